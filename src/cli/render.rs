@@ -1,0 +1,10 @@
+//! `momentlab render` (scaffold: owned by the helper building it).
+
+use anyhow::{bail, Result};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> Result<()> {
+    bail!("'render' is not implemented yet")
+}

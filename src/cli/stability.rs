@@ -1,0 +1,10 @@
+//! `momentlab stability` (scaffold: owned by the helper building it).
+
+use anyhow::{bail, Result};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> Result<()> {
+    bail!("'stability' is not implemented yet")
+}

@@ -1,0 +1,10 @@
+//! `momentlab theta` (scaffold: owned by the helper building it).
+
+use anyhow::{bail, Result};
+
+#[derive(clap::Args, Debug)]
+pub struct Args {}
+
+pub fn run(_args: Args) -> Result<()> {
+    bail!("'theta' is not implemented yet")
+}

@@ -1,0 +1,37 @@
+//! # momentlab
+//!
+//! A research pipeline for moment-based shadow mapping (Peters & Klein, "Moment Shadow
+//! Mapping", I3D 2015). Data flows
+//!
+//! ```text
+//! render / stack  →  kernel (depth distributions, filtered moments)  →  lp | technique
+//!                 →  metrics (error against PCF)  →  search / quantize  →  report
+//! ```
+//!
+//! * [`grid`]: the discrete depth set I of Algorithm 1.
+//! * [`basis`]: the catalog of candidate functions b_j(z), formulas, m-subsets (candidates).
+//! * [`lp`]: Algorithm 1 (the discretized general moment problem): reference and fast solver.
+//! * [`technique`]: the [`technique::Technique`] trait shared by LP candidates and closed-form
+//!   solvers (Hamburger/Hausdorff MSM, TMSM, VSM, ESM, EVSM, CSM).
+//! * [`render`], [`stack`]: the reference ray caster and depth-stack files (OpenEXR + JSON).
+//! * [`kernel`]: the 9×9 Gaussian PCF reference and filtered moment maps.
+//! * [`metrics`]: error of a technique against PCF over all fragments of all layers.
+//! * [`quantize`]: optimal affine quantization transforms θ.
+//! * [`search`]: the candidate sweep (racing, shards, resumable).
+//! * [`report`]: plots and HTML/Markdown reports.
+//! * [`cli`]: the thin command-line layer.
+
+pub mod basis;
+pub mod cli;
+pub mod grid;
+pub mod kernel;
+pub mod lp;
+pub mod metrics;
+pub mod quantize;
+pub mod render;
+pub mod report;
+pub mod search;
+pub mod stack;
+pub mod technique;
+
+pub use grid::Grid;

@@ -1,0 +1,99 @@
+//! Algorithm 1 of Peters & Klein 2015 (Section 3.1): the discretized general moment problem.
+//!
+//! Given b(z_1..z_n) on a grid I, a moment vector b ∈ R^m and a fragment depth z_f,
+//!
+//! G(b, z_f) = min Σ_{z_i < z_f} w_i  s.t.  w ≥ 0, Σ w_i = 1, Σ w_i b(z_i) = b.
+//!
+//! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
+//! exactly as stated) and the fast solver (OWNER: lp helper).
+
+pub mod reference;
+
+use crate::Grid;
+use anyhow::{bail, Result};
+
+/// The values b(z_i) of a basis on a grid: the constraint columns of Algorithm 1.
+#[derive(Clone, Debug)]
+pub struct GridTable {
+    grid: Grid,
+    m: usize,
+    /// Row-major n × m: values[i*m + j] = b_j(z_i).
+    values: Vec<f64>,
+}
+
+impl GridTable {
+    /// Tabulate `f(z, out)` (writing the m values b(z)) at every grid point.
+    pub fn from_fn(grid: &Grid, m: usize, mut f: impl FnMut(f64, &mut [f64])) -> Result<GridTable> {
+        if m == 0 {
+            bail!("basis: need at least one function");
+        }
+        let mut values = vec![0.0; grid.len() * m];
+        for (i, &z) in grid.points().iter().enumerate() {
+            let row = &mut values[i * m..(i + 1) * m];
+            f(z, row);
+            if let Some(j) = row.iter().position(|v| !v.is_finite()) {
+                bail!("basis: function {} is not finite at z = {z}", j + 1);
+            }
+        }
+        Ok(GridTable {
+            grid: grid.clone(),
+            m,
+            values,
+        })
+    }
+
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    /// Number of basis functions m.
+    pub fn m(&self) -> usize {
+        self.m
+    }
+    /// Number of grid points n.
+    pub fn n(&self) -> usize {
+        self.grid.len()
+    }
+    /// b(z_i) as a slice of length m.
+    pub fn row(&self, i: usize) -> &[f64] {
+        &self.values[i * self.m..(i + 1) * self.m]
+    }
+    pub fn values(&self) -> &[f64] {
+        &self.values
+    }
+}
+
+/// Outcome of one LP.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Status {
+    Optimal,
+    /// No distribution on the grid has these moments.
+    Infeasible,
+}
+
+/// Result of Algorithm 1 for one (b, z_f).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Solution {
+    pub status: Status,
+    /// The sharp lower bound G(b, z_f) (NaN when infeasible).
+    pub g: f64,
+    /// Support of a minimising distribution: (z_i, w_i) with w_i > 0, sorted by z.
+    pub support: Vec<(f64, f64)>,
+}
+
+impl Solution {
+    pub fn infeasible() -> Solution {
+        Solution {
+            status: Status::Infeasible,
+            g: f64::NAN,
+            support: Vec::new(),
+        }
+    }
+}
+
+/// A solver for Algorithm 1 on a fixed [`GridTable`]. `&mut self` lets solvers keep warm-start
+/// state between consecutive problems.
+pub trait MomentSolver: Send {
+    /// Solve for moments `b` (length m) and fragment depth `zf`.
+    fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution>;
+}

@@ -1,0 +1,1 @@
+//! Reports: plots (SVG via plotters, PNG pictures) and the HTML/Markdown report.

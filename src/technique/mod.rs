@@ -1,0 +1,46 @@
+//! Shadow techniques: everything that turns filtered moments b and a fragment depth z_f into a
+//! shadow intensity G ∈ [0,1] (0 = lit, 1 = fully shadowed). LP candidates (Algorithm 1 with any
+//! basis) and closed-form solvers (Hamburger/Hausdorff MSM, TMSM, VSM, ESM, EVSM, CSM) implement
+//! the same [`Technique`] trait, so evaluation, benchmarks and stability code are written once.
+//!
+//! OWNERS: closed-form helpers (one file per technique).
+
+/// A filterable shadow-map technique.
+///
+/// The shadow map stores b(z) per texel; filtering gives the moments b = Σ w_l b(z_l) of the
+/// depth distribution; [`Evaluator::shadow`] turns (b, z_f) into a shadow intensity.
+pub trait Technique: Send + Sync {
+    /// Short name used on the CLI and in reports (e.g. "hamburger4", "lp[z,z^2]").
+    fn name(&self) -> String;
+    /// Number m of stored values per texel.
+    fn moment_count(&self) -> usize;
+    /// The basis: `out[j] = b_j(z)` for one depth z (`out.len() == moment_count()`).
+    fn basis(&self, z: f64, out: &mut [f64]);
+    /// Bits stored per shadow-map texel (for the speed/accuracy chart).
+    fn bits_per_texel(&self) -> u32 {
+        32 * self.moment_count() as u32
+    }
+    /// A per-thread evaluator. Closed-form techniques return a stateless wrapper
+    /// ([`Stateless`]); LP candidates keep warm-start state in theirs.
+    fn evaluator(&self) -> Box<dyn Evaluator + '_>;
+}
+
+/// Evaluates shadow intensities; may keep state between calls (LP warm start).
+pub trait Evaluator {
+    /// Shadow intensity G(b, z_f) ∈ [0,1] from filtered moments `moments` at depth `zf`.
+    fn shadow(&mut self, moments: &[f64], zf: f64) -> f64;
+}
+
+/// Closed-form techniques: a pure function of (b, z_f).
+pub trait ClosedForm: Send + Sync {
+    fn shadow(&self, moments: &[f64], zf: f64) -> f64;
+}
+
+/// Wraps a [`ClosedForm`] as an [`Evaluator`].
+pub struct Stateless<'a, T: ?Sized>(pub &'a T);
+
+impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
+    fn shadow(&mut self, moments: &[f64], zf: f64) -> f64 {
+        self.0.shadow(moments, zf)
+    }
+}
