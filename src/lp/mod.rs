@@ -97,3 +97,12 @@ pub trait MomentSolver: Send {
     /// Solve for moments `b` (length m) and fragment depth `zf`.
     fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution>;
 }
+
+/// The solver of the given name ("reference" or "fast") on `table`.
+pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
+    match kind {
+        "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),
+        "fast" => bail!("the fast LP solver is not built yet"),
+        other => bail!("unknown LP solver '{other}' (expected 'reference' or 'fast')"),
+    }
+}

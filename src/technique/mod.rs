@@ -44,3 +44,6 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
         self.0.shadow(moments, zf)
     }
 }
+
+pub mod registry;
+pub use registry::by_name;
