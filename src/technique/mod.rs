@@ -20,6 +20,12 @@ pub trait Technique: Send + Sync {
     fn bits_per_texel(&self) -> u32 {
         32 * self.moment_count() as u32
     }
+    /// The discrete depth set I when the technique is Algorithm 1 on a grid (LP candidates):
+    /// evaluation snaps kernel depths and z_f to the nearest grid point so the moments are
+    /// always those of a distribution on I. `None` for closed-form techniques (exact depths).
+    fn depth_grid(&self) -> Option<&crate::Grid> {
+        None
+    }
     /// A per-thread evaluator. Closed-form techniques return a stateless wrapper
     /// ([`Stateless`]); LP candidates keep warm-start state in theirs.
     fn evaluator(&self) -> Box<dyn Evaluator + '_>;
