@@ -149,6 +149,7 @@ impl Expr {
                 '-' => x - y,
                 '*' => x * y,
                 '/' => x / y,
+                _ if y.fract() == 0.0 && y.abs() <= 64.0 => x.powi(y as i32),
                 _ => x.powf(y),
             });
         }
@@ -262,6 +263,14 @@ fn tokenize(src: &str) -> std::result::Result<Vec<Token>, (String, usize)> {
                     }
                     i = j;
                 }
+            }
+            if i < chars.len() && chars[i] == '.' {
+                // "1..2", "1.2.3": swallow the run so the error shows it.
+                while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+                    i += 1;
+                }
+                let text: String = chars[start..i].iter().collect();
+                return Err((format!("malformed number '{text}'"), pos));
             }
             let text: String = chars[start..i].iter().collect();
             let v: f64 = text
