@@ -156,10 +156,10 @@ fn gram_sigma_ratio(n: usize, m: usize, values: &[f64]) -> f64 {
                     row[i] = c * x - s * y;
                     row[j] = s * x + c * y;
                 }
+                let (ri, rj) = (a[i].clone(), a[j].clone());
                 for k in 0..p {
-                    let (x, y) = (a[i][k], a[j][k]);
-                    a[i][k] = c * x - s * y;
-                    a[j][k] = s * x + c * y;
+                    a[i][k] = c * ri[k] - s * rj[k];
+                    a[j][k] = s * ri[k] + c * rj[k];
                 }
             }
         }

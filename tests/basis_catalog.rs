@@ -59,7 +59,8 @@ fn names_agree_with_formulas() {
             );
         }
     }
-    let known: [(&str, fn(f64) -> f64); 7] = [
+    type Known = (&'static str, fn(f64) -> f64);
+    let known: [Known; 7] = [
         ("z^4", |z| z * z * z * z),
         ("sin(2πz)", |z| (2.0 * std::f64::consts::PI * z).sin()),
         ("cos(4πz)", |z| (4.0 * std::f64::consts::PI * z).cos()),
