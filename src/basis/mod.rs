@@ -174,7 +174,8 @@ impl Catalog {
     pub fn resolve(&self, name_or_formula: &str) -> Result<Function> {
         match self.position(name_or_formula) {
             Some(i) => Ok(self.functions[i].clone()),
-            None => Function::parse(name_or_formula),
+            None => Function::parse(name_or_formula)
+                .with_context(|| format!("'{}' is not in the catalog", name_or_formula.trim())),
         }
     }
 
@@ -185,7 +186,11 @@ impl Catalog {
         }
         let fs = names
             .iter()
-            .map(|n| self.resolve(n.as_ref()))
+            .enumerate()
+            .map(|(i, n)| {
+                self.resolve(n.as_ref())
+                    .with_context(|| format!("basis entry {i}"))
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(Basis::new(fs))
     }
