@@ -123,6 +123,16 @@ fn errors_name_formula_and_position() {
         ("()", "found ')' at position 2"),
         ("z^", "found end of formula at position 3"),
     ];
+    let deep = format!("{}z{}", "(".repeat(2000), ")".repeat(2000));
+    assert!(err(&deep).contains("nested more than 200 levels deep"));
+    let negs = format!("{}z", "-".repeat(300));
+    assert!(err(&negs).contains("nested more than 200 levels deep"));
+    let long = "z+".repeat(3000) + "z";
+    assert!(err(&long).contains("formula too long"));
+    assert_eq!(
+        ev(&format!("{}z{}", "(".repeat(150), ")".repeat(150)), 0.5),
+        0.5
+    );
     for &(s, want) in cases {
         let e = err(s);
         assert!(e.contains(want), "'{s}': error '{e}' lacks '{want}'");

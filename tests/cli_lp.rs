@@ -271,6 +271,14 @@ fn bad_input_gives_one_line_errors() {
         "grid: need at least 2 points, got 1",
     );
     bad(
+        &with(r#"["z"]"#, r#""grid": {"points": 1000000000},"#, ""),
+        "grid: 1000000000 points is more than the supported",
+    );
+    bad(
+        &with(r#"["z"]"#, r#""grid": {"points": -3},"#, ""),
+        "invalid value: integer `-3`",
+    );
+    bad(
         &with(r#"["z"]"#, r#""grid": {"values": [0.5, 0.5]},"#, ""),
         "grid: need at least 2 distinct points",
     );

@@ -339,9 +339,16 @@ fn tokenize(src: &str) -> std::result::Result<Vec<Token>, (String, usize)> {
     Ok(toks)
 }
 
+/// Longest accepted formula (bounds the recursion depth of parsing and evaluation).
+pub const MAX_FORMULA_CHARS: usize = 4096;
+
+/// Deepest accepted nesting of parentheses, unary operators and exponents.
+pub const MAX_NESTING: usize = 200;
+
 struct Parser {
     toks: Vec<Token>,
     at: usize,
+    depth: usize,
 }
 
 type PResult<T> = std::result::Result<T, (String, usize)>;
@@ -384,6 +391,18 @@ impl Parser {
         }
     }
     fn unary(&mut self) -> PResult<Expr> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err((
+                format!("nested more than {MAX_NESTING} levels deep"),
+                self.peek().pos,
+            ));
+        }
+        let r = self.unary_inner();
+        self.depth -= 1;
+        r
+    }
+    fn unary_inner(&mut self) -> PResult<Expr> {
         match self.peek().tok {
             Tok::Op('-') => {
                 self.next();
@@ -459,11 +478,22 @@ impl Parser {
 /// "formula 'SRC': WHAT at position P" (1-based character position).
 pub fn parse(src: &str) -> Result<Expr> {
     let run = || -> PResult<Expr> {
+        let len = src.chars().count();
+        if len > MAX_FORMULA_CHARS {
+            return Err((
+                format!("formula too long ({len} > {MAX_FORMULA_CHARS} characters)"),
+                MAX_FORMULA_CHARS + 1,
+            ));
+        }
         let toks = tokenize(src)?;
         if toks.len() == 1 {
             return Err(("empty formula".to_string(), 1));
         }
-        let mut p = Parser { toks, at: 0 };
+        let mut p = Parser {
+            toks,
+            at: 0,
+            depth: 0,
+        };
         let e = p.expr()?;
         let t = p.peek().clone();
         if t.tok != Tok::End {

@@ -118,9 +118,14 @@ struct CatalogEntry {
 impl Catalog {
     /// The catalog compiled into the binary (`basis_functions/catalog.json`).
     pub fn embedded() -> Catalog {
-        Catalog::from_json(EMBEDDED_CATALOG)
-            .context("embedded catalog basis_functions/catalog.json")
-            .expect("the embedded catalog is checked by tests")
+        static EMBEDDED: std::sync::OnceLock<Catalog> = std::sync::OnceLock::new();
+        EMBEDDED
+            .get_or_init(|| {
+                Catalog::from_json(EMBEDDED_CATALOG)
+                    .context("embedded catalog basis_functions/catalog.json")
+                    .expect("the embedded catalog is checked by tests")
+            })
+            .clone()
     }
 
     /// Load a catalog file; errors name the file and the offending entry.

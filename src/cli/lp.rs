@@ -58,6 +58,9 @@ struct Problem {
 /// Default number of uniform grid points when "grid" is omitted.
 pub const DEFAULT_GRID_POINTS: usize = 1024;
 
+/// Largest accepted grid (the table holds n·m values per solver instance).
+pub const MAX_GRID_POINTS: usize = 1 << 20;
+
 /// Problems solved by one solver instance (consecutive problems share warm-start state).
 const CHUNK: usize = 64;
 
@@ -67,7 +70,12 @@ fn grid_of(spec: Option<GridSpec>) -> Result<Grid> {
         Some(GridSpec {
             points: Some(n),
             values: None,
-        }) => Grid::uniform(n),
+        }) => {
+            if n > MAX_GRID_POINTS {
+                bail!("grid: {n} points is more than the supported {MAX_GRID_POINTS}");
+            }
+            Grid::uniform(n)
+        }
         Some(GridSpec {
             points: None,
             values: Some(v),
