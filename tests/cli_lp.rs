@@ -408,3 +408,48 @@ fn candidates_subcommands() {
         assert!(err.contains(want), "{args:?}: {err}");
     }
 }
+
+/// m = 2 with (z, z²): G equals the one-tailed Chebyshev (Cantelli) bound
+/// (z_f−μ)²/(σ²+(z_f−μ)²) for z_f > μ when the extremal two-point distribution lies on the
+/// grid, and approaches it from above, monotonically over nested grids, otherwise.
+#[test]
+fn vsm_basis_gives_the_cantelli_bound() {
+    let cantelli = |mu: f64, var: f64, zf: f64| {
+        let d: f64 = zf - mu;
+        d * d / (var + d * d)
+    };
+    // μ = 0.5, σ² = 0.01: extremal points {0.4, 0.6} for z_f = 0.6, {0.3, 0.55} for 0.55.
+    let input = json!({"basis": ["z", "z^2"], "grid": {"points": 21}, "solver": "reference",
+        "problems": [{"moments": [0.5, 0.26], "zf": 0.6}, {"moments": [0.5, 0.26], "zf": 0.55}]});
+    let r = lp(&input);
+    for (res, zf) in r.iter().zip([0.6, 0.55]) {
+        let g = res["g"].as_f64().unwrap();
+        assert!((g - cantelli(0.5, 0.01, zf)).abs() < 1e-9, "zf {zf}: {g}");
+    }
+    // Diracs at 0.375 and 0.625 (on every grid below); z_f off every grid; the extremal
+    // point μ − σ²/(z_f − μ) ≈ 0.336 lies inside [0,1], so the bound is approached.
+    let zf = 0.5 + 0.3 / std::f64::consts::PI;
+    let want = cantelli(0.5, 0.015625, zf);
+    let mut prev = f64::INFINITY;
+    for n in [9, 33, 129, 513, 1025] {
+        let input = json!({"basis": ["z", "z^2"], "grid": {"points": n}, "solver": "reference",
+            "problems": [{"moments": [0.5, 0.265625], "zf": zf}]});
+        let g = lp(&input)[0]["g"].as_f64().unwrap();
+        assert!(g >= want - 1e-9, "n {n}: {g} below Cantelli {want}");
+        assert!(
+            g <= prev + 1e-9,
+            "n {n}: {g} not monotone (previous {prev})"
+        );
+        prev = g;
+        // The upper Dirac can only sit at the first grid point z₊ ≥ z_f: Cantelli at z₊,
+        // plus a gap (the lower point off the grid) that shrinks like h².
+        let zp = (zf * (n - 1) as f64).ceil() / (n - 1) as f64;
+        let at_zp = cantelli(0.5, 0.015625, zp);
+        assert!(g >= at_zp - 1e-9, "n {n}: {g} below Cantelli at z+ {at_zp}");
+        if n >= 129 {
+            let tol = 0.1 / ((n - 1) as f64).powi(2) * 128.0;
+            assert!(g - at_zp < tol, "n {n}: {g} vs Cantelli at z+ {at_zp}");
+        }
+    }
+    assert!(prev - want < 2e-3, "n 1025: {prev} vs Cantelli {want}");
+}
