@@ -106,3 +106,35 @@ fn evaluator_is_algorithm_1() {
     assert!(ev.shadow(&b(1.5), 0.5).is_nan());
     assert!(ev.shadow(&[0.5, 0.5, 2.0], 0.5).is_nan());
 }
+
+/// The registry's candidate (fast solver once merged, 1024 points) against the reference LP.
+#[test]
+fn registry_candidate_matches_reference() {
+    let t = by_name("lp:z,z^2,z^3,z^4").unwrap();
+    let grid = t.depth_grid().unwrap().clone();
+    let n = grid.len();
+    let table = GridTable::from_fn(&grid, 4, |z, o| {
+        for (j, v) in o.iter_mut().enumerate() {
+            *v = z.powi(j as i32 + 1);
+        }
+    })
+    .unwrap();
+    let mut oracle = ReferenceSolver::new(table);
+    let mut ev = t.evaluator();
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    for _ in 0..12 {
+        let k = rng.gen_range(1..=4);
+        let mut m = [0.0; 4];
+        for _ in 0..k {
+            let z = rng.gen_range(0..n) as f64 / (n - 1) as f64;
+            let mut out = [0.0; 4];
+            t.basis(z, &mut out);
+            for j in 0..4 {
+                m[j] += out[j] / k as f64;
+            }
+        }
+        let zf = rng.gen_range(0.0..1.0);
+        let (g, want) = (ev.shadow(&m, zf), oracle.solve(&m, zf).unwrap().g);
+        assert!((g - want).abs() < 1e-7, "{m:?} zf {zf}: {g} vs {want}");
+    }
+}
