@@ -22,6 +22,31 @@ pub struct Args {
     /// Render only the scene with this name.
     #[arg(long)]
     pub only: Option<String>,
+    /// Also write `<scene>_<view>.preview.png`: front depth (left) and layer count (right).
+    #[arg(long)]
+    pub preview: bool,
+}
+
+/// Grey-scale preview: front depth (black = near, white = far/background) | layer count
+/// (white = the view's maximum).
+fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Result<()> {
+    let (w, h) = (st.meta.width, st.meta.height);
+    let maxl = st.meta.layers.max(1) as f32;
+    let mut img = vec![0u8; 2 * w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let t = y * w + x;
+            img[y * 2 * w + x] = (st.front(t).clamp(0.0, 1.0) * 255.0) as u8;
+            img[y * 2 * w + w + x] = (st.layer_count_at(t) as f32 / maxl * 255.0) as u8;
+        }
+    }
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), (2 * w) as u32, h as u32);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()?.write_image_data(&img)?;
+    Ok(())
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -58,6 +83,12 @@ pub fn run(args: Args) -> Result<()> {
             let dt = t0.elapsed().as_secs_f64();
             let path = args.out.join(format!("{}.exr", st.file_stem()));
             stack::write(&path, &st)?;
+            if args.preview {
+                write_preview(
+                    &args.out.join(format!("{}.preview.png", st.file_stem())),
+                    &st,
+                )?;
+            }
             let frags = st.fragment_count();
             let covered = (0..st.texel_count())
                 .filter(|&t| st.depth[0][t].is_finite())

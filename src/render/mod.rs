@@ -100,11 +100,7 @@ impl LightFrame {
     pub fn ray_origin(&self, x: usize, y: usize) -> V3 {
         let u = self.uv_origin[0] + (x as f64 + 0.5) * self.texel;
         let v = self.uv_origin[1] + (y as f64 + 0.5) * self.texel;
-        let mut o = [0.0; 3];
-        for k in 0..3 {
-            o[k] = u * self.u_axis[k] + v * self.v_axis[k] + self.near * self.dir[k];
-        }
-        o
+        std::array::from_fn(|k| u * self.u_axis[k] + v * self.v_axis[k] + self.near * self.dir[k])
     }
 }
 

@@ -246,8 +246,8 @@ enum Shape {
         #[serde(default = "default_segments")]
         segments: usize,
     },
-    /// Solid staircase rising along +z: step i is a box of height (i+1)·step_height spanning
-    /// z ∈ [i·step_depth, (i+1)·step_depth], x centred with the given width.
+    /// Solid staircase rising along +z (one closed surface, no interior faces): step i has
+    /// its tread at y = (i+1)·step_height over z ∈ [i·step_depth, (i+1)·step_depth], x centred.
     Stairs {
         steps: usize,
         width: f64,
@@ -374,14 +374,7 @@ impl Shape {
                 pos("stairs width", width)?;
                 pos("stairs step_depth", step_depth)?;
                 pos("stairs step_height", step_height)?;
-                for i in 0..steps {
-                    let z0 = i as f64 * step_depth;
-                    boxed(
-                        &mut out,
-                        [-width / 2.0, 0.0, z0],
-                        [width / 2.0, (i + 1) as f64 * step_height, z0 + step_depth],
-                    );
-                }
+                stairs(&mut out, steps, width, step_depth, step_height);
             }
             Shape::Fence {
                 width,
@@ -698,6 +691,39 @@ pub fn boxed(out: &mut Vec<Tri>, lo: V3, hi: V3) {
         [4, 6, 7, 5],
     ] {
         quad(out, p(f[0]), p(f[1]), p(f[2]), p(f[3]));
+    }
+}
+
+fn stairs(out: &mut Vec<Tri>, n: usize, width: f64, d: f64, h: f64) {
+    let (x0, x1) = (-width / 2.0, width / 2.0);
+    let top = n as f64 * h;
+    let back = n as f64 * d;
+    for i in 0..n {
+        let (z0, z1) = (i as f64 * d, (i + 1) as f64 * d);
+        let (y0, y1) = (i as f64 * h, (i + 1) as f64 * h);
+        // riser (facing −z) and tread (facing +y)
+        quad(out, [x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]);
+        quad(out, [x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0]);
+        // the two side faces of this column of the profile
+        for x in [x0, x1] {
+            quad(out, [x, 0.0, z0], [x, y1, z0], [x, y1, z1], [x, 0.0, z1]);
+        }
+    }
+    if n > 0 {
+        quad(
+            out,
+            [x0, 0.0, back],
+            [x1, 0.0, back],
+            [x1, top, back],
+            [x0, top, back],
+        );
+        quad(
+            out,
+            [x0, 0.0, 0.0],
+            [x1, 0.0, 0.0],
+            [x1, 0.0, back],
+            [x0, 0.0, back],
+        );
     }
 }
 
