@@ -150,7 +150,7 @@ fn embedded_dataset_is_three_scenes_by_four_views_and_hard() {
     let stacks = default_dataset(64).unwrap();
     assert_eq!(stacks.len(), 12);
     for st in &stacks {
-        validate(&st).unwrap();
+        validate(st).unwrap();
         assert!(
             st.fragment_count() > st.texel_count() / 4,
             "{}",
