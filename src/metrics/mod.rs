@@ -250,7 +250,7 @@ fn select(stack: &DepthStack, view: usize, sub: &Subsample) -> Vec<(usize, usize
             }
             let keep = match *sub {
                 Subsample::All => true,
-                Subsample::Stride(k) => i % k == 0,
+                Subsample::Stride(k) => i.is_multiple_of(k),
                 Subsample::Random { fraction, seed } => {
                     let h = splitmix64(
                         seed ^ splitmix64((view as u64) << 40 ^ (l as u64) << 32 ^ t as u64),
