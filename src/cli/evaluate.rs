@@ -39,18 +39,18 @@ pub struct Args {
     /// Only views whose "scene/view" name contains this string.
     #[arg(long)]
     pub only: Option<String>,
-    /// PCF bias ε (default 1e-4).
-    #[arg(long)]
-    pub pcf_epsilon: Option<f64>,
-    /// PCF receiver-plane slope scale s (default 1).
-    #[arg(long)]
-    pub slope_scale: Option<f64>,
-    /// Constant technique bias (default 1e-4).
-    #[arg(long)]
-    pub technique_epsilon: Option<f64>,
-    /// Slope part of the technique bias, in texels (default 4 = kernel radius).
-    #[arg(long)]
-    pub technique_slope_scale: Option<f64>,
+    /// PCF bias ε.
+    #[arg(long, default_value_t = Bias::default().pcf_epsilon)]
+    pub pcf_epsilon: f64,
+    /// PCF receiver-plane slope scale s.
+    #[arg(long, default_value_t = Bias::default().slope_scale)]
+    pub slope_scale: f64,
+    /// Constant part of the technique bias ε′.
+    #[arg(long, default_value_t = Bias::default().technique_epsilon)]
+    pub technique_epsilon: f64,
+    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|).
+    #[arg(long, default_value_t = Bias::default().technique_slope_scale)]
+    pub technique_slope_scale: f64,
 }
 
 fn load_stacks(args: &Args) -> Result<Vec<DepthStack>> {
@@ -96,14 +96,11 @@ pub fn run(args: Args) -> Result<()> {
         Some(t) => Subject::Technique(t.as_ref()),
         None => Subject::Pcf,
     };
-    let d = Bias::default();
     let bias = Bias {
-        pcf_epsilon: args.pcf_epsilon.unwrap_or(d.pcf_epsilon),
-        slope_scale: args.slope_scale.unwrap_or(d.slope_scale),
-        technique_epsilon: args.technique_epsilon.unwrap_or(d.technique_epsilon),
-        technique_slope_scale: args
-            .technique_slope_scale
-            .unwrap_or(d.technique_slope_scale),
+        pcf_epsilon: args.pcf_epsilon,
+        slope_scale: args.slope_scale,
+        technique_epsilon: args.technique_epsilon,
+        technique_slope_scale: args.technique_slope_scale,
     };
     bias.validate()?;
     let subsample = match (args.stride, args.sample) {
