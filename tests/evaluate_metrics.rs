@@ -617,3 +617,42 @@ fn front_shadows_match_fragments() {
         .count();
     assert_eq!(fs.pcf.iter().filter(|v| v.is_nan()).count(), holes);
 }
+
+#[test]
+fn cdf_subject_is_the_bias_floor() {
+    let mut r = rng(20);
+    let stacks: Vec<_> = (0..3)
+        .map(|i| random_stack(&mut r, &format!("c{i}"), 19, 14))
+        .collect();
+    // without any bias PCF is exactly F_Z(z_f): the CDF subject has error 0
+    let zero = Bias {
+        pcf_epsilon: 0.0,
+        slope_scale: 0.0,
+        technique_epsilon: 0.0,
+        technique_slope_scale: 0.0,
+    };
+    let opts = EvalOptions {
+        bias: zero,
+        ..Default::default()
+    };
+    let rep = metrics::evaluate_subject(&stacks, Subject::Cdf, &opts).unwrap();
+    // (only summation-order rounding: PCF sums g_x·g_y row by row)
+    assert!(rep.error < 1e-15, "{}", rep.error);
+    // with the default biases it is the brute-force mean |F_Z(z_f − ε′) − PCF|
+    let bias = Bias::default();
+    let rep = metrics::evaluate_subject(&stacks, Subject::Cdf, &EvalOptions::default()).unwrap();
+    let (mut sum, mut n) = (0.0, 0);
+    for s in &stacks {
+        for f in brute_fragments(s, &bias) {
+            let fz: f64 = brute_distribution(s, f.x, f.y)
+                .iter()
+                .filter(|d| d.0 < f.ztech)
+                .map(|d| d.1)
+                .sum();
+            sum += (fz - f.pcf).abs();
+            n += 1;
+        }
+    }
+    assert!(sum > 0.0);
+    assert!((rep.error - sum / n as f64).abs() < 1e-12);
+}

@@ -12,7 +12,8 @@ use std::sync::Arc;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// Technique: a closed form (vsm, esm, hamburger4, …), an LP candidate
-    /// ("lp:z,z^2,z^3,z^4"), or "pcf" (the reference itself; error 0).
+    /// ("lp:z,z^2,z^3,z^4"), "pcf" (the reference itself; error 0) or "cdf" (the exact
+    /// F_Z(z_f − ε′): the error floor set by the technique bias).
     #[arg(long)]
     pub technique: String,
     /// Directory of depth-stack files; default: render the embedded default dataset.
@@ -87,14 +88,14 @@ fn sanitize(s: &str) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let technique = if args.technique == "pcf" {
-        None
-    } else {
-        Some(crate::technique::by_name(&args.technique)?)
+    let technique = match args.technique.as_str() {
+        "pcf" | "cdf" => None,
+        spec => Some(crate::technique::by_name(spec)?),
     };
     let subject = match &technique {
         Some(t) => Subject::Technique(t.as_ref()),
-        None => Subject::Pcf,
+        None if args.technique == "pcf" => Subject::Pcf,
+        None => Subject::Cdf,
     };
     let bias = Bias {
         pcf_epsilon: args.pcf_epsilon,

@@ -347,6 +347,10 @@ pub enum Subject<'a> {
     Technique(&'a dyn Technique),
     /// PCF itself, recomputed per fragment through the same loop (its error is 0).
     Pcf,
+    /// The exact F_Z(z_f − ε′) of the unsnapped depth distribution: what an ideal technique
+    /// that knew Z_t would return. Its error is the floor set by the technique bias ε′ (it
+    /// differs from PCF only through the biases), not a technique.
+    Cdf,
 }
 
 impl Subject<'_> {
@@ -354,6 +358,7 @@ impl Subject<'_> {
         match self {
             Subject::Technique(t) => t.name(),
             Subject::Pcf => "pcf".to_string(),
+            Subject::Cdf => "cdf".to_string(),
         }
     }
 }
@@ -469,7 +474,7 @@ impl<'a> ViewShader<'a> {
         let kern = Gaussian::paper();
         let front = kernel::front_map(stack);
         let (grid, maps, min_map, skip) = match subject {
-            Subject::Pcf => (None, Vec::new(), Vec::new(), false),
+            Subject::Pcf | Subject::Cdf => (None, Vec::new(), Vec::new(), false),
             Subject::Technique(t) => {
                 let grid = t.depth_grid();
                 let snapped: Vec<f64> = match grid {
@@ -511,6 +516,22 @@ impl<'a> ViewShader<'a> {
         match self.subject {
             Subject::Pcf => {
                 let g = pcf_of(self.stack, &self.front, f.texel, f.layer, &self.bias);
+                (g, f.trivial, true)
+            }
+            Subject::Cdf => {
+                let (w, h) = (self.stack.meta.width, self.stack.meta.height);
+                let g = kernel::depth_distribution(
+                    &self.front,
+                    w,
+                    h,
+                    f.texel % w,
+                    f.texel / w,
+                    &Gaussian::paper(),
+                )
+                .iter()
+                .filter(|(z, _)| *z < f.zf)
+                .map(|(_, wt)| wt)
+                .sum();
                 (g, f.trivial, true)
             }
             Subject::Technique(_) => {
@@ -568,7 +589,7 @@ pub fn evaluate_subject(
     let done = AtomicUsize::new(0);
     let m = match subject {
         Subject::Technique(t) => t.moment_count(),
-        Subject::Pcf => 0,
+        Subject::Pcf | Subject::Cdf => 0,
     };
     let mut views = Vec::with_capacity(stacks.len());
     for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
@@ -584,7 +605,7 @@ pub fn evaluate_subject(
                     (
                         match subject {
                             Subject::Technique(t) => Some(t.evaluator()),
-                            Subject::Pcf => None,
+                            Subject::Pcf | Subject::Cdf => None,
                         },
                         vec![0.0; m],
                     )
@@ -730,7 +751,7 @@ pub fn front_shadows(
                 (
                     match subject {
                         Subject::Technique(t) => Some(t.evaluator()),
-                        Subject::Pcf => None,
+                        Subject::Pcf | Subject::Cdf => None,
                     },
                     vec![0.0; m],
                 )
