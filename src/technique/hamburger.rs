@@ -8,15 +8,31 @@
 //! (1, b'₁, …, b'_{n−1}); G = Σ_{z_i < z_f} w_i, computed as E[p(Z)] for the Newton
 //! interpolation polynomial p with p(z_i) = [z_i < z_f]. m = 2 is VSM (Cantelli's bound).
 
-use super::hamburger4::{pivot_floor, power_basis};
-use super::linalg::{bias, ldlt_solve, real_roots, weight_sum, Precision, Real};
+use super::hamburger4::power_basis;
+use super::linalg::{bias, ldlt_solve, pivot_tol, real_roots, weight_sum, Precision, Real};
 use super::{ClosedForm, Evaluator, Stateless, Technique};
 
 /// Algorithm 2 for already biased moments b' (length m, even), unclamped G and the support
 /// (z_f first, then the roots ascending).
+///
+/// If the Hankel matrix is numerically singular already at size r + 1 < n (Z has r < m/2
+/// Diracs, Proposition 4), the problem is solved with the first 2r moments, whose Hankel
+/// matrix has a one-dimensional kernel: its polynomial has exactly the r support points as
+/// roots, so the reconstruction is exact.
 pub fn msm_hamburger<T: Real>(b: &[T], zf: T) -> (T, Vec<T>) {
-    let m = b.len();
-    let n = m / 2 + 1;
+    let n = b.len() / 2 + 1;
+    let mut r = n;
+    loop {
+        match solve_size(b, zf, r) {
+            Ok(out) => return out,
+            Err(rank) => r = rank + 1,
+        }
+    }
+}
+
+/// Algorithm 2 with the leading r×r Hankel block (moments b'_1 … b'_{2r−2}); Err(rank) if a
+/// pivot before the last one is negligible.
+fn solve_size<T: Real>(b: &[T], zf: T, n: usize) -> Result<(T, Vec<T>), usize> {
     let moment = |k: usize| if k == 0 { T::ONE } else { b[k - 1] };
     let mut a = vec![T::ZERO; n * n];
     for j in 0..n {
@@ -30,7 +46,14 @@ pub fn msm_hamburger<T: Real>(b: &[T], zf: T) -> (T, Vec<T>) {
         *ck = p;
         p *= zf;
     }
-    ldlt_solve(&mut a, n, &mut c, pivot_floor::<T>());
+    let rank = ldlt_solve(&mut a, n, &mut c, pivot_tol::<T>());
+    if rank + 1 < n {
+        return Err(rank);
+    }
+    if n == 1 {
+        // Not reachable for valid b (the 1×1 block is 1); keep G defined.
+        return Ok((T::ZERO, vec![zf]));
+    }
     let roots = real_roots(&c);
     let mut nodes = Vec::with_capacity(n);
     nodes.push(zf);
@@ -40,7 +63,7 @@ pub fn msm_hamburger<T: Real>(b: &[T], zf: T) -> (T, Vec<T>) {
         .map(|&z| if z < zf { T::ONE } else { T::ZERO })
         .collect();
     let moments: Vec<T> = (0..nodes.len()).map(moment).collect();
-    (weight_sum(&nodes, &f, &moments), nodes)
+    Ok((weight_sum(&nodes, &f, &moments), nodes))
 }
 
 /// Hamburger MSM with m (even) moments, bias (α, b*) and arithmetic precision.

@@ -6,12 +6,12 @@
 //! G = 0 if z_f ≤ z₂, w₂ = (z_f z₃ − b'₁(z_f + z₃) + b'₂) / ((z₃ − z₂)(z_f − z₂)) if z_f ≤ z₃,
 //! else 1 − w₁ = 1 − (z₂ z₃ − b'₁(z₂ + z₃) + b'₂) / ((z_f − z₂)(z_f − z₃)).
 
-use super::linalg::{above, bias, quadratic_roots, Precision, Real};
+use super::linalg::{above, bias, pivot_tol, quadratic_roots, Precision, Real};
 use super::{ClosedForm, Evaluator, Stateless, Technique};
 
-/// Relative pivot floor of the LDLᵀ factorisation, in units of ε² of the arithmetic type:
-/// singular B (at most two Diracs, Proposition 4) then yields a huge but finite c whose
-/// direction is the kernel of B, i.e. the exact reconstruction.
+/// Relative floor of the last LDLᵀ pivot D33, in units of ε² of the arithmetic type:
+/// singular B (two Diracs, Proposition 4) then yields a huge but finite c whose direction is
+/// the kernel of B, i.e. the exact reconstruction.
 pub(crate) fn pivot_floor<T: Real>() -> T {
     T::EPS * T::EPS
 }
@@ -42,11 +42,8 @@ pub fn biased4<T: Real>(b: [T; 4], alpha: T, b_star: [T; 4]) -> [T; 4] {
 pub fn msm4_roots<T: Real>(b: [T; 4], zf: T) -> (T, T) {
     let floor = pivot_floor::<T>();
     // B = L D Lᵀ with L = [[1,0,0],[b1,1,0],[b2,L32,1]], D = diag(1, D22, D33).
-    let mut d22 = b[1] - b[0] * b[0];
-    let f22 = floor * (T::ONE + b[1].abs());
-    if !above(d22, f22) {
-        d22 = f22;
-    }
+    // D22 > 16ε·b2 is guaranteed by the caller (single-Dirac branch).
+    let d22 = b[1] - b[0] * b[0];
     let l32d22 = b[2] - b[0] * b[1];
     let l32 = l32d22 / d22;
     let mut d33 = (b[3] - b[1] * b[1]) - l32 * l32d22;
@@ -67,6 +64,15 @@ pub fn msm4_roots<T: Real>(b: [T; 4], zf: T) -> (T, T) {
 /// Algorithm 3 for already biased moments `b` (= b'), unclamped.
 #[inline(always)]
 pub fn msm4_hamburger<T: Real>(b: [T; 4], zf: T) -> Msm4<T> {
+    if !above(b[1] - b[0] * b[0], pivot_tol::<T>() * b[1]) {
+        // Variance at round-off level: a single Dirac at b'₁ (Proposition 4), exact step.
+        let g = if b[0] < zf { T::ONE } else { T::ZERO };
+        return Msm4 {
+            g,
+            z2: b[0],
+            z3: b[0],
+        };
+    }
     let (z2, z3) = msm4_roots(b, zf);
     let g = if zf <= z2 {
         T::ZERO

@@ -6,8 +6,9 @@
 //! Biases (supplementary Section 4): standard b* = (½,…,½); clamped depths α = 4·10⁻³ with
 //! b* = ½·(½,…,½) + ½·(½,⅓,¼,⅕,⅙,⅐).
 
-use super::hamburger4::{pivot_floor, power_basis};
-use super::linalg::{bias, cubic_roots, ldlt_solve, weight_sum, Precision, Real};
+use super::hamburger::msm_hamburger;
+use super::hamburger4::power_basis;
+use super::linalg::{bias, cubic_roots, ldlt_solve, pivot_tol, weight_sum, Precision, Real};
 use super::{ClosedForm, Evaluator, Stateless, Technique};
 
 /// b* = (½, …, ½): Z* = ½(δ₀ + δ₁).
@@ -35,7 +36,16 @@ pub fn msm6<T: Real>(b: [T; 6], zf: T) -> (T, [T; 3]) {
         }
     }
     let mut c = [T::ONE, zf, zf * zf, zf * zf * zf];
-    ldlt_solve(&mut a, 4, &mut c, pivot_floor::<T>());
+    let rank = ldlt_solve(&mut a, 4, &mut c, pivot_tol::<T>());
+    if rank < 3 {
+        // At most two Diracs (Proposition 4): exact reconstruction from fewer moments.
+        let (g, nodes) = msm_hamburger(&b[..2 * rank], zf);
+        let mut r = [T::ZERO; 3];
+        for (i, z) in nodes.iter().skip(1).enumerate().take(3) {
+            r[i] = *z;
+        }
+        return (g, r);
+    }
     let r = cubic_roots(c[0], c[1], c[2], c[3]);
     let nodes = [zf, r[0], r[1], r[2]];
     let ind = |z: T| if z < zf { T::ONE } else { T::ZERO };

@@ -143,27 +143,39 @@ pub fn bias<T: Real>(b: T, alpha: T, b_star: T) -> T {
     b + alpha * (b_star - b)
 }
 
+/// Relative pivot tolerance of [`ldlt_solve`]: a pivot D_j ≤ 16ε·A_jj is at the round-off
+/// level of its own computation, i.e. numerically zero.
+pub fn pivot_tol<T: Real>() -> T {
+    T::of(16.0) * T::EPS
+}
+
 /// Solve A·x = rhs in place for a symmetric positive (semi-)definite n×n matrix `a`
 /// (row-major) with an LDLᵀ decomposition A = L·D·Lᵀ (L unit lower triangular, D diagonal).
-/// Pivots below `tiny` × (largest diagonal entry) are raised to that value, so nearly singular
-/// matrices (Proposition 4 of Peters & Klein 2015) give a large but finite, correctly
-/// oriented solution instead of NaN. `a` is overwritten with the factors.
-pub fn ldlt_solve<T: Real>(a: &mut [T], n: usize, rhs: &mut [T], tiny: T) {
+///
+/// Returns the numerical rank r: if a pivot D_j with j < n − 1 is ≤ `tol`·A_jj the
+/// factorisation stops and returns j (`rhs` is then meaningless). A negligible *last* pivot
+/// is raised to `tol`·A_jj and the solve completes (returns n − 1): for a singular Hankel
+/// matrix (Proposition 4 of Peters & Klein 2015) the solution is then dominated by the kernel
+/// direction, whose polynomial vanishes on the support of the unique distribution.
+/// `a` is overwritten with the factors.
+pub fn ldlt_solve<T: Real>(a: &mut [T], n: usize, rhs: &mut [T], tol: T) -> usize {
     debug_assert!(a.len() >= n * n && rhs.len() >= n);
-    let mut scale = T::ZERO;
-    for i in 0..n {
-        scale = scale.max(a[i * n + i].abs());
-    }
-    let floor = if scale > T::ZERO { tiny * scale } else { tiny };
+    let mut rank = n;
     // Factor: column j of L below the diagonal, D_j on the diagonal.
     for j in 0..n {
-        let mut d = a[j * n + j];
+        let ajj = a[j * n + j];
+        let mut d = ajj;
         for k in 0..j {
             let l = a[j * n + k];
             d -= l * l * a[k * n + k];
         }
-        if !above(d, floor) {
-            d = floor;
+        let thr = tol * ajj.abs();
+        if !above(d, thr) {
+            if j + 1 < n {
+                return j;
+            }
+            rank = j;
+            d = if thr > T::ZERO { thr } else { tol };
         }
         a[j * n + j] = d;
         for i in j + 1..n {
@@ -194,6 +206,7 @@ pub fn ldlt_solve<T: Real>(a: &mut [T], n: usize, rhs: &mut [T], tiny: T) {
             rhs[i] -= l * v;
         }
     }
+    rank
 }
 
 /// Both roots of c0 + c1·z + c2·z² (c2 ≠ 0, discriminant ≥ 0), ascending. A negative
@@ -461,6 +474,7 @@ mod tests {
                     .collect();
                 let mut f = a.clone();
                 ldlt_solve(&mut f, n, &mut rhs, 1e-300);
+                assert!(n > 0);
                 for i in 0..n {
                     assert!((rhs[i] - x[i]).abs() < 1e-9, "n={n}: {rhs:?} vs {x:?}");
                 }

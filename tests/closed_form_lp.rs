@@ -1,0 +1,443 @@
+//! Closed-form solvers against Algorithm 1 (the LP oracle) with their own basis, f64, α = 0.
+//!
+//! Two comparisons per technique (see docs/techniques.md, "How the solvers are checked"):
+//! * exact-support grid: uniform grid ∪ {Dirac positions, z_f, closed-form support}. The grid
+//!   holds the continuous minimiser, and grid distributions are a subset of all distributions,
+//!   so LP = G exactly (up to the LP's own tolerance, 1e-6).
+//! * uniform grid with spacing h, Diracs and z_f on grid points: LP_h ≥ G (subset argument,
+//!   tolerance 1e-7 for round-off) and LP_h − G ≤ K·h² (dual argument: the grid-dual
+//!   polynomial overshoots the indicator between grid points by at most h²/8·max|p''|).
+//!
+//! The instance count per technique is `MOMENTLAB_CF_INSTANCES` (default 150: the reference LP
+//! costs ~ms; the full run with ≥ 10,000 is documented in docs/techniques.md).
+
+use momentlab::lp::{make_solver, GridTable, Status};
+use momentlab::technique::hamburger::Hamburger;
+use momentlab::technique::hamburger4::Hamburger4;
+use momentlab::technique::hamburger6::Hamburger6;
+use momentlab::technique::hausdorff4::Hausdorff4;
+use momentlab::technique::linalg::Precision;
+use momentlab::technique::registry::{build, Params};
+use momentlab::technique::{ClosedForm, Technique};
+use momentlab::Grid;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn instances() -> usize {
+    std::env::var("MOMENTLAB_CF_INSTANCES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(150)
+}
+
+fn solver_kind() -> &'static str {
+    // The fast solver once merged; the reference solver otherwise.
+    let probe = GridTable::from_fn(&Grid::uniform(3).unwrap(), 1, |z, o| o[0] = z).unwrap();
+    if make_solver("fast", probe).is_ok() {
+        "fast"
+    } else {
+        "reference"
+    }
+}
+
+/// Algorithm 1 on the grid `points` with basis `basis` (m functions); None if the LP solver
+/// reports infeasibility (happens only through its tolerances: all moments here are
+/// moments of grid distributions).
+fn try_lp(
+    kind: &str,
+    basis: &dyn Fn(f64, &mut [f64]),
+    m: usize,
+    points: Vec<f64>,
+    b: &[f64],
+    zf: f64,
+) -> Option<f64> {
+    let grid = Grid::from_values(points).unwrap();
+    let table = GridTable::from_fn(&grid, m, basis).unwrap();
+    let mut s = make_solver(kind, table).unwrap();
+    let sol = s.solve(b, zf).unwrap();
+    (sol.status == Status::Optimal).then_some(sol.g)
+}
+
+fn lp(
+    kind: &str,
+    basis: &dyn Fn(f64, &mut [f64]),
+    m: usize,
+    points: Vec<f64>,
+    b: &[f64],
+    zf: f64,
+) -> f64 {
+    try_lp(kind, basis, m, points.clone(), b, zf)
+        .unwrap_or_else(|| panic!("LP infeasible for b = {b:?}, zf = {zf}"))
+}
+
+/// Support points of the closed-form minimiser usable on the grid: those in [lo, hi] are
+/// added; a root beyond 10⁶ (c_n ≈ 0) carries weight ≤ b₂/z² ≈ 10⁻¹² and is dropped; any other
+/// point outside [lo, hi] means the minimiser of I = R is not representable: skip (None).
+fn usable_support(support: &[f64], lo: f64, hi: f64) -> Option<Vec<f64>> {
+    let mut out = Vec::new();
+    for &z in support {
+        if (lo..=hi).contains(&z) {
+            out.push(z);
+        } else if z.is_finite() && z.abs() < 1e6 {
+            return None;
+        }
+    }
+    Some(out)
+}
+
+/// A random depth distribution: 1..=kmax Diracs in [lo, hi] with random weights.
+fn diracs(rng: &mut ChaCha8Rng, kmax: usize, lo: f64, hi: f64) -> Vec<(f64, f64)> {
+    let k = rng.gen_range(1..=kmax);
+    let mut w: Vec<f64> = (0..k).map(|_| rng.gen_range(0.05..1.0)).collect();
+    let s: f64 = w.iter().sum();
+    w.iter_mut().for_each(|x| *x /= s);
+    w.into_iter().map(|wi| (rng.gen_range(lo..hi), wi)).collect()
+}
+
+fn moments(t: &dyn Fn(f64, &mut [f64]), m: usize, d: &[(f64, f64)]) -> Vec<f64> {
+    let mut b = vec![0.0; m];
+    let mut tmp = vec![0.0; m];
+    for &(z, w) in d {
+        t(z, &mut tmp);
+        for j in 0..m {
+            b[j] += w * tmp[j];
+        }
+    }
+    b
+}
+
+fn uniform(n: usize, lo: f64, hi: f64) -> Vec<f64> {
+    Grid::uniform_on(n, lo, hi).unwrap().points().to_vec()
+}
+
+/// The grid point of `uniform(n, lo, hi)` nearest to z (exactly that f64 value, so moments
+/// of snapped Diracs are exactly feasible on the grid).
+fn snap(z: f64, lo: f64, hi: f64, n: usize) -> f64 {
+    let h = (hi - lo) / (n - 1) as f64;
+    let i = ((z - lo) / h).round().clamp(0.0, (n - 1) as f64) as usize;
+    uniform(n, lo, hi)[i]
+}
+
+/// Minimum distance between z_f and the support of Z (the strict inequality z < z_f makes G
+/// discontinuous there; instances too close are skipped).
+fn gap(d: &[(f64, f64)], zf: f64) -> f64 {
+    d.iter().map(|&(z, _)| (z - zf).abs()).fold(f64::INFINITY, f64::min)
+}
+
+struct Case<'a> {
+    name: &'a str,
+    m: usize,
+    basis: &'a dyn Fn(f64, &mut [f64]),
+    /// Closed form: G and its support points.
+    solve: &'a dyn Fn(&[f64], f64) -> (f64, Vec<f64>),
+    /// Grid interval (I = [lo, hi] for Hausdorff; a wide stand-in for R for Hamburger).
+    lo: f64,
+    hi: f64,
+    /// Interval of Dirac positions and z_f.
+    dlo: f64,
+    dhi: f64,
+    kmax: usize,
+}
+
+fn exact_support(case: &Case, seed: u64) {
+    let kind = solver_kind();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut worst = 0.0f64;
+    let mut done = 0;
+    let mut skipped = 0;
+    while done < instances() {
+        let d = diracs(&mut rng, case.kmax, case.dlo, case.dhi);
+        let zf = rng.gen_range(case.dlo..case.dhi);
+        if gap(&d, zf) < 1e-3 {
+            continue;
+        }
+        let b = moments(case.basis, case.m, &d);
+        let (g, support) = (case.solve)(&b, zf);
+        assert!(g.is_finite(), "{}: G not finite for {d:?}, zf {zf}", case.name);
+        let Some(sup) = usable_support(&support, case.lo, case.hi) else {
+            skipped += 1;
+            continue;
+        };
+        let mut pts = uniform(41, case.lo, case.hi);
+        pts.extend(d.iter().map(|x| x.0));
+        pts.push(zf);
+        pts.extend(sup);
+        let l = lp(kind, case.basis, case.m, pts, &b, zf);
+        let err = (l - g.clamp(0.0, 1.0)).abs();
+        worst = worst.max(err);
+        assert!(
+            err < 1e-6,
+            "{}: closed form {g} vs LP {l} for Z = {d:?}, zf = {zf}, support {support:?}",
+            case.name
+        );
+        done += 1;
+    }
+    eprintln!(
+        "{}: exact-support max |G − LP| = {worst:.2e} over {done} ({skipped} skipped: support outside the grid interval; {kind})",
+        case.name
+    );
+    assert!(skipped < done, "{}: too many skipped instances", case.name);
+}
+
+fn uniform_grid(case: &Case, seed: u64, n: usize, k: f64) {
+    let kind = solver_kind();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let h = (case.hi - case.lo) / (n - 1) as f64;
+    let mut worst = 0.0f64;
+    let mut done = 0;
+    let mut lp_failures = 0;
+    while done < instances() {
+        let mut d = diracs(&mut rng, case.kmax, case.dlo, case.dhi);
+        d.iter_mut()
+            .for_each(|x| x.0 = snap(x.0, case.lo, case.hi, n));
+        let zf = snap(rng.gen_range(case.dlo..case.dhi), case.lo, case.hi, n);
+        if gap(&d, zf) < 0.5 * h {
+            continue;
+        }
+        let b = moments(case.basis, case.m, &d);
+        let (g, support) = (case.solve)(&b, zf);
+        // I = R stand-in: the continuous minimiser must lie in [lo, hi].
+        if usable_support(&support, case.lo, case.hi).is_none() {
+            continue;
+        }
+        let g = g.clamp(0.0, 1.0);
+        let Some(l) = try_lp(kind, case.basis, case.m, uniform(n, case.lo, case.hi), &b, zf)
+        else {
+            lp_failures += 1;
+            continue;
+        };
+        assert!(
+            l >= g - 1e-7,
+            "{}: LP on a grid {l} below the sharp bound {g}: Z = {d:?}, zf = {zf}",
+            case.name
+        );
+        worst = worst.max(l - g);
+        assert!(
+            l - g <= k * h * h,
+            "{}: LP {l} − G {g} > K·h² = {} (Z = {d:?}, zf = {zf})",
+            case.name,
+            k * h * h
+        );
+        done += 1;
+    }
+    eprintln!(
+        "{}: uniform grid h = {h:.4}: max LP − G = {worst:.2e} = {:.2}·h² over {done} ({lp_failures} LP tolerance failures; {kind})",
+        case.name,
+        worst / (h * h)
+    );
+    assert!(lp_failures * 10 < done, "{}: LP failed too often", case.name);
+}
+
+fn power(z: f64, out: &mut [f64]) {
+    let mut p = 1.0;
+    for o in out.iter_mut() {
+        p *= z;
+        *o = p;
+    }
+}
+
+fn hamburger_case<'a>(
+    name: &'a str,
+    m: usize,
+    solve: &'a dyn Fn(&[f64], f64) -> (f64, Vec<f64>),
+) -> Case<'a> {
+    Case {
+        name,
+        m,
+        basis: &power,
+        solve,
+        lo: -1.0,
+        hi: 2.0,
+        dlo: 0.0,
+        dhi: 1.0,
+        kmax: m / 2 + 2,
+    }
+}
+
+const K_H2: f64 = 50.0;
+
+#[test]
+fn hamburger4_equals_lp() {
+    let t = Hamburger4::new(0.0, [0.5; 4], Precision::F64);
+    let f = |b: &[f64], zf: f64| {
+        let r = t.solve(b, zf);
+        (r.g, vec![r.z2, r.z3])
+    };
+    let c = hamburger_case("hamburger4", 4, &f);
+    exact_support(&c, 11);
+    uniform_grid(&c, 12, 121, K_H2);
+}
+
+#[test]
+fn hamburger_any_m_equals_lp() {
+    for m in [2usize, 4, 6] {
+        let t = Hamburger::new(0.0, vec![0.5; m], Precision::F64);
+        let f = |b: &[f64], zf: f64| {
+            let (g, nodes) = t.solve(b, zf);
+            (g, nodes)
+        };
+        let name = format!("hamburger m={m}");
+        let c = hamburger_case(&name, m, &f);
+        exact_support(&c, 20 + m as u64);
+    }
+}
+
+#[test]
+fn hamburger6_equals_lp() {
+    let t = Hamburger6::new(0.0, [0.5; 6], Precision::F64);
+    let f = |b: &[f64], zf: f64| {
+        let (g, r) = t.solve(b, zf);
+        (g, r.to_vec())
+    };
+    let c = hamburger_case("hamburger6", 6, &f);
+    exact_support(&c, 31);
+}
+
+#[test]
+fn hausdorff4_equals_lp() {
+    let t = Hausdorff4::new(0.0, [0.5; 4], Precision::F64);
+    // Support for the exact-support grid: the Hamburger roots, 0, 1 and z_free are all
+    // candidates; include them all (extra grid points cannot hurt the subset argument).
+    let h = Hamburger4::new(0.0, [0.5; 4], Precision::F64);
+    let f = |b: &[f64], zf: f64| {
+        let r = h.solve(b, zf);
+        let (b1, b2, b3, b4) = (b[0], b[1], b[2], b[3]);
+        let zfree = (b4 - (1.0 + zf) * b3 + zf * b2) / (b3 - (1.0 + zf) * b2 + zf * b1);
+        let mut s = vec![0.0, 1.0];
+        for z in [r.z2, r.z3, zfree] {
+            if (0.0..=1.0).contains(&z) {
+                s.push(z);
+            }
+        }
+        (t.raw(b, zf), s)
+    };
+    let c = Case {
+        name: "hausdorff4",
+        m: 4,
+        basis: &power,
+        solve: &f,
+        lo: 0.0,
+        hi: 1.0,
+        dlo: 0.0,
+        dhi: 1.0,
+        kmax: 4,
+    };
+    exact_support(&c, 41);
+    uniform_grid(&c, 42, 61, K_H2);
+}
+
+#[test]
+fn vsm_equals_lp() {
+    let t = build("vsm", &Params::with(Precision::F64, Some(0.0))).unwrap();
+    let basis = |z: f64, o: &mut [f64]| t.basis(z, o);
+    let f = |b: &[f64], zf: f64| {
+        // Cantelli's extremal distribution: Diracs at z_f and μ − σ²/(z_f − μ).
+        let mu = b[0];
+        let var = b[1] - mu * mu;
+        let mut e = t.evaluator();
+        let s = if zf > mu {
+            vec![mu - var / (zf - mu)]
+        } else {
+            vec![mu + var / (mu - zf)]
+        };
+        (e.shadow(b, zf), s)
+    };
+    let c = Case {
+        name: "vsm",
+        m: 2,
+        basis: &basis,
+        solve: &f,
+        lo: -1.0,
+        hi: 2.0,
+        dlo: 0.0,
+        dhi: 1.0,
+        kmax: 3,
+    };
+    exact_support(&c, 51);
+}
+
+#[test]
+fn esm_equals_lp_up_to_the_interval_cut() {
+    // Markov is sharp for I = R with mass escaping to −∞; on [lo, hi] the LP may put that mass
+    // only at lo, which raises G by at most e^{c(lo − z_f)}/(1 − e^{c(lo − z_f)}).
+    let c = 10.0;
+    let p = Params {
+        esm_c: c,
+        alpha: Some(0.0),
+        ..Params::default()
+    };
+    let t = build("esm", &p).unwrap();
+    let kind = solver_kind();
+    let mut rng = ChaCha8Rng::seed_from_u64(61);
+    let (lo, hi) = (-2.0, 1.0);
+    for _ in 0..instances() {
+        let d = diracs(&mut rng, 4, 0.0, 1.0);
+        let zf = rng.gen_range(0.0..1.0);
+        if gap(&d, zf) < 1e-3 {
+            continue;
+        }
+        let basis = |z: f64, o: &mut [f64]| t.basis(z, o);
+        let b = moments(&basis, 1, &d);
+        let g = t.evaluator().shadow(&b, zf);
+        let mut pts = uniform(31, lo, hi);
+        pts.extend(d.iter().map(|x| x.0));
+        pts.push(zf);
+        let l = lp(kind, &basis, 1, pts, &b, zf);
+        let e = (c * (lo - zf)).exp();
+        let tol = e / (1.0 - e) + 1e-7;
+        assert!(l >= g - 1e-7 && l - g <= tol, "esm: G {g} LP {l} tol {tol}");
+    }
+}
+
+#[test]
+fn evsm_is_a_lower_bound_and_each_warp_is_sharp() {
+    // EVSM is not sharp for its 4-function basis, but never exceeds the sharp bound (LP), and
+    // each warped VSM equals the LP with its two-function basis whenever Cantelli's extremal
+    // point lies in the range of the warp (w₊ > 0, w₋ < 0).
+    let (cp, cn) = (3.0, 3.0);
+    let p = Params {
+        evsm_c_pos: cp,
+        evsm_c_neg: cn,
+        alpha: Some(0.0),
+        ..Params::default()
+    };
+    let t = build("evsm", &p).unwrap();
+    let kind = solver_kind();
+    let mut rng = ChaCha8Rng::seed_from_u64(71);
+    let (lo, hi) = (-1.0, 2.0);
+    let mut sharp_hits = 0;
+    for _ in 0..instances() {
+        let d = diracs(&mut rng, 4, 0.0, 1.0);
+        let zf = rng.gen_range(0.0..1.0);
+        if gap(&d, zf) < 1e-3 {
+            continue;
+        }
+        let basis = |z: f64, o: &mut [f64]| t.basis(z, o);
+        let b = moments(&basis, 4, &d);
+        let g = t.evaluator().shadow(&b, zf);
+        let mut pts = uniform(61, lo, hi);
+        pts.extend(d.iter().map(|x| x.0));
+        pts.push(zf);
+        let l = lp(kind, &basis, 4, pts.clone(), &b, zf);
+        assert!(l >= g - 1e-7, "evsm: G {g} above the sharp bound {l}");
+        // Positive warp alone.
+        let wp = (cp * zf).exp();
+        let (mu, var) = (b[0], b[1] - b[0] * b[0]);
+        if wp > mu && mu - var / (wp - mu) > 0.0 {
+            let zx = (mu - var / (wp - mu)).ln() / cp;
+            if (lo..=hi).contains(&zx) {
+                let gp = momentlab::technique::vsm::vsm(mu, b[1], wp, 0.0);
+                let sub = |z: f64, o: &mut [f64]| {
+                    o[0] = (cp * z).exp();
+                    o[1] = o[0] * o[0];
+                };
+                let mut q = pts.clone();
+                q.push(zx);
+                let l2 = lp(kind, &sub, 2, q, &b[..2], zf);
+                assert!((l2 - gp).abs() < 1e-6, "evsm w₊: {gp} vs LP {l2}");
+                sharp_hits += 1;
+            }
+        }
+    }
+    assert!(sharp_hits > 0);
+}
