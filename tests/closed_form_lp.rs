@@ -148,12 +148,15 @@ fn gap(d: &[(f64, f64)], zf: f64) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// A closed form returning G and its support points.
+type SolveFn = dyn Fn(&[f64], f64) -> (f64, Vec<f64>);
+
 struct Case<'a> {
     name: &'a str,
     m: usize,
     basis: &'a dyn Fn(f64, &mut [f64]),
     /// Closed form: G and its support points.
-    solve: &'a dyn Fn(&[f64], f64) -> (f64, Vec<f64>),
+    solve: &'a SolveFn,
     /// Grid interval (I = [lo, hi] for Hausdorff; a wide stand-in for R for Hamburger).
     lo: f64,
     hi: f64,
@@ -285,11 +288,7 @@ fn power(z: f64, out: &mut [f64]) {
     }
 }
 
-fn hamburger_case<'a>(
-    name: &'a str,
-    m: usize,
-    solve: &'a dyn Fn(&[f64], f64) -> (f64, Vec<f64>),
-) -> Case<'a> {
+fn hamburger_case<'a>(name: &'a str, m: usize, solve: &'a SolveFn) -> Case<'a> {
     Case {
         name,
         m,
