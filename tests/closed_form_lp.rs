@@ -149,14 +149,14 @@ fn gap(d: &[(f64, f64)], zf: f64) -> f64 {
 }
 
 /// A closed form returning G and its support points.
-type SolveFn = dyn Fn(&[f64], f64) -> (f64, Vec<f64>);
+type SolveFn<'a> = dyn Fn(&[f64], f64) -> (f64, Vec<f64>) + 'a;
 
 struct Case<'a> {
     name: &'a str,
     m: usize,
     basis: &'a dyn Fn(f64, &mut [f64]),
     /// Closed form: G and its support points.
-    solve: &'a SolveFn,
+    solve: &'a SolveFn<'a>,
     /// Grid interval (I = [lo, hi] for Hausdorff; a wide stand-in for R for Hamburger).
     lo: f64,
     hi: f64,
@@ -288,7 +288,7 @@ fn power(z: f64, out: &mut [f64]) {
     }
 }
 
-fn hamburger_case<'a>(name: &'a str, m: usize, solve: &'a SolveFn) -> Case<'a> {
+fn hamburger_case<'a>(name: &'a str, m: usize, solve: &'a SolveFn<'a>) -> Case<'a> {
     Case {
         name,
         m,
