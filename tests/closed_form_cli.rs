@@ -30,13 +30,22 @@ fn shadow_batch_results() {
 #[test]
 fn shadow_batch_errors_are_one_line_and_specific() {
     let cases = [
-        (r#"{"technique":"hamburger4","problems":[{"moments":[1,2],"zf":0.5}]"#, "line 1"),
-        (r#"{"technique":"nope","problems":[]}"#, "unknown technique 'nope'"),
+        (
+            r#"{"technique":"hamburger4","problems":[{"moments":[1,2],"zf":0.5}]"#,
+            "line 1",
+        ),
+        (
+            r#"{"technique":"nope","problems":[]}"#,
+            "unknown technique 'nope'",
+        ),
         (
             r#"{"technique":"vsm","problems":[{"moments":[0.5,0.3],"zf":0.5},{"moments":[0.5],"zf":0.5}]}"#,
             "problem 1",
         ),
-        (r#"{"technique":"vsm","problems":[{"moments":[0.5,0.3]}]}"#, "zf"),
+        (
+            r#"{"technique":"vsm","problems":[{"moments":[0.5,0.3]}]}"#,
+            "zf",
+        ),
         (r#"{"technique":"vsm","alpha":2,"problems":[]}"#, "alpha"),
         (r#"{"technique":"vsm","wat":2,"problems":[]}"#, "wat"),
         (r#"{"problems":[]}"#, "technique"),

@@ -41,8 +41,8 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
     let problems = obj
         .remove("problems")
         .ok_or_else(|| anyhow!("{src}: missing \"problems\""))?;
-    let problems: Vec<Problem> = serde_json::from_value(problems)
-        .map_err(|e| anyhow!("{src}: \"problems\": {e}"))?;
+    let problems: Vec<Problem> =
+        serde_json::from_value(problems).map_err(|e| anyhow!("{src}: \"problems\": {e}"))?;
     let mut params: Params = serde_json::from_value(Value::Object(Map::from_iter(obj)))
         .map_err(|e| anyhow!("{src}: technique parameters: {e}"))?;
     if technique == "hamburger" && params.moment_count.is_none() {
@@ -66,7 +66,9 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
             bail!("{src}: problem {i}: zf is not finite");
         }
         let g = ev.shadow(&p.moments, p.zf);
-        results.push(serde_json::json!({ "g": if g.is_finite() { Value::from(g) } else { Value::Null } }));
+        results.push(
+            serde_json::json!({ "g": if g.is_finite() { Value::from(g) } else { Value::Null } }),
+        );
     }
     Ok(serde_json::json!({ "results": results }))
 }

@@ -115,7 +115,7 @@ impl ClosedForm for Hamburger {
 
 impl Technique for Hamburger {
     fn name(&self) -> String {
-        format!("hamburger{}", self.b_star.len())
+        format!("hamburger(m={})", self.b_star.len())
     }
     fn moment_count(&self) -> usize {
         self.b_star.len()
