@@ -163,11 +163,12 @@ fn certified(nodes: &[f64], b: &[f64], zf: f64, g: f64) -> bool {
         if a[col][col].abs() < 1e-300 {
             return false;
         }
-        for r in 0..k {
+        let pivot_row = a[col].clone();
+        for (r, row) in a.iter_mut().enumerate() {
             if r != col {
-                let f = a[r][col] / a[col][col];
-                for c in col..=k {
-                    a[r][c] -= f * a[col][c];
+                let f = row[col] / pivot_row[col];
+                for (x, p) in row.iter_mut().zip(&pivot_row).skip(col) {
+                    *x -= f * p;
                 }
             }
         }
