@@ -42,7 +42,7 @@ pub fn biased4<T: Real>(b: [T; 4], alpha: T, b_star: [T; 4]) -> [T; 4] {
 pub fn msm4_roots<T: Real>(b: [T; 4], zf: T) -> (T, T) {
     let floor = pivot_floor::<T>();
     // B = L D Lᵀ with L = [[1,0,0],[b1,1,0],[b2,L32,1]], D = diag(1, D22, D33).
-    // D22 > 16ε·b2 is guaranteed by the caller (single-Dirac branch).
+    // D22 > 4ε·b2 is guaranteed by the caller (single-Dirac branch).
     let d22 = b[1] - b[0] * b[0];
     let l32d22 = b[2] - b[0] * b[1];
     let l32 = l32d22 / d22;

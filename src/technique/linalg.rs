@@ -143,10 +143,10 @@ pub fn bias<T: Real>(b: T, alpha: T, b_star: T) -> T {
     b + alpha * (b_star - b)
 }
 
-/// Relative pivot tolerance of [`ldlt_solve`]: a pivot D_j ≤ 16ε·A_jj is at the round-off
+/// Relative pivot tolerance of [`ldlt_solve`]: a pivot D_j ≤ 4ε·A_jj is at the round-off
 /// level of its own computation, i.e. numerically zero.
 pub fn pivot_tol<T: Real>() -> T {
-    T::of(16.0) * T::EPS
+    T::of(4.0) * T::EPS
 }
 
 /// Solve A·x = rhs in place for a symmetric positive (semi-)definite n×n matrix `a`
