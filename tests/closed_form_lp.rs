@@ -302,12 +302,21 @@ fn exact_support(case: &Case, seed: u64) {
             // Singular B: Z is the only distribution with these moments (Proposition 4), so
             // the sharp bound is F_Z(z_f) itself — a better oracle than the LP, whose
             // tolerance matters most exactly here.
-            // Tolerance 1e-5: Diracs here may nearly coincide (no separation is imposed), which
-            // makes the kernel direction of B ill-conditioned (measured max in the log line).
+            // Tolerance: 1e-6 for Diracs ≥ 0.02 apart; 1e-4 for clusters, whose roots the power
+            // Hankel matrix determines only to ~1e-7 in f64 (checked against 60-digit mpmath:
+            // two Diracs 0.003 apart give root errors 1.6e-7 and |G − F_Z| = 1.7e-5 at m = 6).
+            let sep = d
+                .iter()
+                .enumerate()
+                .flat_map(|(i, a)| d[i + 1..].iter().map(move |b| (a.0 - b.0).abs()))
+                .fold(f64::INFINITY, f64::min);
+            let tol = if sep >= 0.02 { 1e-6 } else { 1e-4 };
             let truth: f64 = d.iter().filter(|x| x.0 < zf).map(|x| x.1).sum();
-            worst_unique = worst_unique.max((g.clamp(0.0, 1.0) - truth).abs());
+            if sep >= 0.02 {
+                worst_unique = worst_unique.max((g.clamp(0.0, 1.0) - truth).abs());
+            }
             assert!(
-                (g.clamp(0.0, 1.0) - truth).abs() < 1e-5,
+                (g.clamp(0.0, 1.0) - truth).abs() < tol,
                 "{}: singular case G {g} vs F_Z {truth} for {d:?}, zf {zf}",
                 case.name
             );
@@ -346,7 +355,7 @@ fn exact_support(case: &Case, seed: u64) {
         done += 1;
     }
     eprintln!(
-        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e}; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
+        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e} for separated Diracs; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
         case.name
     );
     assert!(
