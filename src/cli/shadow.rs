@@ -48,7 +48,12 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
     if technique == "hamburger" && params.moment_count.is_none() {
         params.moment_count = problems.first().map(|p| p.moments.len());
     }
-    let t = build(&technique, &params).with_context(|| src.to_string())?;
+    let t = if technique.starts_with("lp:") {
+        crate::technique::by_name(&technique)
+    } else {
+        build(&technique, &params)
+    }
+    .with_context(|| src.to_string())?;
     let m = t.moment_count();
     let mut ev = t.evaluator();
     let mut results = Vec::with_capacity(problems.len());

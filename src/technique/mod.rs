@@ -59,6 +59,7 @@ pub mod hamburger4;
 pub mod hamburger6;
 pub mod hausdorff4;
 pub mod linalg;
+pub mod lp_candidate;
 pub mod registry;
 pub mod vsm;
 pub use registry::by_name;

@@ -281,6 +281,8 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
 
 /// The technique named by `spec` with default parameters; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
-    // "lp:f1,f2,…": OWNER basis helper.
+    if let Some(list) = spec.strip_prefix("lp:") {
+        return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
+    }
     build(spec, &Params::default())
 }
