@@ -285,6 +285,7 @@ fn exact_support(case: &Case, seed: u64) {
     let mut lp_failures = 0;
     let mut unique = 0;
     let mut worst_unique = 0.0f64;
+    let mut worst_cluster = 0.0f64;
     while done < instances() {
         let d = diracs(&mut rng, case.kmax, case.dlo, case.dhi);
         let zf = rng.gen_range(case.dlo..case.dhi);
@@ -302,18 +303,22 @@ fn exact_support(case: &Case, seed: u64) {
             // Singular B: Z is the only distribution with these moments (Proposition 4), so
             // the sharp bound is F_Z(z_f) itself — a better oracle than the LP, whose
             // tolerance matters most exactly here.
-            // Tolerance: 1e-6 for Diracs ≥ 0.02 apart; 1e-4 for clusters, whose roots the power
+            // Tolerance: 1e-6 for Diracs ≥ 0.02 apart; 1e-3 for clusters, whose roots the power
             // Hankel matrix determines only to ~1e-7 in f64 (checked against 60-digit mpmath:
-            // two Diracs 0.003 apart give root errors 1.6e-7 and |G − F_Z| = 1.7e-5 at m = 6).
+            // two Diracs 0.003 apart give root errors 1.6e-7 and |G − F_Z| = 1.7e-5 at m = 6; 0.001
+            // apart 1.0e-4).
             let sep = d
                 .iter()
                 .enumerate()
                 .flat_map(|(i, a)| d[i + 1..].iter().map(move |b| (a.0 - b.0).abs()))
                 .fold(f64::INFINITY, f64::min);
-            let tol = if sep >= 0.02 { 1e-6 } else { 1e-4 };
+            let tol = if sep >= 0.02 { 1e-6 } else { 1e-3 };
             let truth: f64 = d.iter().filter(|x| x.0 < zf).map(|x| x.1).sum();
+            let e = (g.clamp(0.0, 1.0) - truth).abs();
             if sep >= 0.02 {
-                worst_unique = worst_unique.max((g.clamp(0.0, 1.0) - truth).abs());
+                worst_unique = worst_unique.max(e);
+            } else {
+                worst_cluster = worst_cluster.max(e);
             }
             assert!(
                 (g.clamp(0.0, 1.0) - truth).abs() < tol,
@@ -355,7 +360,7 @@ fn exact_support(case: &Case, seed: u64) {
         done += 1;
     }
     eprintln!(
-        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e} for separated Diracs; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
+        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e} for Diracs ≥ 0.02 apart, {worst_cluster:.1e} for clusters; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
         case.name
     );
     assert!(
