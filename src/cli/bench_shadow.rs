@@ -8,6 +8,7 @@ use anyhow::{bail, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::hint::black_box;
+use std::io::Write;
 use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
@@ -105,23 +106,27 @@ pub fn run(args: Args) -> Result<()> {
             });
         }
     }
+    let mut out = std::io::stdout().lock();
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&rows)?);
+        writeln!(out, "{}", serde_json::to_string_pretty(&rows)?)?;
     } else {
-        println!(
-            "{:<12} {:>4} {:>3} {:>10} {:>8}",
+        writeln!(
+            out,
+            "{:<15} {:>4} {:>3} {:>10} {:>8}",
             "technique", "prec", "m", "ns/eval", "mean G"
-        );
+        )?;
         for r in &rows {
-            println!(
-                "{:<12} {:>4} {:>3} {:>10.1} {:>8.4}",
+            writeln!(
+                out,
+                "{:<15} {:>4} {:>3} {:>10.1} {:>8.4}",
                 r.technique, r.precision, r.moments, r.ns_per_eval, r.mean_g
-            );
+            )?;
         }
-        println!(
+        writeln!(
+            out,
             "({n} inputs per row, median of {} runs, one core)",
             args.reps
-        );
+        )?;
     }
     Ok(())
 }

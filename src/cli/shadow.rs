@@ -93,6 +93,8 @@ pub fn run(args: Args) -> Result<()> {
         }
     };
     let out = evaluate_batch(&text, &src)?;
-    println!("{}", serde_json::to_string(&out)?);
+    use std::io::Write;
+    writeln!(std::io::stdout().lock(), "{}", serde_json::to_string(&out)?)
+        .context("writing stdout")?;
     Ok(())
 }
