@@ -53,3 +53,6 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
 
 pub mod registry;
 pub use registry::by_name;
+pub mod sparse;
+pub mod stability;
+pub mod tmsm;

@@ -9,5 +9,8 @@ use anyhow::{bail, Result};
 
 /// The technique named by `spec`; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
+    if spec == "tmsm" {
+        return Ok(Box::new(super::tmsm::Tmsm::default()));
+    }
     bail!("unknown technique '{spec}'")
 }
