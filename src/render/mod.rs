@@ -2,3 +2,5 @@
 //! fitted to the scene bounds) recording every surface along each texel's ray.
 //!
 //! OWNER: render/stack helper.
+
+pub mod rectified;
