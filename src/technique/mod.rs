@@ -51,6 +51,7 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
     }
 }
 
+pub mod lp_candidate;
 pub mod registry;
 pub use registry::by_name;
 pub mod sparse;

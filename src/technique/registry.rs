@@ -12,5 +12,8 @@ pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
     if spec == "tmsm" {
         return Ok(Box::new(super::tmsm::Tmsm::default()));
     }
+    if let Some(list) = spec.strip_prefix("lp:") {
+        return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
+    }
     bail!("unknown technique '{spec}'")
 }
