@@ -213,8 +213,9 @@ fn invert(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
             if r != c {
                 let f = a[r][c];
                 if f != 0.0 {
-                    for k in 0..2 * n {
-                        a[r][k] -= f * a[c][k];
+                    let pivot = a[c].clone();
+                    for (x, p) in a[r].iter_mut().zip(&pivot) {
+                        *x -= f * p;
                     }
                 }
             }
@@ -560,6 +561,12 @@ pub fn oracle_solver() -> String {
     }
 }
 
+/// Per technique on one sample: the sharp bound and G per applicable mode.
+type TechResult = (f64, Vec<(Mode, f64)>);
+
+/// Heat-map cells `[row][col]` (None: no input fell in the cell).
+pub type Cells = Vec<Vec<Option<f64>>>;
+
 /// Evaluate every technique (spec name, technique) on every sample and mode. `progress` is
 /// called with the number of samples finished (from worker threads).
 pub fn run(
@@ -574,7 +581,7 @@ pub fn run(
         .map(|(s, t)| Quant::new(s, t.as_ref()))
         .collect();
     // Per sample: for each technique, the sharp bound and G per applicable mode.
-    let per_sample: Vec<Vec<(f64, Vec<(Mode, f64)>)>> = samples
+    let per_sample: Vec<Vec<TechResult>> = samples
         .par_iter()
         .map(|s| {
             let r = techniques
@@ -666,7 +673,7 @@ pub fn heat_map(
     mode: Mode,
     rows: usize,
     cols: usize,
-) -> (Vec<Vec<Option<f64>>>, (f64, f64), (f64, f64)) {
+) -> (Cells, (f64, f64), (f64, f64)) {
     let (v0, v1) = (-10.0, 0.0);
     let (d0, d1) = (-0.6, 0.6);
     let mut sum = vec![vec![0.0; cols]; rows];
