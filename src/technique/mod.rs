@@ -63,3 +63,6 @@ pub mod lp_candidate;
 pub mod registry;
 pub mod vsm;
 pub use registry::by_name;
+pub mod sparse;
+pub mod stability;
+pub mod tmsm;

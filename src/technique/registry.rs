@@ -281,6 +281,9 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
 
 /// The technique named by `spec` with default parameters; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
+    if spec == "tmsm" {
+        return Ok(Box::new(super::tmsm::Tmsm::default()));
+    }
     if let Some(list) = spec.strip_prefix("lp:") {
         return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
     }
