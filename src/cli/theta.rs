@@ -26,6 +26,12 @@ pub struct Args {
     /// Maximum sweeps over all rows per start.
     #[arg(long, default_value_t = 400)]
     pub max_sweeps: usize,
+    /// Basin-hopping steps per start (perturb, re-ascend, keep if better).
+    #[arg(long, default_value_t = 0)]
+    pub hops: usize,
+    /// Relative size of the basin-hopping perturbation.
+    #[arg(long, default_value_t = 0.2)]
+    pub hop_sigma: f64,
     /// Write the JSON here instead of stdout.
     #[arg(long)]
     pub output: Option<PathBuf>,
@@ -90,6 +96,8 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         restarts: args.restarts,
         max_sweeps: args.max_sweeps,
+        hops: args.hops,
+        hop_sigma: args.hop_sigma,
         ..Default::default()
     };
     let pb = ProgressBar::new(args.restarts as u64);
@@ -124,6 +132,7 @@ pub fn run(args: Args) -> Result<()> {
         "exact_verification": ver.exact,
         "seed": args.seed,
         "restarts": args.restarts,
+        "hops": args.hops,
         "start_gains_bits": out.start_gains,
         "lps_solved": out.lps,
     });

@@ -32,6 +32,10 @@ pub struct Options {
     pub tol_bits: f64,
     /// Relative shrink that makes the final θ strictly feasible.
     pub margin: f64,
+    /// Basin-hopping steps per start: perturb all rows by relative noise `hop_sigma`,
+    /// re-ascend, keep if better.
+    pub hops: usize,
+    pub hop_sigma: f64,
 }
 
 impl Default for Options {
@@ -42,6 +46,8 @@ impl Default for Options {
             max_sweeps: 400,
             tol_bits: 1e-9,
             margin: 1e-9,
+            hops: 0,
+            hop_sigma: 0.2,
         }
     }
 }
@@ -362,25 +368,30 @@ pub fn optimize(
             let mut lps = 0;
             let mut rows: Vec<Row> = (0..m)
                 .map(|_| {
-                    let a: Vec<f64> = (0..m)
-                        .map(|_| {
-                            // Box–Muller normal
-                            let u: f64 = rng.gen_range(1e-12..1.0);
-                            let v: f64 = rng.gen_range(0.0..1.0);
-                            (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
-                        })
-                        .collect();
-                    let ext = frame.extrema(curve, &a);
-                    let (lo, hi) = ext.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, e| {
-                        (r.0.min(e.1), r.1.max(e.1))
-                    });
+                    let mut a: Vec<f64> = (0..m).map(|_| normal(&mut rng)).collect();
+                    normalize_row(&frame, curve, &mut a);
                     Row {
-                        a: a.iter().map(|v| v / (hi - lo)).collect(),
+                        a,
                         pts: init_pts.clone(),
                     }
                 })
                 .collect();
-            let g = ascend(&frame, curve, &mut rows, opts, &mut rng, &mut lps);
+            let mut g = ascend(&frame, curve, &mut rows, opts, &mut rng, &mut lps);
+            for _ in 0..opts.hops {
+                let mut trial = rows.clone();
+                for r in trial.iter_mut() {
+                    let n = dot(&r.a, &r.a).sqrt();
+                    for v in r.a.iter_mut() {
+                        *v += opts.hop_sigma * n * normal(&mut rng) / (m as f64).sqrt();
+                    }
+                    normalize_row(&frame, curve, &mut r.a);
+                }
+                let gt = ascend(&frame, curve, &mut trial, opts, &mut rng, &mut lps);
+                if gt > g {
+                    g = gt;
+                    rows = trial;
+                }
+            }
             progress(k, g + frame_gain(&frame));
             (g, rows, lps)
         })
@@ -411,6 +422,24 @@ pub fn optimize(
         best_start,
         lps,
     })
+}
+
+/// Standard normal sample (Box–Muller).
+fn normal(rng: &mut impl Rng) -> f64 {
+    let u: f64 = rng.gen_range(1e-12..1.0);
+    let v: f64 = rng.gen_range(0.0..1.0);
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
+/// Scale a q-space row to range exactly 1 over [0,1].
+fn normalize_row(frame: &Frame, curve: &dyn Curve, a: &mut [f64]) {
+    let ext = frame.extrema(curve, a);
+    let (lo, hi) = ext.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, e| {
+        (r.0.min(e.1), r.1.max(e.1))
+    });
+    if hi > lo {
+        a.iter_mut().for_each(|v| *v /= hi - lo);
+    }
 }
 
 /// log₂|det W|: gain of the whitening itself (q-space det + this = b-space det).
