@@ -14,6 +14,7 @@
 pub mod codegen;
 pub mod curve;
 pub mod linalg;
+pub mod lpsmall;
 pub mod optimize;
 pub mod poly;
 pub mod theta;

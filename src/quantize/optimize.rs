@@ -177,46 +177,29 @@ fn row_lp(
     lps: &mut usize,
 ) -> Option<Vec<f64>> {
     let m = frame.m;
-    let bound = 1e6;
     for _ in 0..40 {
-        let mut vars = variables!();
-        let a: Vec<Variable> = (0..m)
-            .map(|_| vars.add(variable().min(-bound).max(bound)))
-            .collect();
-        let t = vars.add(variable().min(-bound).max(bound));
-        let mut cons = Vec::new();
-        let mut model = match goal {
-            Goal::Ascend(c) => {
-                let obj: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
-                vars.maximise(obj).using(microlp)
-            }
-            Goal::TieBreak(c, floor, w) => {
-                let u: Vec<Variable> = (0..m).map(|_| vars.add(variable().min(0.0))).collect();
-                let obj: Expression = u.iter().zip(w.iter()).map(|(v, &wj)| wj * *v).sum();
-                let ab: Vec<Expression> = (0..m)
-                    .map(|j| (0..m).map(|i| frame.w[i][j] * a[i]).sum())
-                    .collect();
-                for (e, uj) in ab.into_iter().zip(&u) {
-                    cons.push(e.clone().leq(*uj));
-                    cons.push((-e).leq(*uj));
-                }
-                let ca: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
-                cons.push(ca.geq(*floor));
-                vars.minimise(obj).using(microlp)
-            }
-        };
-        for (_, q) in pts.iter() {
-            let e: Expression = a.iter().zip(q).map(|(v, &qj)| qj * *v).sum::<Expression>() + t;
-            cons.push(e.clone().geq(0.0));
-            cons.push(e.leq(1.0));
-        }
-        for c in cons {
-            model = model.with(c);
-        }
         *lps += 1;
-        let sol = model.solve().ok()?;
-        let av: Vec<f64> = a.iter().map(|v| sol.value(*v)).collect();
-        let tv = sol.value(t);
+        let (av, tv) = match goal {
+            Goal::Ascend(c) => {
+                let mut obj = c.to_vec();
+                obj.push(0.0);
+                let mut g = Vec::with_capacity(2 * pts.len());
+                let mut h = Vec::with_capacity(2 * pts.len());
+                for (_, q) in pts.iter() {
+                    let mut up = q.clone();
+                    up.push(1.0);
+                    g.push(up.iter().map(|v| -v).collect());
+                    h.push(0.0);
+                    g.push(up);
+                    h.push(1.0);
+                }
+                match super::lpsmall::max_free(&obj, &g, &h) {
+                    Some(x) => (x[..m].to_vec(), x[m]),
+                    None => microlp_row(frame, goal, pts)?,
+                }
+            }
+            Goal::TieBreak(..) => microlp_row(frame, goal, pts)?,
+        };
         let ext = frame.extrema(curve, &av);
         let (lo, hi) = ext.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, e| {
             (r.0.min(e.1), r.1.max(e.1))
@@ -245,6 +228,50 @@ fn row_lp(
         }
     }
     None
+}
+
+/// The row LP through good_lp + microlp (tie-break goal, and fallback).
+fn microlp_row(frame: &Frame, goal: &Goal, pts: &[(f64, Vec<f64>)]) -> Option<(Vec<f64>, f64)> {
+    let m = frame.m;
+    let bound = 1e6;
+    let mut vars = variables!();
+    let a: Vec<Variable> = (0..m)
+        .map(|_| vars.add(variable().min(-bound).max(bound)))
+        .collect();
+    let t = vars.add(variable().min(-bound).max(bound));
+    let mut cons = Vec::new();
+    let mut model = match goal {
+        Goal::Ascend(c) => {
+            let obj: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
+            vars.maximise(obj).using(microlp)
+        }
+        Goal::TieBreak(c, floor, w) => {
+            let u: Vec<Variable> = (0..m).map(|_| vars.add(variable().min(0.0))).collect();
+            let obj: Expression = u.iter().zip(w.iter()).map(|(v, &wj)| wj * *v).sum();
+            let ab: Vec<Expression> = (0..m)
+                .map(|j| (0..m).map(|i| frame.w[i][j] * a[i]).sum())
+                .collect();
+            for (e, uj) in ab.into_iter().zip(&u) {
+                cons.push(e.clone().leq(*uj));
+                cons.push((-e).leq(*uj));
+            }
+            let ca: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
+            cons.push(ca.geq(*floor));
+            vars.minimise(obj).using(microlp)
+        }
+    };
+    for (_, q) in pts.iter() {
+        let e: Expression = a.iter().zip(q).map(|(v, &qj)| qj * *v).sum::<Expression>() + t;
+        cons.push(e.clone().geq(0.0));
+        cons.push(e.leq(1.0));
+    }
+    for c in cons {
+        model = model.with(c);
+    }
+    let sol = model.solve().ok()?;
+    let av: Vec<f64> = a.iter().map(|v| sol.value(*v)).collect();
+    let tv = sol.value(t);
+    Some((av, tv))
 }
 
 fn initial_points(frame: &Frame, curve: &dyn Curve) -> Vec<(f64, Vec<f64>)> {
