@@ -351,13 +351,14 @@ fn tie_break(frame: &Frame, curve: &dyn Curve, rows: &mut [Row], weights: &[f64]
         let c: Vec<f64> = c.iter().map(|v| v * sgn).collect();
         let floor = dot(&c, &rows[i].a) * (1.0 - 1e-11);
         let mut pts = rows[i].pts.clone();
-        if let Some(a) = row_lp(
+        let res = row_lp(
             frame,
             curve,
             &Goal::TieBreak(&c, floor, weights),
             &mut pts,
             lps,
-        ) {
+        );
+        if let Some(a) = res {
             let old = std::mem::replace(&mut rows[i].a, a);
             if log2det(rows) < before - 1e-9 {
                 rows[i].a = old;
@@ -433,7 +434,9 @@ pub fn optimize(
         Some(e) => e.iter().map(|&v| v as f64).collect(),
         None => (1..=m).map(|v| v as f64).collect(),
     };
-    tie_break(&frame, curve, &mut rows, &weights, &mut lps);
+    for _ in 0..3 {
+        tie_break(&frame, curve, &mut rows, &weights, &mut lps);
+    }
     // Map back: A = Ã W, t = −min over z of the row (set by normalisation).
     let a_b: Vec<Vec<f64>> = rows.iter().map(|r| frame.to_b(&r.a)).collect();
     let mut offset = Vec::with_capacity(m);
