@@ -2,7 +2,7 @@
 //! 2015 paper). JSON to stdout or --output; HLSL/GLSL snippets to --snippets DIR.
 
 use crate::basis::Catalog;
-use crate::quantize::{codegen, curve, optimize, theta, volume, Curve};
+use crate::quantize::{self, codegen, curve, optimize, theta, volume, Curve};
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
@@ -11,6 +11,11 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Instead of searching: read DIR/theta{2,3,4,6}.json, re-verify them and the published
+    /// θ₂/θ₄/θ₆, write DIR/comparison.md, DIR/summary.json and the Fig. 5 analogue
+    /// (DIR/fig5.svg, DIR/fig5.json).
+    #[arg(long, conflicts_with_all = ["moments", "basis"])]
+    pub summary: Option<PathBuf>,
     /// Power basis (z, z², …, z^m).
     #[arg(long, conflicts_with = "basis")]
     pub moments: Option<usize>,
@@ -90,6 +95,10 @@ fn snippet_tag(curve: &dyn Curve) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.summary {
+        return summary(dir);
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
     let curve = build_curve(args.moments, args.basis.as_deref())?;
     let m = curve.dim();
     let opts = optimize::Options {
@@ -135,6 +144,7 @@ pub fn run(args: Args) -> Result<()> {
         "hops": args.hops,
         "start_gains_bits": out.start_gains,
         "lps_solved": out.lps,
+        "command": command,
     });
     if power {
         let bound = volume::volume_bound_bits(m);
@@ -168,5 +178,111 @@ pub fn run(args: Args) -> Result<()> {
         ver.max_violation,
         args.snippets.display()
     );
+    Ok(())
+}
+
+fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json::Value)>> {
+    if !path.exists() {
+        return Ok(None);
+    }
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
+    let get = |k: &str| {
+        v.get(k)
+            .cloned()
+            .with_context(|| format!("{}: missing field '{k}'", path.display()))
+    };
+    let th = theta::Theta::new(
+        serde_json::from_value(get("basis")?)
+            .with_context(|| format!("{}: basis", path.display()))?,
+        serde_json::from_value(get("matrix")?)
+            .with_context(|| format!("{}: matrix", path.display()))?,
+        serde_json::from_value(get("offset")?)
+            .with_context(|| format!("{}: offset", path.display()))?,
+    )
+    .with_context(|| path.display().to_string())?;
+    Ok(Some((th, v)))
+}
+
+fn summary(dir: &std::path::Path) -> Result<()> {
+    // quoted gains: 2015 paper Section 4.3 (θ2 2, θ3 6.2, θ4 12.2783), 2016 supplementary
+    // Section 3 (θ6 30.511 / "30.5")
+    let quoted = [(2usize, "2"), (3, "6.2"), (4, "12.2783"), (6, "30.511")];
+    let mut md = String::from(
+        "| m | ours: gain (bits) | ours: time (s) | ours: max violation | published: gain (our verifier) | published: max violation | quoted in paper | volume bound (bits) | headroom ours (bits) |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    let mut rows = Vec::new();
+    let mut commands = String::new();
+    for (m, q) in quoted {
+        let curve = curve::MonomialCurve::power(m)?;
+        let ours = read_theta(&dir.join(format!("theta{m}.json")))?;
+        let pubd = theta::published(m);
+        let bound = volume::volume_bound_bits(m);
+        let (og, ov, ot) = match &ours {
+            Some((th, v)) => {
+                let ver = theta::verify(th, &curve)?;
+                if let Some(c) = v.get("command").and_then(|c| c.as_str()) {
+                    commands.push_str(&format!("- m = {m}: `{c}`\n"));
+                }
+                (
+                    Some(th.gain_bits()),
+                    Some(ver.max_violation),
+                    v.get("seconds").and_then(|s| s.as_f64()),
+                )
+            }
+            None => (None, None, None),
+        };
+        let (pg, pv) = match &pubd {
+            Some(th) => (
+                Some(th.gain_bits()),
+                Some(theta::verify(th, &curve)?.max_violation),
+            ),
+            None => (None, None),
+        };
+        let f = |x: Option<f64>, p: usize| x.map_or("—".to_string(), |v| format!("{v:.p$}"));
+        let e = |x: Option<f64>| x.map_or("—".to_string(), |v| format!("{v:.2e}"));
+        md.push_str(&format!(
+            "| {m} | {} | {} | {} | {} | {} | {q} | {bound:.4} | {} |\n",
+            f(og, 6),
+            f(ot, 1),
+            e(ov),
+            f(pg, 6),
+            e(pv),
+            f(og.map(|g| bound - g), 4)
+        ));
+        rows.push(json!({
+            "m": m, "ours_gain_bits": og, "ours_seconds": ot, "ours_max_violation": ov,
+            "published_gain_bits": pg, "published_max_violation": pv, "quoted": q,
+            "volume_bound_bits": bound, "headroom_bits": og.map(|g| bound - g),
+        }));
+    }
+    md.push_str("\nmax violation: worst amount by which θ(b(z)) leaves [0,1] over z ∈ [0,1], from the exact verifier (roots of the derivative of each row polynomial); negative = strictly inside. Published tables are printed with ~10 significant digits, so they can leave [0,1] by ~1e-9.\n");
+    if !commands.is_empty() {
+        md.push_str("\nCommands:\n\n");
+        md.push_str(&commands);
+    }
+    let mut fig = serde_json::Value::Null;
+    if let Some((t3, _)) = read_theta(&dir.join("theta3.json"))? {
+        let vols = quantize::fig5::volumes(&t3, 2000)?;
+        let svg = quantize::fig5::svg(&t3, &vols, 48)?;
+        let p = dir.join("fig5.svg");
+        std::fs::write(&p, svg).with_context(|| format!("writing {}", p.display()))?;
+        md.push_str(&format!(
+            "\nFig. 5 analogue (fig5.svg): hull of b([0,1]) {:.6} (exact 1/180 = {:.6}), hull of θ₃∘b([0,1]) {:.4}, ratio {:.1} (paper: 0.41 and 73.9×).\n",
+            vols.volume_b, vols.volume_b_exact, vols.volume_theta, vols.ratio
+        ));
+        fig = serde_json::to_value(&vols)?;
+    }
+    let p = dir.join("comparison.md");
+    std::fs::write(&p, &md).with_context(|| format!("writing {}", p.display()))?;
+    let p = dir.join("summary.json");
+    std::fs::write(
+        &p,
+        serde_json::to_string_pretty(&json!({"rows": rows, "fig5": fig}))? + "\n",
+    )
+    .with_context(|| format!("writing {}", p.display()))?;
+    print!("{md}");
     Ok(())
 }

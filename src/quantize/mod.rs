@@ -13,6 +13,7 @@
 
 pub mod codegen;
 pub mod curve;
+pub mod fig5;
 pub mod linalg;
 pub mod lpsmall;
 pub mod optimize;
