@@ -19,6 +19,9 @@ pub mod score;
 pub mod span;
 pub mod sweep;
 
+pub use dataset::{Dataset, DatasetBuilder, Fragment};
+pub use score::Scorer;
+
 
 
 
