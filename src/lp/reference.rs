@@ -39,11 +39,7 @@ impl MomentSolver for ReferenceSolver {
         let total: Expression = w.iter().copied().sum();
         model = model.with(constraint!(total == 1.0));
         for (j, &bj) in moments.iter().enumerate() {
-            let e: Expression = w
-                .iter()
-                .enumerate()
-                .map(|(i, v)| t.row(i)[j] * *v)
-                .sum();
+            let e: Expression = w.iter().enumerate().map(|(i, v)| t.row(i)[j] * *v).sum();
             model = model.with(constraint!(e == bj));
         }
         match model.solve() {

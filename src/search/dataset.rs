@@ -141,9 +141,7 @@ impl DatasetBuilder {
     }
 
     pub fn finish(mut self) -> Dataset {
-        self.data
-            .fragments
-            .sort_by(|a, b| (a.dist, a.zf, a.layer).cmp(&(b.dist, b.zf, b.layer)));
+        self.data.fragments.sort_by_key(|f| (f.dist, f.zf, f.layer));
         self.data
     }
 }
@@ -337,8 +335,10 @@ mod tests {
         assert_eq!(ds.trivial_error(), 0.25);
         assert_eq!(ds.fragments().len(), 1);
         assert_eq!(ds.cdf(d, 7), 0.5);
-        let t = FunctionTable::new(&g, vec!["z".into(), "z^2".into()], |j, z| z.powi(j as i32 + 1))
-            .unwrap();
+        let t = FunctionTable::new(&g, vec!["z".into(), "z^2".into()], |j, z| {
+            z.powi(j as i32 + 1)
+        })
+        .unwrap();
         let f = ds.filtered(&t);
         assert!((f[0] - 0.5).abs() < 1e-12 && (f[1] - (0.09 + 0.49) / 2.0).abs() < 1e-12);
     }
@@ -362,7 +362,10 @@ mod tests {
                     .iter()
                     .filter(|&&k| ds.fragments()[k as usize].view == v)
                     .count() as f64;
-                assert!((got - all * prefix as f64 / total).abs() <= 4.0 + 1e-9, "{got} {all}");
+                assert!(
+                    (got - all * prefix as f64 / total).abs() <= 4.0 + 1e-9,
+                    "{got} {all}"
+                );
             }
         }
     }

@@ -20,12 +20,9 @@ pub mod span;
 pub mod sweep;
 
 pub use dataset::{Dataset, DatasetBuilder, Fragment};
+pub use results::{merge_dirs, read_rows, Row};
 pub use score::Scorer;
-
-
-
-
-
+pub use sweep::{run_sweep, Hooks, Outcome, Progress, SweepConfig, SweepSummary};
 
 use crate::lp::GridTable;
 use crate::Grid;

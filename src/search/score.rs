@@ -157,7 +157,11 @@ pub fn bound_curve(
     let mut s = lp::make_solver(solver, table.grid_table(cols)?)?;
     let b: Vec<f64> = cols
         .iter()
-        .map(|&c| dist.iter().map(|&(i, w)| w * table.value(i as usize, c)).sum())
+        .map(|&c| {
+            dist.iter()
+                .map(|&(i, w)| w * table.value(i as usize, c))
+                .sum()
+        })
         .collect();
     let z = table.grid().points();
     Ok(zf
@@ -194,7 +198,9 @@ mod tests {
         let s = Scorer::new(&ds, &t, "reference", 7).unwrap();
         let ids: Vec<u32> = (0..ds.fragments().len() as u32).collect();
         let all: Vec<usize> = (0..n - 1).collect();
-        let e = s.errors_many(&[all.clone()], &ids, &|_| {}).unwrap();
+        let e = s
+            .errors_many(std::slice::from_ref(&all), &ids, &|_| {})
+            .unwrap();
         assert_eq!(e[0].failures, 0);
         assert!(e[0].errors.iter().all(|&x| x < 1e-7), "{:?}", e[0].errors);
         // One indicator only: G is much weaker, so errors appear somewhere.

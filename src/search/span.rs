@@ -157,7 +157,15 @@ mod tests {
     fn table() -> FunctionTable {
         // 0: z, 1: z^2, 2: 1-z (affine in z), 3: sin^2(pi z), 4: cos(2 pi z) (= 1 - 2 sin^2),
         // 5: exp(z), 6: 2z^2 + 3 (affine in z^2)
-        let names = ["z", "z^2", "1-z", "sin^2(pi z)", "cos(2 pi z)", "exp(z)", "2z^2+3"];
+        let names = [
+            "z",
+            "z^2",
+            "1-z",
+            "sin^2(pi z)",
+            "cos(2 pi z)",
+            "exp(z)",
+            "2z^2+3",
+        ];
         let pi = std::f64::consts::PI;
         FunctionTable::new(
             &Grid::uniform(64).unwrap(),
