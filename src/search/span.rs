@@ -5,8 +5,11 @@
 //! `tol`, an affine combination of the others on the grid). Two candidates with the same affine
 //! span V = span{1, b_1, …, b_m} on the grid have moments related by an invertible affine map, so
 //! their feasible sets and G coincide: the sweep scores the *canonical* member of V only — the
-//! lexicographically smallest set of m catalog functions spanning V (matroid greedy) — and
-//! flags every other member as its duplicate.
+//! componentwise smallest set of m catalog functions spanning V (matroid greedy; smallest in
+//! both lexicographic and colexicographic order, hence the smallest candidate index) — and
+//! flags every other member as its duplicate. The sweep also applies the basis module's
+//! degeneracy check (`basis::candidates::analyze_values`); a candidate is degenerate if either
+//! check says so.
 //!
 //! Implementation: one Householder QR of the column-normalised n × (N+1) matrix
 //! (1, f_1, …, f_N) gives coordinates r_j ∈ R^(N+1) with ⟨f_i, f_j⟩ = ⟨r_i, r_j⟩ (Q orthonormal),

@@ -325,7 +325,21 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         .collect();
     let subsets: HashMap<u64, Vec<usize>> = mine.iter().cloned().collect();
     let spans = SpanAnalyzer::new(scorer.table(), cfg.tol);
-    let flags: Vec<Flag> = mine.par_iter().map(|(_, c)| spans.flag(c)).collect();
+    // Degenerate: the basis module's check (σ_min/σ_max of the normalised [1, b] on the grid)
+    // or ours (Gram–Schmidt residual); duplicates: our exact span comparison (see `span`).
+    let n_grid = scorer.table().grid().len();
+    let flags: Vec<Flag> = mine
+        .par_iter()
+        .map(|(_, c)| {
+            let gt = scorer.table().grid_table(c)?;
+            let info = crate::basis::candidates::analyze_values(n_grid, c.len(), gt.values());
+            Ok(if info.degenerate {
+                Flag::Degenerate
+            } else {
+                spans.flag(c)
+            })
+        })
+        .collect::<Result<_>>()?;
 
     let results = dir.join(RESULTS_FILE);
     let mut done: BTreeSet<u64> = read_jsonl::<Row>(&results, true)?
