@@ -16,6 +16,8 @@ use std::path::Path;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reference {
     pub label: String,
+    /// Number of functions (ranks are only stated among candidates of the same m).
+    pub m: usize,
     pub error: f64,
     pub stderr: f64,
 }
@@ -74,6 +76,7 @@ pub fn lp_references(data: &Dataset, solver: &str, chunk: usize) -> Result<Vec<R
     let nt = ids.len() as f64;
     let mut out = vec![Reference {
         label: "PCF".into(),
+        m: 0,
         error: 0.0,
         stderr: 0.0,
     }];
@@ -87,6 +90,7 @@ pub fn lp_references(data: &Dataset, solver: &str, chunk: usize) -> Result<Vec<R
         };
         out.push(Reference {
             label: label.to_string(),
+            m: subsets[out.len() - 1].len(),
             error: (data.trivial_error() + sum) / total,
             stderr: nt / total * (var / nt.max(1.0)).sqrt(),
         });
@@ -209,6 +213,7 @@ pub fn plot_side_by_side(path: &Path, sets: &[(String, Vec<f64>)]) -> Result<()>
     for (area, (label, v)) in areas.iter().zip(sets) {
         let refs = [Reference {
             label: "best".into(),
+            m: 0,
             error: v.first().copied().unwrap_or(f64::NAN),
             stderr: 0.0,
         }];
@@ -423,7 +428,18 @@ pub fn ranking_text(rows: &[Row], refs: &[Reference]) -> String {
         best * 100.0,
         top.stderr.unwrap_or(0.0) * 100.0
     );
-    for r in refs.iter().filter(|r| r.label != "PCF") {
+    let m = top.functions.len();
+    for r in refs.iter().filter(|r| r.label != "PCF" && r.m != m) {
+        let _ = writeln!(
+            s,
+            "- {} (m = {}): {:.4} % ± {:.4} % (not ranked: different m).",
+            r.label,
+            r.m,
+            r.error * 100.0,
+            r.stderr * 100.0
+        );
+    }
+    for r in refs.iter().filter(|r| r.label != "PCF" && r.m == m) {
         let _ = writeln!(
             s,
             "- {}: {:.4} % ± {:.4} %, rank {} of {} (the best candidate is {:.4} percentage points, {:.1} % relative, below it).",
@@ -479,6 +495,7 @@ mod tests {
         assert!(t.contains("| 1 | 1 | f1 | 2.0000 |"), "{t}");
         let refs = [Reference {
             label: "b_MSM (LP)".into(),
+            m: 1,
             error: 0.025,
             stderr: 0.0,
         }];
@@ -494,6 +511,7 @@ mod tests {
         let errs: Vec<f64> = (0..100).map(|k| 0.02 + k as f64 * 1e-4).collect();
         let refs = vec![Reference {
             label: "b_MSM (LP)".into(),
+            m: 4,
             error: 0.025,
             stderr: 0.0,
         }];

@@ -534,7 +534,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
             let keep: BTreeSet<u64> = promoted.iter().copied().collect();
             let out: Vec<u64> = cur.iter().copied().filter(|i| !keep.contains(i)).collect();
             tryst!(write_eliminated(
-                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error
+                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error, nontrivial
             ));
             cur = keep.into_iter().collect();
             leader = Some(best);
@@ -555,7 +555,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
             let keep: BTreeSet<u64> = r[..cfg.top].iter().map(|x| x.1).collect();
             let out: Vec<u64> = cur.iter().copied().filter(|i| !keep.contains(i)).collect();
             tryst!(write_eliminated(
-                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error
+                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error, nontrivial
             ));
             cur = keep.into_iter().collect();
         }
@@ -635,6 +635,7 @@ fn write_eliminated(
     stage: usize,
     names: &dyn Fn(u64) -> Vec<String>,
     to_error: &dyn Fn(u64, f64, f64) -> (f64, f64),
+    nontrivial: u64,
 ) -> Result<Result<(), Stopped>> {
     let rows: Vec<Row> = out
         .iter()
@@ -652,7 +653,8 @@ fn write_eliminated(
                 duplicate_of: None,
                 seconds: p.seconds,
                 stage,
-                full: false,
+                // The disjoint stage blocks may have covered every fragment.
+                full: p.n == nontrivial,
                 lp_failures: p.failures,
             }
         })
