@@ -149,6 +149,7 @@ impl Expr {
                 '-' => x - y,
                 '*' => x * y,
                 '/' => x / y,
+                _ if y.fract() == 0.0 && y.abs() <= 64.0 => x.powi(y as i32),
                 _ => x.powf(y),
             });
         }
@@ -263,6 +264,14 @@ fn tokenize(src: &str) -> std::result::Result<Vec<Token>, (String, usize)> {
                     i = j;
                 }
             }
+            if i < chars.len() && chars[i] == '.' {
+                // "1..2", "1.2.3": swallow the run so the error shows it.
+                while i < chars.len() && (chars[i].is_ascii_digit() || chars[i] == '.') {
+                    i += 1;
+                }
+                let text: String = chars[start..i].iter().collect();
+                return Err((format!("malformed number '{text}'"), pos));
+            }
             let text: String = chars[start..i].iter().collect();
             let v: f64 = text
                 .parse()
@@ -330,9 +339,16 @@ fn tokenize(src: &str) -> std::result::Result<Vec<Token>, (String, usize)> {
     Ok(toks)
 }
 
+/// Longest accepted formula (bounds the recursion depth of parsing and evaluation).
+pub const MAX_FORMULA_CHARS: usize = 4096;
+
+/// Deepest accepted nesting of parentheses, unary operators and exponents.
+pub const MAX_NESTING: usize = 200;
+
 struct Parser {
     toks: Vec<Token>,
     at: usize,
+    depth: usize,
 }
 
 type PResult<T> = std::result::Result<T, (String, usize)>;
@@ -375,6 +391,18 @@ impl Parser {
         }
     }
     fn unary(&mut self) -> PResult<Expr> {
+        self.depth += 1;
+        if self.depth > MAX_NESTING {
+            return Err((
+                format!("nested more than {MAX_NESTING} levels deep"),
+                self.peek().pos,
+            ));
+        }
+        let r = self.unary_inner();
+        self.depth -= 1;
+        r
+    }
+    fn unary_inner(&mut self) -> PResult<Expr> {
         match self.peek().tok {
             Tok::Op('-') => {
                 self.next();
@@ -450,11 +478,22 @@ impl Parser {
 /// "formula 'SRC': WHAT at position P" (1-based character position).
 pub fn parse(src: &str) -> Result<Expr> {
     let run = || -> PResult<Expr> {
+        let len = src.chars().count();
+        if len > MAX_FORMULA_CHARS {
+            return Err((
+                format!("formula too long ({len} > {MAX_FORMULA_CHARS} characters)"),
+                MAX_FORMULA_CHARS + 1,
+            ));
+        }
         let toks = tokenize(src)?;
         if toks.len() == 1 {
             return Err(("empty formula".to_string(), 1));
         }
-        let mut p = Parser { toks, at: 0 };
+        let mut p = Parser {
+            toks,
+            at: 0,
+            depth: 0,
+        };
         let e = p.expr()?;
         let t = p.peek().clone();
         if t.tok != Tok::End {

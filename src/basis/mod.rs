@@ -118,9 +118,14 @@ struct CatalogEntry {
 impl Catalog {
     /// The catalog compiled into the binary (`basis_functions/catalog.json`).
     pub fn embedded() -> Catalog {
-        Catalog::from_json(EMBEDDED_CATALOG)
-            .context("embedded catalog basis_functions/catalog.json")
-            .expect("the embedded catalog is checked by tests")
+        static EMBEDDED: std::sync::OnceLock<Catalog> = std::sync::OnceLock::new();
+        EMBEDDED
+            .get_or_init(|| {
+                Catalog::from_json(EMBEDDED_CATALOG)
+                    .context("embedded catalog basis_functions/catalog.json")
+                    .expect("the embedded catalog is checked by tests")
+            })
+            .clone()
     }
 
     /// Load a catalog file; errors name the file and the offending entry.
@@ -174,7 +179,8 @@ impl Catalog {
     pub fn resolve(&self, name_or_formula: &str) -> Result<Function> {
         match self.position(name_or_formula) {
             Some(i) => Ok(self.functions[i].clone()),
-            None => Function::parse(name_or_formula),
+            None => Function::parse(name_or_formula)
+                .with_context(|| format!("'{}' is not in the catalog", name_or_formula.trim())),
         }
     }
 
@@ -185,7 +191,11 @@ impl Catalog {
         }
         let fs = names
             .iter()
-            .map(|n| self.resolve(n.as_ref()))
+            .enumerate()
+            .map(|(i, n)| {
+                self.resolve(n.as_ref())
+                    .with_context(|| format!("basis entry {i}"))
+            })
             .collect::<Result<Vec<_>>>()?;
         Ok(Basis::new(fs))
     }

@@ -58,6 +58,9 @@ struct Problem {
 /// Default number of uniform grid points when "grid" is omitted.
 pub const DEFAULT_GRID_POINTS: usize = 1024;
 
+/// Largest accepted grid (the table holds n·m values per solver instance).
+pub const MAX_GRID_POINTS: usize = 1 << 20;
+
 /// Problems solved by one solver instance (consecutive problems share warm-start state).
 const CHUNK: usize = 64;
 
@@ -67,7 +70,12 @@ fn grid_of(spec: Option<GridSpec>) -> Result<Grid> {
         Some(GridSpec {
             points: Some(n),
             values: None,
-        }) => Grid::uniform(n),
+        }) => {
+            if n > MAX_GRID_POINTS {
+                bail!("grid: {n} points is more than the supported {MAX_GRID_POINTS}");
+            }
+            Grid::uniform(n)
+        }
         Some(GridSpec {
             points: None,
             values: Some(v),
@@ -81,8 +89,23 @@ fn grid_of(spec: Option<GridSpec>) -> Result<Grid> {
     }
 }
 
-/// Validates and solves a batch; returns the output JSON value.
-pub fn solve_batch(text: &str, catalog: &Catalog) -> Result<serde_json::Value> {
+/// One result, serialised as {"status", "g", "support"} in that order.
+#[derive(serde::Serialize)]
+struct Output {
+    status: Status,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    g: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    support: Option<Vec<[f64; 2]>>,
+}
+
+#[derive(serde::Serialize)]
+struct Results {
+    results: Vec<Output>,
+}
+
+/// Validates and solves a batch; returns the output JSON text.
+pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String> {
     let input: Input = serde_json::from_str(text).context("malformed input JSON")?;
     if input.basis.is_empty() {
         bail!("basis: need at least one function");
@@ -113,11 +136,11 @@ pub fn solve_batch(text: &str, catalog: &Catalog) -> Result<serde_json::Value> {
     if input.problems.len() < 1000 {
         bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
     }
-    let chunks: Vec<Vec<serde_json::Value>> = input
+    let chunks: Vec<Vec<Output>> = input
         .problems
         .par_chunks(CHUNK)
         .enumerate()
-        .map(|(c, chunk)| -> Result<Vec<serde_json::Value>> {
+        .map(|(c, chunk)| -> Result<Vec<Output>> {
             let mut s = make_solver(&solver, table.clone())?;
             let mut out = Vec::with_capacity(chunk.len());
             for (k, p) in chunk.iter().enumerate() {
@@ -125,12 +148,16 @@ pub fn solve_batch(text: &str, catalog: &Catalog) -> Result<serde_json::Value> {
                     .solve(&p.moments, p.zf)
                     .with_context(|| format!("problem {}", c * CHUNK + k))?;
                 out.push(match sol.status {
-                    Status::Optimal => serde_json::json!({
-                        "status": "optimal",
-                        "g": sol.g,
-                        "support": sol.support.iter().map(|&(z, w)| [z, w]).collect::<Vec<_>>(),
-                    }),
-                    Status::Infeasible => serde_json::json!({"status": "infeasible"}),
+                    Status::Optimal => Output {
+                        status: sol.status,
+                        g: Some(sol.g),
+                        support: Some(sol.support.iter().map(|&(z, w)| [z, w]).collect()),
+                    },
+                    Status::Infeasible => Output {
+                        status: sol.status,
+                        g: None,
+                        support: None,
+                    },
                 });
                 bar.inc(1);
             }
@@ -138,7 +165,14 @@ pub fn solve_batch(text: &str, catalog: &Catalog) -> Result<serde_json::Value> {
         })
         .collect::<Result<_>>()?;
     bar.finish_and_clear();
-    Ok(serde_json::json!({ "results": chunks.into_iter().flatten().collect::<Vec<_>>() }))
+    let out = Results {
+        results: chunks.into_iter().flatten().collect(),
+    };
+    Ok(if pretty {
+        serde_json::to_string_pretty(&out)?
+    } else {
+        serde_json::to_string(&out)?
+    })
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -159,12 +193,7 @@ pub fn run(args: Args) -> Result<()> {
             (s, "stdin".to_string())
         }
     };
-    let out = solve_batch(&text, &catalog).with_context(|| format!("lp {source}"))?;
-    let s = if args.pretty {
-        serde_json::to_string_pretty(&out)?
-    } else {
-        serde_json::to_string(&out)?
-    };
-    println!("{s}");
+    let out = solve_batch(&text, &catalog, args.pretty).with_context(|| format!("lp {source}"))?;
+    println!("{out}");
     Ok(())
 }
