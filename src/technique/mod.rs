@@ -51,5 +51,6 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
     }
 }
 
+pub mod lp_candidate;
 pub mod registry;
 pub use registry::by_name;

@@ -9,5 +9,8 @@ use anyhow::{bail, Result};
 
 /// The technique named by `spec`; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
+    if let Some(list) = spec.strip_prefix("lp:") {
+        return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
+    }
     bail!("unknown technique '{spec}'")
 }
