@@ -258,3 +258,5 @@ pub fn default_dataset(resolution: usize) -> Result<Vec<DepthStack>> {
         .map(|(s, i)| render_view(s, i, resolution))
         .collect())
 }
+
+pub mod rectified;
