@@ -135,7 +135,7 @@ pub fn run(args: Args) -> Result<()> {
         .with_context(|| format!("writing {}", p.display()))?;
     let i3 = alphas.iter().position(|&a| (a - 3e-5).abs() < 1e-12);
     let mut md = format!(
-        "Mean |G − PCF| over {} fragments of {} views ({}), stride {}; bias b* = (½,…,½).\n\n| technique | storage | best α | error at best α | error at α = 3e-5 | non-finite at best α |\n|---|---|---|---|---|---|\n",
+        "Mean |G − PCF| over {} fragments of {} views ({}), stride {}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone).\n\n| technique | storage | best α | error at best α | error at α = 3e-5 | deviation at best α | deviation at α = 3e-5 | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
         all.first().map_or(0, |s| s.fragments),
         stacks.len(),
         args.stacks.display(),
@@ -148,12 +148,14 @@ pub fn run(args: Args) -> Result<()> {
             .position(|&a| a == s.best_alpha)
             .unwrap_or(0);
         md.push_str(&format!(
-            "| {} | {} | {:.0e} | {:.5} | {} | {} |\n",
+            "| {} | {} | {:.0e} | {:.5} | {} | {:.2e} | {} | {} |\n",
             s.technique,
             s.config,
             s.best_alpha,
             s.best_error,
             i3.map_or("—".into(), |i| format!("{:.5}", s.errors[i])),
+            s.deviation[k],
+            i3.map_or("—".into(), |i| format!("{:.2e}", s.deviation[i])),
             s.non_finite[k]
         ));
     }

@@ -24,6 +24,8 @@ pub enum Storage {
     Unorm(u32),
     /// IEEE single precision (round to nearest).
     Float32,
+    /// No rounding (f64): the reference for the quantization deviation.
+    Exact,
 }
 
 impl Storage {
@@ -35,6 +37,7 @@ impl Storage {
                 (v.clamp(0.0, 1.0) * q).round() / q
             }
             Storage::Float32 => v as f32 as f64,
+            Storage::Exact => v,
         }
     }
 }
@@ -144,6 +147,9 @@ pub struct Sweep {
     pub alphas: Vec<f64>,
     /// Mean |G − PCF| over all evaluated fragments, per α.
     pub errors: Vec<f64>,
+    /// Mean |G − G_exact| per α: deviation from the same technique and α on unquantized
+    /// (f64) moments, i.e. the error caused by storage alone (non-finite counted as 1).
+    pub deviation: Vec<f64>,
     /// Fragments with non-finite G per α (counted as error 1).
     pub non_finite: Vec<usize>,
     pub best_alpha: f64,
@@ -171,6 +177,14 @@ pub fn sweep(
         .collect();
     let fronts: Vec<Vec<f64>> = stacks.iter().map(front_map).collect();
     let n_frag: usize = frags.iter().map(|f| f.len()).sum();
+    let exact: Vec<Vec<Vec<f64>>> = stacks
+        .par_iter()
+        .zip(&fronts)
+        .map(|(s, f)| {
+            let id = identity_theta(tech.m());
+            decoded_moments(f, s.meta.width, s.meta.height, &id, Storage::Exact, &kernel)
+        })
+        .collect();
     let mut out = Vec::new();
     for cfg in configs {
         let maps: Vec<Vec<Vec<f64>>> = stacks
@@ -187,24 +201,29 @@ pub fn sweep(
                 )
             })
             .collect();
-        let per_alpha: Vec<(f64, usize)> = alphas
+        let per_alpha: Vec<(f64, usize, f64)> = alphas
             .par_iter()
             .map(|&a| {
                 let sh = tech.shadower(a);
                 let mut sum = 0.0;
+                let mut dev = 0.0;
                 let mut bad = 0;
-                for (fr, mp) in frags.iter().zip(&maps) {
+                for ((fr, mp), ex) in frags.iter().zip(&maps).zip(&exact) {
                     for f in fr {
                         let g = sh.shadow(&mp[f.texel], f.zf);
+                        let ge = sh.shadow(&ex[f.texel], f.zf);
                         if g.is_finite() {
                             sum += (g - f.pcf).abs();
+                            dev += if ge.is_finite() { (g - ge).abs() } else { 1.0 };
                         } else {
                             sum += 1.0;
+                            dev += 1.0;
                             bad += 1;
                         }
                     }
                 }
-                (sum / n_frag.max(1) as f64, bad)
+                let n = n_frag.max(1) as f64;
+                (sum / n, bad, dev / n)
             })
             .collect();
         let errors: Vec<f64> = per_alpha.iter().map(|p| p.0).collect();
@@ -219,6 +238,7 @@ pub fn sweep(
             best_error: errors.get(k).copied().unwrap_or(f64::NAN),
             errors,
             non_finite: per_alpha.iter().map(|p| p.1).collect(),
+            deviation: per_alpha.iter().map(|p| p.2).collect(),
             fragments: n_frag,
         });
     }
