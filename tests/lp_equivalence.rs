@@ -1,0 +1,325 @@
+//! The fast solver against the reference (good_lp + microlp) on random and degenerate
+//! instances of Algorithm 1.
+
+use momentlab::lp::fast::FastSolver;
+use momentlab::lp::instances::{
+    mixture_moments, power_table, random_mixture, smooth_functions, table_of, SmoothFn,
+};
+use momentlab::lp::reference::ReferenceSolver;
+use momentlab::lp::{GridTable, MomentSolver, Solution, Status};
+use momentlab::Grid;
+use rand::seq::SliceRandom;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const TOL_G: f64 = 1e-9;
+
+/// The support reproduces the moments, its weights are positive and sum to 1, G is its mass
+/// below z_f, and it lies on the grid.
+fn check_support(
+    table: &GridTable,
+    b: &[f64],
+    zf: f64,
+    sol: &Solution,
+    what: &str,
+) -> Result<(), String> {
+    if sol.status != Status::Optimal {
+        return Err(format!("{what}: not optimal"));
+    }
+    let z = table.grid().points();
+    let mut mass = 0.0;
+    let mut below = 0.0;
+    let mut mom = vec![0.0; table.m()];
+    for &(zs, w) in &sol.support {
+        if w <= 0.0 {
+            return Err(format!("{what}: weight {w}"));
+        }
+        let Some(i) = z.iter().position(|&v| v == zs) else {
+            return Err(format!("{what}: support point {zs} not on the grid"));
+        };
+        mass += w;
+        if zs < zf {
+            below += w;
+        }
+        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
+            *mj += w * v;
+        }
+    }
+    if (mass - 1.0).abs() > 1e-9 {
+        return Err(format!("{what}: mass {mass}"));
+    }
+    if (below - sol.g).abs() > 1e-9 {
+        return Err(format!("{what}: G {} vs mass below {below}", sol.g));
+    }
+    for j in 0..table.m() {
+        let scale = (0..table.n())
+            .map(|i| table.row(i)[j].abs())
+            .fold(1e-300, f64::max);
+        if (mom[j] - b[j]).abs() > 1e-8 * scale {
+            return Err(format!(
+                "{what}: moment {j}: support gives {} want {} (scale {scale})",
+                mom[j], b[j]
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A random distinct m-subset of the built-in smooth functions.
+fn random_basis(rng: &mut ChaCha8Rng, m: usize) -> Vec<SmoothFn> {
+    let mut all = smooth_functions();
+    all.shuffle(rng);
+    all.truncate(m);
+    all
+}
+
+fn pick_zf(rng: &mut ChaCha8Rng, z: &[f64], mixture: &[(usize, f64)]) -> f64 {
+    match rng.gen_range(0..6) {
+        0 => rng.gen_range(0.0..=1.0),
+        1 => z[rng.gen_range(0..z.len())],
+        2 | 3 => z[mixture[rng.gen_range(0..mixture.len())].0],
+        4 => 0.0,
+        _ => 1.0,
+    }
+}
+
+/// Mixture kinds: general (1–6 Diracs), a single Dirac, or a boundary point of the moment
+/// space (fewer Diracs, or Diracs at the grid's end points).
+fn pick_mixture(rng: &mut ChaCha8Rng, n: usize, m: usize) -> Vec<(usize, f64)> {
+    match rng.gen_range(0..5) {
+        0 => random_mixture(rng, n, 1),
+        1 => {
+            // Boundary: fewer than (m+1)/2 interior atoms, or an end point.
+            let k = rng.gen_range(1..=(m / 2).max(1));
+            let mut mix = random_mixture(rng, n, k);
+            if rng.gen_bool(0.5) {
+                let end = if rng.gen_bool(0.5) { 0 } else { n - 1 };
+                if !mix.iter().any(|&(i, _)| i == end) {
+                    mix[0].0 = end;
+                }
+            }
+            mix
+        }
+        _ => {
+            let k = rng.gen_range(1..=6);
+            random_mixture(rng, n, k)
+        }
+    }
+}
+
+/// Tables whose [1, b] is worse conditioned than this on the grid are numerically
+/// rank-deficient candidates (reported as degenerate by the sweep, not solved).
+const COND_MAX: f64 = 1e8;
+/// Where the rounding bound of the final basis exceeds 1e-9 (clustered support on a fine
+/// grid), G is not determined to 1e-9 by double-precision moments: compare within this
+/// multiple of the bound instead, and count such instances separately.
+const BOUND_FACTOR: f64 = 10.0;
+
+#[derive(Default)]
+struct Tally {
+    /// Feasible instances compared at 1e-9.
+    strict: usize,
+    /// Feasible instances whose |ΔG| > 1e-9 is within the rounding bound.
+    loose: usize,
+    infeasible: usize,
+    skipped_tables: usize,
+    /// Feasible instances (certified by the mixture) that the reference calls infeasible.
+    reference_misreports: usize,
+    max_diff: f64,
+    failures: Vec<String>,
+}
+
+impl Tally {
+    fn compare(&mut self, what: &str, fast: &Solution, bound: f64, r: &Solution) {
+        if fast.status != r.status {
+            self.failures.push(format!(
+                "{what}: status {:?} vs ref {:?}",
+                fast.status, r.status
+            ));
+            return;
+        }
+        let d = (fast.g - r.g).abs();
+        if d <= TOL_G {
+            self.strict += 1;
+            self.max_diff = self.max_diff.max(d);
+        } else if d <= BOUND_FACTOR * bound {
+            self.loose += 1;
+        } else {
+            self.failures.push(format!(
+                "{what}: G fast {} ref {} (diff {d:e}, bound {bound:e})",
+                fast.g, r.g
+            ));
+        }
+    }
+
+    fn finish(&self, min_strict: usize) {
+        eprintln!(
+            "{} instances equal to 1e-9 (max |dG| {:e}), {} within the rounding bound, {} infeasible, {} tables skipped (cond > {COND_MAX:e}), {} reference misreports",
+            self.strict, self.max_diff, self.loose, self.infeasible, self.skipped_tables, self.reference_misreports
+        );
+        for f in self.failures.iter().take(10) {
+            eprintln!("FAIL {f}");
+        }
+        assert!(self.failures.is_empty(), "{} failures", self.failures.len());
+        assert!(
+            self.strict >= min_strict,
+            "only {} strict instances",
+            self.strict
+        );
+        assert!(
+            self.reference_misreports * 1000 <= self.strict,
+            "too many reference misreports: {}",
+            self.reference_misreports
+        );
+        assert!(
+            self.loose * 50 <= self.strict,
+            "too many ill-posed instances: {}",
+            self.loose
+        );
+    }
+}
+
+fn run_family(seed: u64, tables: usize, per_table: usize, ns: &[usize], tally: &mut Tally) {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for t in 0..tables {
+        let n = ns[rng.gen_range(0..ns.len())];
+        let m = if rng.gen_bool(0.4) {
+            4
+        } else {
+            rng.gen_range(1..=8)
+        };
+        let grid = Grid::uniform(n).unwrap();
+        let fns = random_basis(&mut rng, m);
+        let names: Vec<&str> = fns.iter().map(|f| f.0).collect();
+        let table = table_of(&grid, &fns).unwrap();
+        let mut fast = FastSolver::new(table.clone());
+        if fast.condition() > COND_MAX {
+            tally.skipped_tables += 1;
+            continue;
+        }
+        let mut cold = FastSolver::new(table.clone());
+        cold.set_warm_start(false);
+        let mut reference = ReferenceSolver::new(table.clone());
+        for p in 0..per_table {
+            let mix = pick_mixture(&mut rng, n, m);
+            let b = mixture_moments(&table, &mix);
+            // Several z_f per moment vector, as in evaluation (exercises warm start).
+            for _ in 0..3 {
+                let zf = pick_zf(&mut rng, grid.points(), &mix);
+                let what = format!(
+                    "seed {seed} table {t} problem {p}: n {n} basis {names:?} mix {mix:?} zf {zf} warm basis {:?}",
+                    fast.warm_basis()
+                );
+                let r = reference.solve(&b, zf).unwrap();
+                let fallbacks = fast.stats().fallbacks + cold.stats().fallbacks;
+                let f = fast.solve(&b, zf).unwrap();
+                let fb = fast.last_error_bound();
+                let c = cold.solve(&b, zf).unwrap();
+                let cb = cold.last_error_bound();
+                if fast.stats().fallbacks + cold.stats().fallbacks > fallbacks {
+                    tally
+                        .failures
+                        .push(format!("fallback to the reference: {what}"));
+                }
+                if r.status != Status::Optimal {
+                    // The mixture certifies feasibility: a reference misreport (microlp's
+                    // phase-1 tolerances). The fast solution must still be a valid
+                    // distribution no worse than the mixture itself.
+                    tally.reference_misreports += 1;
+                    let g_mix: f64 = mix
+                        .iter()
+                        .filter(|&&(i, _)| grid.points()[i] < zf)
+                        .map(|&(_, w)| w)
+                        .sum();
+                    for (sol, name) in [(&f, "warm"), (&c, "cold")] {
+                        let w = format!("{name} (reference misreport): {what}");
+                        if let Err(e) = check_support(&table, &b, zf, sol, &w) {
+                            tally.failures.push(e);
+                        } else if sol.g > g_mix + 1e-9 {
+                            tally
+                                .failures
+                                .push(format!("{w}: G {} > mixture {g_mix}", sol.g));
+                        }
+                    }
+                    continue;
+                }
+                tally.compare(&what, &f, fb, &r);
+                tally.compare(&format!("cold: {what}"), &c, cb, &r);
+                for (sol, name) in [(&f, "warm"), (&c, "cold")] {
+                    if let Err(e) = check_support(&table, &b, zf, sol, &format!("{name}: {what}")) {
+                        tally.failures.push(e);
+                    }
+                }
+            }
+            // An infeasible neighbour: push b outside the convex hull of the grid columns
+            // along a random direction ℓ, by a clear margin.
+            if p % 4 == 0 {
+                let l: Vec<f64> = (0..m).map(|_| rng.gen_range(-1.0..1.0)).collect();
+                let proj = |v: &[f64]| v.iter().zip(&l).map(|(a, b)| a * b).sum::<f64>();
+                let hmax = (0..n).map(|i| proj(table.row(i))).fold(f64::MIN, f64::max);
+                let ll = proj(&l);
+                let scale = (0..n)
+                    .flat_map(|i| table.row(i).iter().map(|v| v.abs()))
+                    .fold(0.0, f64::max);
+                let margin = 1e-3 * scale * ll.sqrt();
+                let step = (hmax - proj(&b) + margin) / ll;
+                let bad: Vec<f64> = b.iter().zip(&l).map(|(a, d)| a + step * d).collect();
+                let zf = rng.gen_range(0.0..=1.0);
+                let what = format!("infeasible: seed {seed} table {t} basis {names:?} b {bad:?}");
+                let r = reference.solve(&bad, zf).unwrap();
+                let f = fast.solve(&bad, zf).unwrap();
+                if r.status != Status::Infeasible || f.status != Status::Infeasible {
+                    tally
+                        .failures
+                        .push(format!("{what}: ref {:?} fast {:?}", r.status, f.status));
+                } else if !(f.g.is_nan() && f.support.is_empty()) {
+                    tally
+                        .failures
+                        .push(format!("{what}: infeasible with a solution"));
+                } else {
+                    tally.infeasible += 1;
+                }
+            }
+        }
+        if fast.stats().fallbacks + cold.stats().fallbacks > 0 {
+            tally
+                .failures
+                .push(format!("fallbacks to the reference on table {t} {names:?}"));
+        }
+    }
+}
+
+#[test]
+fn fast_equals_reference_on_random_instances() {
+    let mut tally = Tally::default();
+    run_family(1, 200, 12, &[16, 24, 32, 48, 64], &mut tally);
+    run_family(2, 40, 10, &[128], &mut tally);
+    tally.finish(7000);
+}
+
+#[test]
+fn power_basis_matches_reference() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut tally = Tally::default();
+    for &n in &[17usize, 33, 64] {
+        for m in 1..=6 {
+            let grid = Grid::uniform(n).unwrap();
+            let table = power_table(&grid, m).unwrap();
+            let mut fast = FastSolver::new(table.clone());
+            let mut reference = ReferenceSolver::new(table.clone());
+            for _ in 0..40 {
+                let mix = pick_mixture(&mut rng, n, m);
+                let b = mixture_moments(&table, &mix);
+                let zf = pick_zf(&mut rng, grid.points(), &mix);
+                let r = reference.solve(&b, zf).unwrap();
+                let f = fast.solve(&b, zf).unwrap();
+                let what = format!("power m {m} n {n} mix {mix:?} zf {zf}");
+                tally.compare(&what, &f, fast.last_error_bound(), &r);
+                if let Err(e) = check_support(&table, &b, zf, &f, &what) {
+                    tally.failures.push(e);
+                }
+            }
+        }
+    }
+    tally.finish(3 * 6 * 40 * 9 / 10);
+}
