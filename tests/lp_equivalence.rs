@@ -3,7 +3,8 @@
 
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::instances::{
-    mixture_moments, power_table, random_mixture, smooth_functions, table_of, SmoothFn,
+    kernel_patches, mixture_moments, power_table, random_mixture, smooth_functions, table_of,
+    SmoothFn,
 };
 use momentlab::lp::reference::ReferenceSolver;
 use momentlab::lp::{GridTable, MomentSolver, Solution, Status};
@@ -114,6 +115,8 @@ const COND_MAX: f64 = 1e8;
 /// grid), G is not determined to 1e-9 by double-precision moments: compare within this
 /// multiple of the bound instead, and count such instances separately.
 const BOUND_FACTOR: f64 = 10.0;
+/// ... and never more than this absolute difference.
+const LOOSE_MAX: f64 = 1e-4;
 
 #[derive(Default)]
 struct Tally {
@@ -126,6 +129,7 @@ struct Tally {
     /// Feasible instances (certified by the mixture) that the reference calls infeasible.
     reference_misreports: usize,
     max_diff: f64,
+    max_loose: f64,
     failures: Vec<String>,
 }
 
@@ -142,8 +146,12 @@ impl Tally {
         if d <= TOL_G {
             self.strict += 1;
             self.max_diff = self.max_diff.max(d);
-        } else if d <= BOUND_FACTOR * bound {
+        } else if d <= LOOSE_MAX && d <= BOUND_FACTOR * bound {
             self.loose += 1;
+            self.max_loose = self.max_loose.max(d);
+            if self.loose <= 5 {
+                eprintln!("loose: {what}: diff {d:e} bound {bound:e}");
+            }
         } else {
             self.failures.push(format!(
                 "{what}: G fast {} ref {} (diff {d:e}, bound {bound:e})",
@@ -152,10 +160,46 @@ impl Tally {
         }
     }
 
+    /// The mixture certifies feasibility, but the reference says infeasible (microlp's phase-1
+    /// tolerances): count it; the fast solutions must still be valid distributions with these
+    /// moments and no worse than the mixture itself.
+    fn misreport(
+        &mut self,
+        table: &GridTable,
+        b: &[f64],
+        zf: f64,
+        mix: &[(usize, f64)],
+        sols: &[&Solution],
+        what: &str,
+    ) {
+        self.reference_misreports += 1;
+        let z = table.grid().points();
+        let g_mix: f64 = mix
+            .iter()
+            .filter(|&&(i, _)| z[i] < zf)
+            .map(|&(_, w)| w)
+            .sum();
+        for sol in sols {
+            let w = format!("(reference misreport): {what}");
+            if let Err(e) = check_support(table, b, zf, sol, &w) {
+                self.failures.push(e);
+            } else if sol.g > g_mix + 1e-9 {
+                self.failures
+                    .push(format!("{w}: G {} > mixture {g_mix}", sol.g));
+            }
+        }
+    }
+
     fn finish(&self, min_strict: usize) {
+        self.finish_with(min_strict, 50, 1000);
+    }
+
+    /// `loose_ratio`: at most one instance within the rounding bound per this many strict ones.
+    /// `misreport_ratio`: at most one reference misreport per this many strict instances.
+    fn finish_with(&self, min_strict: usize, loose_ratio: usize, misreport_ratio: usize) {
         eprintln!(
-            "{} instances equal to 1e-9 (max |dG| {:e}), {} within the rounding bound, {} infeasible, {} tables skipped (cond > {COND_MAX:e}), {} reference misreports",
-            self.strict, self.max_diff, self.loose, self.infeasible, self.skipped_tables, self.reference_misreports
+            "{} instances equal to 1e-9 (max |dG| {:e}), {} within the rounding bound (max |dG| {:e}), {} infeasible, {} tables skipped (cond > {COND_MAX:e}), {} reference misreports",
+            self.strict, self.max_diff, self.loose, self.max_loose, self.infeasible, self.skipped_tables, self.reference_misreports
         );
         for f in self.failures.iter().take(10) {
             eprintln!("FAIL {f}");
@@ -167,12 +211,12 @@ impl Tally {
             self.strict
         );
         assert!(
-            self.reference_misreports * 1000 <= self.strict,
+            self.reference_misreports * misreport_ratio <= self.strict,
             "too many reference misreports: {}",
             self.reference_misreports
         );
         assert!(
-            self.loose * 50 <= self.strict,
+            self.loose * loose_ratio <= self.strict,
             "too many ill-posed instances: {}",
             self.loose
         );
@@ -322,4 +366,44 @@ fn power_basis_matches_reference() {
         }
     }
     tally.finish(3 * 6 * 40 * 9 / 10);
+}
+
+/// Realistic problems (9×9 Gaussian kernels over depth maps with 1–3 clusters, the MSM power
+/// basis) at n = 256 and n = 1024, the benchmark's distribution.
+#[test]
+fn kernel_problems_match_reference_at_1024() {
+    let mut tally = Tally::default();
+    for &(n, patches) in &[(256usize, 100usize), (1024, 50)] {
+        let grid = Grid::uniform(n).unwrap();
+        let table = power_table(&grid, 4).unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(11 + n as u64);
+        let mut fast = FastSolver::new(table.clone());
+        let mut reference = ReferenceSolver::new(table.clone());
+        for (k, patch) in kernel_patches(&mut rng, &grid, patches).iter().enumerate() {
+            let b = mixture_moments(&table, &patch.mixture);
+            for &zf in &patch.zf {
+                let what = format!("kernel n {n} patch {k}: b {b:?} zf {zf}");
+                let r = match reference.solve(&b, zf) {
+                    Ok(r) => r,
+                    Err(e) => {
+                        tally.failures.push(format!("{what}: reference: {e}"));
+                        continue;
+                    }
+                };
+                let f = fast.solve(&b, zf).unwrap();
+                if r.status == Status::Infeasible {
+                    tally.misreport(&table, &b, zf, &patch.mixture, &[&f], &what);
+                    continue;
+                }
+                tally.compare(&what, &f, fast.last_error_bound(), &r);
+                if let Err(e) = check_support(&table, &b, zf, &f, &what) {
+                    tally.failures.push(e);
+                }
+            }
+        }
+        assert_eq!(fast.stats().fallbacks, 0);
+    }
+    // Kernel problems at z_f on the receiver's own cluster are ill-posed at 1e-9 much more
+    // often than random mixtures: allow up to a fifth of them within the rounding bound.
+    tally.finish_with(300, 5, 100);
 }

@@ -127,6 +127,13 @@ pub struct FastSolver {
     ls_q: Vec<f64>,
     ls_r: Vec<f64>,
     ls_w: Vec<f64>,
+    /// 1 / max_i |M_j(z_i)|: row equilibration of the original system.
+    oscale: Vec<f64>,
+    lo_a: Vec<f64>,
+    lo_q: Vec<f64>,
+    lo_r: Vec<f64>,
+    lo_w: Vec<f64>,
+    lo_rhs: Vec<f64>,
 }
 
 impl FastSolver {
@@ -213,7 +220,6 @@ impl FastSolver {
             rows,
             rcoef,
             kept,
-            fscale,
             b0,
             condition,
             last_bound: 0.0,
@@ -236,6 +242,16 @@ impl FastSolver {
             ls_q: vec![0.0; r * r],
             ls_r: vec![0.0; r * r],
             ls_w: vec![0.0; r],
+            oscale: fscale
+                .iter()
+                .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
+                .collect(),
+            lo_a: vec![0.0; mm * mm],
+            lo_q: vec![0.0; mm * mm],
+            lo_r: vec![0.0; mm * mm],
+            lo_w: vec![0.0; mm],
+            lo_rhs: vec![0.0; mm],
+            fscale,
             table,
         }
     }
@@ -720,6 +736,74 @@ impl FastSolver {
         self.basis[l] = q;
     }
 
+    /// Final refinement in the original coordinates: least squares of the (row-equilibrated)
+    /// system [1; b(z_i)] w = [1; b] on the support found, accepted when the weights stay
+    /// non-negative and the residual shrinks. The transformed moments c carry the rounding of
+    /// R^{-T}; this removes it from the weights (and G).
+    fn polish_original(&mut self, moments: &[f64]) {
+        let mm = self.m + 1;
+        let mut k = 0;
+        for t in 0..self.r {
+            if self.basis[t] != ART && self.x[t] > 0.0 {
+                self.ls_sup[k] = t;
+                k += 1;
+            }
+        }
+        if k == 0 {
+            return;
+        }
+        self.lo_rhs[0] = 1.0;
+        for j in 1..mm {
+            self.lo_rhs[j] = moments[j - 1] * self.oscale[j];
+        }
+        for a in 0..k {
+            let i = self.basis[self.ls_sup[a]];
+            let col = &mut self.lo_a[a * mm..(a + 1) * mm];
+            col[0] = 1.0;
+            for (j, v) in self.table.row(i).iter().enumerate() {
+                col[j + 1] = v * self.oscale[j + 1];
+            }
+        }
+        let resid = |a: &[f64], w: &[f64], rhs: &[f64]| -> f64 {
+            let mut ss = 0.0;
+            for j in 0..mm {
+                let mut acc = -rhs[j];
+                for (t, wt) in w.iter().enumerate() {
+                    acc += wt * a[t * mm + j];
+                }
+                ss += acc * acc;
+            }
+            ss
+        };
+        for a in 0..k {
+            self.lo_w[a] = self.x[self.ls_sup[a]];
+        }
+        let before = resid(&self.lo_a[..k * mm], &self.lo_w[..k], &self.lo_rhs);
+        let (w, rest) = self.lo_w.split_at_mut(k);
+        let _ = rest;
+        if !least_squares(
+            &self.lo_a[..k * mm],
+            mm,
+            k,
+            &self.lo_rhs,
+            &mut self.lo_q,
+            &mut self.lo_r,
+            w,
+        ) {
+            return;
+        }
+        if w.iter().any(|&v| v < -1e-12) {
+            return;
+        }
+        w.iter_mut().for_each(|v| *v = v.max(0.0));
+        let after = resid(&self.lo_a[..k * mm], w, &self.lo_rhs);
+        if after < before {
+            for a in 0..k {
+                self.x[self.ls_sup[a]] = w[a];
+            }
+        }
+    }
+
     fn solution(&self, kf: usize) -> Solution {
         let z = self.table.grid().points();
         let mut g = 0.0;
@@ -796,6 +880,7 @@ impl MomentSolver for FastSolver {
                             None => self.warm_basis = Some(self.basis.clone()),
                         }
                     }
+                    self.polish_original(moments);
                     return Ok(self.solution(kf));
                 }
                 Outcome::Infeasible => {

@@ -7,6 +7,7 @@
 //! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
 //! exactly as stated) and the fast solver (OWNER: lp helper).
 
+pub mod bench;
 pub mod fast;
 pub mod instances;
 pub mod reference;

@@ -1,6 +1,7 @@
 //! The reference solver: Algorithm 1 handed verbatim to good_lp's pure-Rust microlp backend.
 //!
-//! Two numerical touches that leave the LP unchanged: when microlp reports the LP infeasible,
+//! Two numerical touches that leave the LP unchanged: when microlp reports the LP infeasible
+//! (or fails),
 //! it is asked again with every equality row divided by its largest coefficient (row
 //! equilibration), and the weights of the support microlp returns are
 //! polished by least squares on that support (microlp works to tolerances of about 1e-10 per
@@ -52,12 +53,37 @@ impl MomentSolver for ReferenceSolver {
             })
             .collect();
         let z = t.grid().points();
-        // The LP verbatim; if microlp reports it infeasible, a second opinion on the
-        // row-equilibrated LP (microlp's phase 1 works to absolute tolerances, so badly scaled
-        // rows can turn a boundary point of the moment space "infeasible").
-        let mut found = microlp_solve(t, moments, zf, &vec![1.0; m])?;
-        if found.is_none() {
-            found = microlp_solve(t, moments, zf, &scale)?;
+        // The LP verbatim; if microlp reports it infeasible or fails ("singular matrix"), a
+        // second opinion on the row-equilibrated LP, then a third on the LP with orthonormalised
+        // rows (microlp's phase 1 works to absolute tolerances, so badly scaled rows can turn a
+        // boundary point of the moment space "infeasible").
+        let mut found = None;
+        let mut failure = None;
+        let mm = m + 1;
+        let diag = |d: &[f64]| -> Vec<f64> {
+            let mut tm = vec![0.0; mm * mm];
+            tm[0] = 1.0;
+            for j in 0..m {
+                tm[(j + 1) * mm + j + 1] = d[j];
+            }
+            tm
+        };
+        let mut transforms = vec![diag(&vec![1.0; m]), diag(&scale)];
+        if let Some(tm) = orthonormalising_transform(t) {
+            transforms.push(tm);
+        }
+        for tm in &transforms {
+            match microlp_solve(t, moments, zf, tm) {
+                Ok(Some(w)) => {
+                    found = Some(w);
+                    break;
+                }
+                Ok(None) => {}
+                Err(e) => failure = Some(e),
+            }
+        }
+        if let (None, Some(e)) = (&found, failure) {
+            return Err(e);
         }
         let Some(mut wv) = found else {
             return Ok(Solution::infeasible());
@@ -84,15 +110,12 @@ impl MomentSolver for ReferenceSolver {
     }
 }
 
-/// Algorithm 1 through good_lp + microlp with row j of the moment constraints multiplied by
-/// `scale[j]`: the weights, or None when microlp reports the LP infeasible.
-fn microlp_solve(
-    t: &GridTable,
-    moments: &[f64],
-    zf: f64,
-    scale: &[f64],
-) -> Result<Option<Vec<f64>>> {
-    let n = t.n();
+/// Algorithm 1 through good_lp + microlp with the m+1 equality rows [1; b(z_i)] w = [1; b]
+/// multiplied by the row-major (m+1)×(m+1) matrix `tm` (an invertible row transform leaves the
+/// feasible set unchanged): the weights, or None when microlp reports the LP infeasible.
+fn microlp_solve(t: &GridTable, moments: &[f64], zf: f64, tm: &[f64]) -> Result<Option<Vec<f64>>> {
+    let (n, m) = (t.n(), t.m());
+    let mm = m + 1;
     let mut vars = variables!();
     let w: Vec<Variable> = (0..n).map(|_| vars.add(variable().min(0.0))).collect();
     let z = t.grid().points();
@@ -103,22 +126,70 @@ fn microlp_solve(
         .map(|(v, _)| *v)
         .sum();
     let mut model = vars.minimise(objective).using(microlp);
-    let total: Expression = w.iter().copied().sum();
-    model = model.with(constraint!(total == 1.0));
-    for (j, &bj) in moments.iter().enumerate() {
-        let sj = scale[j];
-        let e: Expression = w
-            .iter()
-            .enumerate()
-            .map(|(i, v)| (t.row(i)[j] * sj) * *v)
-            .sum();
-        model = model.with(constraint!(e == bj * sj));
+    let bbar: Vec<f64> = std::iter::once(1.0)
+        .chain(moments.iter().copied())
+        .collect();
+    for k in 0..mm {
+        let tk = &tm[k * mm..(k + 1) * mm];
+        let coef = |i: usize| -> f64 {
+            let row = t.row(i);
+            tk[0] + (0..m).map(|j| tk[j + 1] * row[j]).sum::<f64>()
+        };
+        let e: Expression = w.iter().enumerate().map(|(i, v)| coef(i) * *v).sum();
+        let rhs: f64 = tk.iter().zip(&bbar).map(|(a, b)| a * b).sum();
+        model = model.with(constraint!(e == rhs));
     }
     match model.solve() {
         Ok(sol) => Ok(Some(w.iter().map(|v| sol.value(*v)).collect())),
         Err(ResolutionError::Infeasible) => Ok(None),
         Err(e) => bail!("reference LP solver failed: {e}"),
     }
+}
+
+/// T = √n R^{-T} for the QR factorisation M = Q R of M = [1, b_1(z), …, b_m(z)] on the grid
+/// (modified Gram–Schmidt, twice), so that T [1; b(z_i)] = √n Q_i: orthonormal rows. None if
+/// M is numerically rank-deficient.
+fn orthonormalising_transform(t: &GridTable) -> Option<Vec<f64>> {
+    let (n, m) = (t.n(), t.m());
+    let mm = m + 1;
+    let mut q: Vec<Vec<f64>> = Vec::with_capacity(mm);
+    let mut r = vec![0.0; mm * mm]; // r[k*mm + j] = R[k][j]
+    for j in 0..mm {
+        let mut v: Vec<f64> = (0..n)
+            .map(|i| if j == 0 { 1.0 } else { t.row(i)[j - 1] })
+            .collect();
+        let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        for _ in 0..2 {
+            for (k, qk) in q.iter().enumerate() {
+                let h: f64 = qk.iter().zip(&v).map(|(a, b)| a * b).sum();
+                r[k * mm + j] += h;
+                for (a, b) in v.iter_mut().zip(qk) {
+                    *a -= h * b;
+                }
+            }
+        }
+        let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        if nv.is_nan() || nv <= 1e-10 * n0 {
+            return None;
+        }
+        r[j * mm + j] = nv;
+        v.iter_mut().for_each(|a| *a /= nv);
+        q.push(v);
+    }
+    // Solve Rᵀ X = √n I column by column (Rᵀ lower triangular): X = √n R^{-T}.
+    let sn = (n as f64).sqrt();
+    let mut tm = vec![0.0; mm * mm];
+    for col in 0..mm {
+        for row in 0..mm {
+            // (Rᵀ)[row][k] = R[k][row]
+            let mut acc = if row == col { sn } else { 0.0 };
+            for k in 0..row {
+                acc -= r[k * mm + row] * tm[k * mm + col];
+            }
+            tm[row * mm + col] = acc / r[row * mm + row];
+        }
+    }
+    Some(tm)
 }
 
 /// Scaled residual rows of [1; s_j b_j] w − [1; s_j b_j] and its sum of squares.
