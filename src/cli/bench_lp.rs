@@ -23,6 +23,10 @@ pub struct Args {
     pub m: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Timed repeats of the fast solvers' problem sequence; each problem's minimum time is
+    /// kept (filters preemption on a shared machine).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: usize,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -41,6 +45,7 @@ pub fn run(args: Args) -> Result<()> {
         reference_problems: args.reference_problems,
         m: args.m,
         seed: args.seed,
+        repeats: args.repeats,
     };
     let mut rows: Vec<BenchRow> = Vec::new();
     for &n in &cfg.ns {
@@ -91,13 +96,16 @@ pub fn run(args: Args) -> Result<()> {
             r.pivots_cold,
             r.max_abs_diff
         );
-        if r.status_mismatches > 0 || r.fallbacks > 0 {
+        if r.status_mismatches > 0 || r.fallbacks > 0 || r.errors > 0 {
             println!(
-                "  warning: n = {}: {} status mismatches, {} fallbacks",
-                r.n, r.status_mismatches, r.fallbacks
+                "  warning: n = {}: {} status mismatches, {} fallbacks to the reference, {} errors",
+                r.n, r.status_mismatches, r.fallbacks, r.errors
             );
         }
     }
-    println!("(µs columns: median per LP; × = reference median / fast median, same run)");
+    println!(
+        "(µs: median per LP, fast = per-problem minimum of {} repeats; × = reference median / fast median, same run)",
+        cfg.repeats
+    );
     Ok(())
 }

@@ -44,8 +44,10 @@ const TOL_INF: f64 = 1e-9;
 const TOL_RANK: f64 = 1e-10;
 /// Relative tolerance of the consistency check of a dependent function's moment.
 const TOL_DEP: f64 = 1e-8;
+/// Largest condition number (Frobenius) of a basis accepted at refactorisation.
+const MAX_COND: f64 = 1e12;
 /// Pivots between refactorisations of the basis inverse.
-const REFACTOR_EVERY: usize = 32;
+const REFACTOR_EVERY: usize = 16;
 /// Consecutive degenerate pivots after which Bland's rule takes over.
 const DEGENERATE_LIMIT: usize = 20;
 /// Weights at or below this are left out of the returned support (as in the reference).
@@ -58,6 +60,14 @@ pub struct FastStats {
     pub solves: u64,
     /// Simplex pivots (both phases).
     pub pivots: u64,
+    /// Of which in phase 1.
+    pub phase1_pivots: u64,
+    /// Of which degenerate (step 0).
+    pub degenerate_pivots: u64,
+    /// Full pricing passes (partial pricing found nothing, or Bland's rule).
+    pub full_pricing: u64,
+    /// Of which found an entering column that partial pricing missed.
+    pub partial_misses: u64,
     /// Problems that needed phase 1 (start basis not primal feasible).
     pub phase1: u64,
     /// Problems reported infeasible.
@@ -122,6 +132,15 @@ pub struct FastSolver {
     alpha: Vec<f64>,
     art: Vec<f64>,
     s: Vec<f64>,
+    /// Duals and weights before the last verification refactorisation.
+    yold: Vec<f64>,
+    xold: Vec<f64>,
+    /// max_i ‖a_i‖₂.
+    amax: f64,
+    /// is_basic[i]: grid column i is in the basis.
+    is_basic: Vec<bool>,
+    /// Coarse stride of partial pricing (1 = always full pricing).
+    stride: usize,
     ls_sup: Vec<usize>,
     ls_a: Vec<f64>,
     ls_q: Vec<f64>,
@@ -191,6 +210,9 @@ impl FastSolver {
             rcoef[j * r..(j + 1) * r].copy_from_slice(&rcoef_full[j * mm..j * mm + r]);
         }
         let b0 = max_volume_rows(&rows, n, r);
+        let amax = (0..n)
+            .map(|i| norm(&rows[i * r..(i + 1) * r]))
+            .fold(0.0, f64::max);
         // cond_F(R) over the kept functions (= condition of M on the grid).
         let condition = {
             let mut rk = vec![0.0; r * r];
@@ -237,6 +259,15 @@ impl FastSolver {
             alpha: vec![0.0; r],
             art: vec![0.0; r],
             s: vec![0.0; n],
+            yold: vec![0.0; r],
+            xold: vec![0.0; r],
+            amax,
+            is_basic: vec![false; n],
+            stride: if n >= 64 {
+                ((n as f64 / 2.0).sqrt() as usize).max(2)
+            } else {
+                1
+            },
             ls_sup: vec![0; r],
             ls_a: vec![0.0; r * r],
             ls_q: vec![0.0; r * r],
@@ -283,6 +314,15 @@ impl FastSolver {
         self.warm = true;
         self.warm_basis = Some(basis.to_vec());
         Ok(())
+    }
+
+    /// Enable or disable partial pricing (coarse subgrid first; on by default for n ≥ 64).
+    pub fn set_partial_pricing(&mut self, on: bool) {
+        self.stride = if on && self.n >= 64 {
+            ((self.n as f64 / 2.0).sqrt() as usize).max(2)
+        } else {
+            1
+        };
     }
 
     /// Forget the warm-start basis.
@@ -371,7 +411,10 @@ impl FastSolver {
                 self.bmat[k * r + t] = v;
             }
         }
-        let ok = invert(&mut self.bmat, &mut self.binv, r);
+        let bnorm = norm(&self.bmat);
+        // Numerically singular for our purposes: weights from such a basis carry errors of
+        // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
+        let ok = invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND;
         if ok {
             mat_vec(&self.binv, &self.c, &mut self.x, r);
             // Two steps of iterative refinement: x += B⁻¹ (c − B x). The explicit inverse of an
@@ -454,6 +497,7 @@ impl FastSolver {
                     }
                 }
                 art_norm = norm(&self.art);
+                self.is_basic[self.basis[ts]] = false;
                 self.basis[ts] = ART;
                 art_pos = ts;
                 phase1 = true;
@@ -471,6 +515,15 @@ impl FastSolver {
         for _iter in 0..cap {
             if since_refactor >= REFACTOR_EVERY {
                 if !self.refactor() {
+                    // Numerically singular basis (clustered grid points): rebuild a
+                    // well-conditioned one around the current weights.
+                    if rescues < 3 && self.rescue() {
+                        rescues += 1;
+                        phase1 = false;
+                        since_refactor = 0;
+                        verified = false;
+                        continue;
+                    }
                     return Outcome::Failed;
                 }
                 since_refactor = 0;
@@ -478,20 +531,54 @@ impl FastSolver {
             let bland = bland_always || degenerate >= DEGENERATE_LIMIT;
             self.duals(phase1, kf);
             let kf_eff = if phase1 { 0 } else { kf };
-            let (q, dq) = if bland {
+            let partial = if bland || self.stride <= 1 {
+                (usize::MAX, 0.0)
+            } else {
+                self.price_partial(kf_eff)
+            };
+            if partial.0 == usize::MAX {
+                self.stats.full_pricing += 1;
+            }
+            let (q, dq) = if partial.0 != usize::MAX {
+                partial
+            } else if bland {
                 price_bland(&self.cols, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
             } else {
                 price(&self.cols, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
             };
+            if partial.0 == usize::MAX && dq < -TOL_D {
+                self.stats.partial_misses += 1;
+            }
             if dq >= -TOL_D {
                 // Optimal for the current phase: verify with a fresh factorisation first.
                 if !verified && since_refactor > 0 {
+                    self.yold.copy_from_slice(&self.y);
+                    self.xold.copy_from_slice(&self.x);
                     if !self.refactor() {
+                        if rescues < 3 && self.rescue() {
+                            rescues += 1;
+                            phase1 = false;
+                            since_refactor = 0;
+                            verified = false;
+                            continue;
+                        }
                         return Outcome::Failed;
                     }
                     since_refactor = 0;
                     verified = true;
-                    continue;
+                    // If the fresh duals moved so little that no reduced cost can have crossed
+                    // the tolerance, the pricing pass stands; otherwise price again.
+                    self.duals(phase1, kf);
+                    let dy: f64 = self
+                        .y
+                        .iter()
+                        .zip(&self.yold)
+                        .map(|(a, b)| (a - b) * (a - b))
+                        .sum::<f64>()
+                        .sqrt();
+                    if dy * self.amax > 0.5 * TOL_D || dq < -0.5 * TOL_D {
+                        continue;
+                    }
                 }
                 if phase1 {
                     let xa = self.x[art_pos].max(0.0);
@@ -543,6 +630,20 @@ impl FastSolver {
                     verified = false;
                     continue;
                 }
+                // The updated weights drifted on an ill-conditioned basis: rebuild from the
+                // weights before the refactorisation (validated by least squares in rescue).
+                if rescues < 3 {
+                    self.x.copy_from_slice(&self.xold);
+                    if self.rescue() {
+                        rescues += 1;
+                        since_refactor = 0;
+                        verified = false;
+                        continue;
+                    }
+                    if !self.refactor() {
+                        return Outcome::Failed;
+                    }
+                }
                 if self.x.iter().all(|&v| v >= -TOL_P_LOOSE) {
                     // Dual feasible and primal feasible to 1e-9: as good as the data allow
                     // on this degenerate, ill-conditioned basis.
@@ -587,12 +688,16 @@ impl FastSolver {
             let theta = (self.x[l].max(0.0) / self.alpha[l]).max(0.0);
             if theta * (-dq) <= 1e-14 {
                 degenerate += 1;
+                self.stats.degenerate_pivots += 1;
             } else {
                 degenerate = 0;
             }
             let leaving = self.basis[l];
             self.pivot(l, q, theta);
             self.stats.pivots += 1;
+            if phase1 {
+                self.stats.phase1_pivots += 1;
+            }
             since_refactor += 1;
             if phase1 && leaving == ART {
                 phase1 = false;
@@ -691,7 +796,9 @@ impl FastSolver {
         let Some(full) = complete_basis(&self.rows, self.n, r, &cols) else {
             return false;
         };
+        self.mark_basic(false);
         self.basis.copy_from_slice(&full);
+        self.mark_basic(true);
         if !self.refactor() {
             return false;
         }
@@ -703,6 +810,69 @@ impl FastSolver {
             *v = v.max(0.0);
         }
         true
+    }
+
+    /// Set the basic flags of the current basis' real columns.
+    fn mark_basic(&mut self, on: bool) {
+        for &bt in &self.basis {
+            if bt != ART {
+                self.is_basic[bt] = on;
+            }
+        }
+    }
+
+    /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point, both ends
+    /// and the two points around z_f), then on the fine grid around the best coarse point.
+    /// Reduced costs are smooth in z on either side of z_f, so this usually finds a good
+    /// entering column at a fraction of a full pass. Returns (usize::MAX, −TOL_D) when the
+    /// coarse pass finds no negative reduced cost (then a full pass decides).
+    fn price_partial(&self, kf: usize) -> (usize, f64) {
+        let (n, r, st) = (self.n, self.r, self.stride);
+        let y = &self.y[..r];
+        let rows = &self.rows;
+        let basic = &self.is_basic;
+        let mut best = (usize::MAX, -TOL_D);
+        let visit = |i: usize, best: &mut (usize, f64)| {
+            if basic[i] {
+                return;
+            }
+            let row = &rows[i * r..(i + 1) * r];
+            let mut s = 0.0;
+            for k in 0..r {
+                s += row[k] * y[k];
+            }
+            let d = if i < kf { 1.0 - s } else { -s };
+            if d < best.1 {
+                *best = (i, d);
+            }
+        };
+        let mut i = 0;
+        while i < n {
+            visit(i, &mut best);
+            i += st;
+        }
+        visit(n - 1, &mut best);
+        // Narrow dips of the reduced cost appear next to the current support points and at
+        // the step at z_f: scan a few neighbours of each.
+        const W: usize = 3;
+        for i in kf.saturating_sub(W)..(kf + W).min(n) {
+            visit(i, &mut best);
+        }
+        for &bt in &self.basis {
+            if bt != ART {
+                for i in bt.saturating_sub(W)..(bt + W + 1).min(n) {
+                    visit(i, &mut best);
+                }
+            }
+        }
+        if best.0 == usize::MAX {
+            return best;
+        }
+        let c = best.0;
+        for i in c.saturating_sub(st - 1)..(c + st).min(n) {
+            visit(i, &mut best);
+        }
+        best
     }
 
     /// alpha = B⁻¹ a_j.
@@ -733,6 +903,10 @@ impl FastSolver {
                 }
             }
         }
+        if self.basis[l] != ART {
+            self.is_basic[self.basis[l]] = false;
+        }
+        self.is_basic[q] = true;
         self.basis[l] = q;
     }
 
@@ -859,11 +1033,15 @@ impl MomentSolver for FastSolver {
         for _attempt in 0..6 {
             match start {
                 Start::Warm => {
+                    self.mark_basic(false);
                     let wb = self.warm_basis.as_ref().expect("warm basis");
                     self.basis.copy_from_slice(wb);
+                    self.mark_basic(true);
                 }
                 Start::Cold => {
+                    self.mark_basic(false);
                     self.basis.copy_from_slice(&self.b0);
+                    self.mark_basic(true);
                     cold_runs += 1;
                 }
                 Start::Current => {}
