@@ -41,7 +41,10 @@ impl Grid {
         values.sort_by(|a, b| a.partial_cmp(b).unwrap());
         values.dedup();
         if values.len() < 2 {
-            bail!("grid: need at least 2 distinct points, got {}", values.len());
+            bail!(
+                "grid: need at least 2 distinct points, got {}",
+                values.len()
+            );
         }
         Ok(Grid { points: values })
     }

@@ -1,10 +1,199 @@
-//! `momentlab lp` (scaffold: owned by the helper building it).
+//! `momentlab lp [FILE]`: Algorithm 1 for a JSON batch (stdin when no file).
+//!
+//! Input:  {"basis": ["z", "z^2", …], "grid": {"points": 1024} | {"values": [..]},
+//!          "solver": "fast" | "reference", "problems": [{"moments": [..], "zf": 0.4}, …]}
+//! ("grid" defaults to 1024 uniform points, "solver" to "fast").
+//! Output: {"results": [{"status": "optimal", "g": 0.25, "support": [[z, w], …]},
+//!          {"status": "infeasible"}, …]}
+//! Everything is validated before any LP is solved; an infeasible problem does not abort.
 
-use anyhow::{bail, Result};
+use crate::basis::Catalog;
+use crate::lp::{make_solver, GridTable, Status};
+use crate::Grid;
+use anyhow::{bail, Context, Result};
+use rayon::prelude::*;
+use serde::Deserialize;
+use std::io::Read;
+use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// JSON batch file (stdin when omitted).
+    pub file: Option<PathBuf>,
+    /// Catalog used to resolve basis names (default: the embedded catalog).
+    #[arg(long)]
+    pub catalog: Option<PathBuf>,
+    /// Pretty-print the output JSON.
+    #[arg(long)]
+    pub pretty: bool,
+}
 
-pub fn run(_args: Args) -> Result<()> {
-    bail!("'lp' is not implemented yet")
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Input {
+    basis: Vec<String>,
+    #[serde(default)]
+    grid: Option<GridSpec>,
+    #[serde(default)]
+    solver: Option<String>,
+    problems: Vec<Problem>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct GridSpec {
+    #[serde(default)]
+    points: Option<usize>,
+    #[serde(default)]
+    values: Option<Vec<f64>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Problem {
+    moments: Vec<f64>,
+    zf: f64,
+}
+
+/// Default number of uniform grid points when "grid" is omitted.
+pub const DEFAULT_GRID_POINTS: usize = 1024;
+
+/// Largest accepted grid (the table holds n·m values per solver instance).
+pub const MAX_GRID_POINTS: usize = 1 << 20;
+
+/// Problems solved by one solver instance (consecutive problems share warm-start state).
+const CHUNK: usize = 64;
+
+fn grid_of(spec: Option<GridSpec>) -> Result<Grid> {
+    match spec {
+        None => Grid::uniform(DEFAULT_GRID_POINTS),
+        Some(GridSpec {
+            points: Some(n),
+            values: None,
+        }) => {
+            if n > MAX_GRID_POINTS {
+                bail!("grid: {n} points is more than the supported {MAX_GRID_POINTS}");
+            }
+            Grid::uniform(n)
+        }
+        Some(GridSpec {
+            points: None,
+            values: Some(v),
+        }) => {
+            if let Some(i) = v.iter().position(|x| !(0.0..=1.0).contains(x)) {
+                bail!("grid: value {i} ({}) is outside [0,1]", v[i]);
+            }
+            Grid::from_values(v)
+        }
+        Some(_) => bail!("grid: give exactly one of \"points\" or \"values\""),
+    }
+}
+
+/// One result, serialised as {"status", "g", "support"} in that order.
+#[derive(serde::Serialize)]
+struct Output {
+    status: Status,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    g: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    support: Option<Vec<[f64; 2]>>,
+}
+
+#[derive(serde::Serialize)]
+struct Results {
+    results: Vec<Output>,
+}
+
+/// Validates and solves a batch; returns the output JSON text.
+pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String> {
+    let input: Input = serde_json::from_str(text).context("malformed input JSON")?;
+    if input.basis.is_empty() {
+        bail!("basis: need at least one function");
+    }
+    let basis = catalog.basis(&input.basis)?;
+    let grid = grid_of(input.grid)?;
+    let solver = input.solver.unwrap_or_else(|| "fast".to_string());
+    let m = basis.len();
+    for (k, p) in input.problems.iter().enumerate() {
+        if p.moments.len() != m {
+            bail!(
+                "problem {k}: expected {m} moments (one per basis function), got {}",
+                p.moments.len()
+            );
+        }
+        if let Some(j) = p.moments.iter().position(|x| !x.is_finite()) {
+            bail!("problem {k}: moment {j} is not finite ({})", p.moments[j]);
+        }
+        if !(0.0..=1.0).contains(&p.zf) {
+            bail!("problem {k}: zf = {} is outside [0,1]", p.zf);
+        }
+    }
+    let table = GridTable::from_fn(&grid, m, |z, out| basis.eval(z, out))?;
+    // Fail early (unknown or unavailable solver) before spawning work.
+    make_solver(&solver, table.clone())?;
+
+    let bar = indicatif::ProgressBar::new(input.problems.len() as u64);
+    if input.problems.len() < 1000 {
+        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
+    }
+    let chunks: Vec<Vec<Output>> = input
+        .problems
+        .par_chunks(CHUNK)
+        .enumerate()
+        .map(|(c, chunk)| -> Result<Vec<Output>> {
+            let mut s = make_solver(&solver, table.clone())?;
+            let mut out = Vec::with_capacity(chunk.len());
+            for (k, p) in chunk.iter().enumerate() {
+                let sol = s
+                    .solve(&p.moments, p.zf)
+                    .with_context(|| format!("problem {}", c * CHUNK + k))?;
+                out.push(match sol.status {
+                    Status::Optimal => Output {
+                        status: sol.status,
+                        g: Some(sol.g),
+                        support: Some(sol.support.iter().map(|&(z, w)| [z, w]).collect()),
+                    },
+                    Status::Infeasible => Output {
+                        status: sol.status,
+                        g: None,
+                        support: None,
+                    },
+                });
+                bar.inc(1);
+            }
+            Ok(out)
+        })
+        .collect::<Result<_>>()?;
+    bar.finish_and_clear();
+    let out = Results {
+        results: chunks.into_iter().flatten().collect(),
+    };
+    Ok(if pretty {
+        serde_json::to_string_pretty(&out)?
+    } else {
+        serde_json::to_string(&out)?
+    })
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let catalog = match &args.catalog {
+        Some(p) => Catalog::load(p)?,
+        None => Catalog::embedded(),
+    };
+    let (text, source) = match &args.file {
+        Some(p) => (
+            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,
+            p.display().to_string(),
+        ),
+        None => {
+            let mut s = String::new();
+            std::io::stdin()
+                .read_to_string(&mut s)
+                .context("cannot read stdin")?;
+            (s, "stdin".to_string())
+        }
+    };
+    let out = solve_batch(&text, &catalog, args.pretty).with_context(|| format!("lp {source}"))?;
+    println!("{out}");
+    Ok(())
 }

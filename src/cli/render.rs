@@ -1,10 +1,121 @@
-//! `momentlab render` (scaffold: owned by the helper building it).
+//! `momentlab render`: ray-cast depth stacks of the scenes (embedded default dataset unless
+//! `--scenes DIR`) and write one `<scene>_<view>.exr` + `.json` per view.
 
-use anyhow::{bail, Result};
+use crate::render::{self, Scene};
+use crate::stack;
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Directory of scene JSON files (default: the embedded dataset).
+    #[arg(long)]
+    pub scenes: Option<PathBuf>,
+    /// Output directory for the depth stacks.
+    #[arg(long, default_value = "stacks/default")]
+    pub out: PathBuf,
+    /// Shadow-map resolution (square).
+    #[arg(long, default_value_t = 512)]
+    pub resolution: usize,
+    /// Render only the scene with this name.
+    #[arg(long)]
+    pub only: Option<String>,
+    /// Also write `<scene>_<view>.preview.png`: front depth (left) and layer count (right).
+    #[arg(long)]
+    pub preview: bool,
+}
 
-pub fn run(_args: Args) -> Result<()> {
-    bail!("'render' is not implemented yet")
+/// Grey-scale preview: front depth (black = near, white = far/background) | layer count
+/// (white = the view's maximum).
+fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Result<()> {
+    let (w, h) = (st.meta.width, st.meta.height);
+    let maxl = st.meta.layers.max(1) as f32;
+    let mut img = vec![0u8; 2 * w * h];
+    for y in 0..h {
+        for x in 0..w {
+            let t = y * w + x;
+            img[y * 2 * w + x] = (st.front(t).clamp(0.0, 1.0) * 255.0) as u8;
+            img[y * 2 * w + w + x] = (st.layer_count_at(t) as f32 / maxl * 255.0) as u8;
+        }
+    }
+    let file =
+        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), (2 * w) as u32, h as u32);
+    enc.set_color(png::ColorType::Grayscale);
+    enc.set_depth(png::BitDepth::Eight);
+    enc.write_header()?.write_image_data(&img)?;
+    Ok(())
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if !(1..=16384).contains(&args.resolution) {
+        bail!("--resolution {} outside [1, 16384]", args.resolution);
+    }
+    let mut scenes: Vec<Scene> = match &args.scenes {
+        Some(dir) => render::load_scenes(dir)?,
+        None => render::embedded_scenes()?,
+    };
+    if let Some(only) = &args.only {
+        let names: Vec<String> = scenes.iter().map(|s| s.name.clone()).collect();
+        scenes.retain(|s| &s.name == only);
+        if scenes.is_empty() {
+            bail!("--only {only}: no such scene (have: {})", names.join(", "));
+        }
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("creating {}", args.out.display()))?;
+    let views: usize = scenes.iter().map(|s| s.lights.len()).sum();
+    let bar = ProgressBar::new((views * args.resolution) as u64);
+    bar.set_style(
+        ProgressStyle::with_template("{msg:>16} [{bar:40}] {pos}/{len} rows ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let start = Instant::now();
+    let mut lines = Vec::new();
+    let (mut total_frags, mut max_layers) = (0usize, 0usize);
+    for s in &scenes {
+        for (i, light) in s.lights.iter().enumerate() {
+            bar.set_message(format!("{}/{}", s.name, light.name));
+            let t0 = Instant::now();
+            let st = render::render_view_with(s, i, args.resolution, &|k| bar.inc(k));
+            let dt = t0.elapsed().as_secs_f64();
+            let path = args.out.join(format!("{}.exr", st.file_stem()));
+            stack::write(&path, &st)?;
+            if args.preview {
+                write_preview(
+                    &args.out.join(format!("{}.preview.png", st.file_stem())),
+                    &st,
+                )?;
+            }
+            let frags = st.fragment_count();
+            let covered = (0..st.texel_count())
+                .filter(|&t| st.depth[0][t].is_finite())
+                .count();
+            total_frags += frags;
+            max_layers = max_layers.max(st.meta.layers);
+            lines.push(format!(
+                "{:>8} {:>7} {:>8} tris {:>10} fragments  {:>5.2} per covered texel  {:>3} layers  {:>6.2} s",
+                s.name,
+                light.name,
+                s.triangles.len(),
+                frags,
+                frags as f64 / covered.max(1) as f64,
+                st.meta.layers,
+                dt
+            ));
+        }
+    }
+    bar.finish_and_clear();
+    for l in &lines {
+        println!("{l}");
+    }
+    println!(
+        "rendered {views} views at {r}x{r} in {:.2} s: {total_frags} fragments, at most {max_layers} layers -> {}",
+        start.elapsed().as_secs_f64(),
+        args.out.display(),
+        r = args.resolution
+    );
+    Ok(())
 }

@@ -1,4 +1,262 @@
 //! The reference renderer: a CPU ray caster for a directional light (orthographic projection
 //! fitted to the scene bounds) recording every surface along each texel's ray.
 //!
-//! OWNER: render/stack helper.
+//! Light space: w = p·d along the light direction d, u = p·u_axis, v = p·v_axis with
+//! (u_axis, v_axis, d) right-handed orthonormal and v_axis the negated projection of world up
+//! (+y texel rows go "down"). Depth z = (w − near)/(far − near) ∈ [0,1], with near/far the
+//! scene's w range widened by 1 % on each side; the square (u, v) window is the scene's
+//! projected bounds widened by 1 %. Texel (x, y) casts one ray through its centre
+//! (u0 + (x+½)·s, v0 + (y+½)·s). Per surface the receiver-plane slopes are analytic from the
+//! triangle's geometric normal n in light space: ∂z/∂x = −(n_u/n_w)·s/(far−near),
+//! ∂z/∂y = −(n_v/n_w)·s/(far−near) (per texel step). OWNER: render/stack helper.
+
+pub mod bvh;
+mod embedded;
+pub mod scene;
+
+pub use embedded::{embedded_scenes, EMBEDDED_SCENE_NAMES};
+pub use scene::{Light, Scene, Tri, V3};
+
+use crate::stack::{DepthStack, StackMeta};
+use anyhow::{bail, Context, Result};
+use bvh::{Bvh, LTri};
+use rayon::prelude::*;
+use scene::{cross, dot, norm, scale, sub};
+use std::path::Path;
+
+/// Relative widening of the fitted depth range and (u, v) window on each side.
+pub const MARGIN: f64 = 0.01;
+/// Hits closer than this in depth z are one surface (shared edges, coincident faces); it also
+/// guarantees strictly increasing f32 depths.
+pub const DEDUP_EPS: f64 = 1e-6;
+
+/// The orthographic light frame of one view.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightFrame {
+    pub dir: V3,
+    pub u_axis: V3,
+    pub v_axis: V3,
+    pub near: f64,
+    pub far: f64,
+    /// (u, v) of the corner of texel (0, 0).
+    pub uv_origin: [f64; 2],
+    /// Texel edge length (world units).
+    pub texel: f64,
+    pub resolution: usize,
+}
+
+impl LightFrame {
+    /// Fits the frame for light direction `dir` (unit) to the bounds of `tris`.
+    pub fn fit(tris: &[Tri], dir: V3, resolution: usize) -> LightFrame {
+        let hint = if dir[1].abs() < 0.9 {
+            [0.0, 1.0, 0.0]
+        } else {
+            [0.0, 0.0, 1.0]
+        };
+        let up = sub(hint, scale(dir, dot(hint, dir)));
+        let v_axis = scale(up, -1.0 / norm(up));
+        let u_axis = cross(v_axis, dir);
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in tris.iter().flatten() {
+            let q = [dot(*p, u_axis), dot(*p, v_axis), dot(*p, dir)];
+            for k in 0..3 {
+                lo[k] = lo[k].min(q[k]);
+                hi[k] = hi[k].max(q[k]);
+            }
+        }
+        if tris.is_empty() {
+            lo = [-1.0; 3];
+            hi = [1.0; 3];
+        }
+        let ext = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+        let ext = if ext > 0.0 { ext } else { 1.0 };
+        let side = ext * (1.0 + 2.0 * MARGIN);
+        let mut dr = hi[2] - lo[2];
+        if dr <= 0.0 {
+            dr = ext;
+        }
+        LightFrame {
+            dir,
+            u_axis,
+            v_axis,
+            near: lo[2] - MARGIN * dr,
+            far: hi[2] + MARGIN * dr,
+            uv_origin: [
+                (lo[0] + hi[0]) / 2.0 - side / 2.0,
+                (lo[1] + hi[1]) / 2.0 - side / 2.0,
+            ],
+            texel: side / resolution as f64,
+            resolution,
+        }
+    }
+
+    /// Light-space (u, v, w) of a world point.
+    pub fn to_light(&self, p: V3) -> V3 {
+        [dot(p, self.u_axis), dot(p, self.v_axis), dot(p, self.dir)]
+    }
+
+    /// World-space origin (on the near plane) of the ray of texel (x, y).
+    pub fn ray_origin(&self, x: usize, y: usize) -> V3 {
+        let u = self.uv_origin[0] + (x as f64 + 0.5) * self.texel;
+        let v = self.uv_origin[1] + (y as f64 + 0.5) * self.texel;
+        std::array::from_fn(|k| u * self.u_axis[k] + v * self.v_axis[k] + self.near * self.dir[k])
+    }
+}
+
+/// One surface along a texel's ray.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub z: f32,
+    pub dzdu: f32,
+    pub dzdv: f32,
+}
+
+/// Sorts raw hits (w, ∂w/∂u, ∂w/∂v) front to back, converts them to depth/slopes per texel
+/// step and merges hits closer than [`DEDUP_EPS`] (the front-most is kept).
+pub fn finish_hits(frame: &LightFrame, raw: &mut [(f64, f64, f64)], out: &mut Vec<Hit>) {
+    raw.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let range = frame.far - frame.near;
+    let k = frame.texel / range;
+    let mut last = f64::NEG_INFINITY;
+    for &(w, su, sv) in raw.iter() {
+        let z = ((w - frame.near) / range).clamp(0.0, 1.0);
+        if z - last <= DEDUP_EPS {
+            continue;
+        }
+        last = z;
+        out.push(Hit {
+            z: z as f32,
+            dzdu: (su * k) as f32,
+            dzdv: (sv * k) as f32,
+        });
+    }
+}
+
+/// The scene's triangles in the frame's light space, ready for ray casting.
+pub fn light_bvh(tris: &[Tri], frame: &LightFrame) -> Bvh {
+    let lt: Vec<LTri> = tris
+        .iter()
+        .filter_map(|t| {
+            LTri::new(
+                frame.to_light(t[0]),
+                frame.to_light(t[1]),
+                frame.to_light(t[2]),
+            )
+        })
+        .collect();
+    Bvh::build(lt)
+}
+
+/// Renders view `light_index` of `scene` at `resolution`² (see module docs). Panics if
+/// `light_index` is out of range or `resolution` is 0 (callers validate user input).
+pub fn render_view(scene: &Scene, light_index: usize, resolution: usize) -> DepthStack {
+    render_view_with(scene, light_index, resolution, &|_| {})
+}
+
+/// [`render_view`] calling `row_done(1)` after each finished row (for progress bars).
+pub fn render_view_with(
+    scene: &Scene,
+    light_index: usize,
+    resolution: usize,
+    row_done: &(dyn Fn(u64) + Sync),
+) -> DepthStack {
+    assert!(resolution > 0, "resolution must be positive");
+    let light = &scene.lights[light_index];
+    let frame = LightFrame::fit(&scene.triangles, light.dir, resolution);
+    let bvh = light_bvh(&scene.triangles, &frame);
+    let n = resolution;
+    let rows: Vec<(Vec<u32>, Vec<Hit>)> = (0..n)
+        .into_par_iter()
+        .map(|y| {
+            let mut counts = Vec::with_capacity(n);
+            let mut hits = Vec::new();
+            let mut raw = Vec::new();
+            let v = frame.uv_origin[1] + (y as f64 + 0.5) * frame.texel;
+            for x in 0..n {
+                let u = frame.uv_origin[0] + (x as f64 + 0.5) * frame.texel;
+                raw.clear();
+                bvh.for_each_hit(u, v, |t, w| raw.push((w, t.su, t.sv)));
+                let before = hits.len();
+                finish_hits(&frame, &mut raw, &mut hits);
+                counts.push((hits.len() - before) as u32);
+            }
+            row_done(1);
+            (counts, hits)
+        })
+        .collect();
+    let layers = rows
+        .iter()
+        .flat_map(|r| r.0.iter())
+        .copied()
+        .max()
+        .unwrap_or(0)
+        .max(1) as usize;
+    let mut depth = vec![vec![f32::INFINITY; n * n]; layers];
+    let mut dzdu = vec![vec![0.0f32; n * n]; layers];
+    let mut dzdv = vec![vec![0.0f32; n * n]; layers];
+    for (y, (counts, hits)) in rows.iter().enumerate() {
+        let mut i = 0;
+        for (x, &c) in counts.iter().enumerate() {
+            let t = y * n + x;
+            for l in 0..c as usize {
+                let h = hits[i];
+                depth[l][t] = h.z;
+                dzdu[l][t] = h.dzdu;
+                dzdv[l][t] = h.dzdv;
+                i += 1;
+            }
+        }
+    }
+    DepthStack {
+        meta: StackMeta {
+            scene: scene.name.clone(),
+            view: light.name.clone(),
+            light_dir: light.dir,
+            near: frame.near,
+            far: frame.far,
+            width: n,
+            height: n,
+            layers,
+            u_axis: frame.u_axis,
+            v_axis: frame.v_axis,
+            uv_origin: frame.uv_origin,
+            texel_size: frame.texel,
+        },
+        depth,
+        dzdu,
+        dzdv,
+    }
+}
+
+/// All `*.json` scenes of `dir`, sorted by file name.
+pub fn load_scenes(dir: &Path) -> Result<Vec<Scene>> {
+    let mut files = Vec::new();
+    for e in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let p = e?.path();
+        if p.is_file() && p.extension().is_some_and(|x| x == "json") {
+            files.push(p);
+        }
+    }
+    files.sort();
+    if files.is_empty() {
+        bail!("no *.json scenes in {}", dir.display());
+    }
+    files.iter().map(|p| Scene::load(p)).collect()
+}
+
+/// The embedded default dataset (every view of every embedded scene), rendered at
+/// `resolution`², in scene-file then light order.
+pub fn default_dataset(resolution: usize) -> Result<Vec<DepthStack>> {
+    if resolution == 0 {
+        bail!("resolution must be positive");
+    }
+    let scenes = embedded_scenes()?;
+    Ok(scenes
+        .iter()
+        .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
+        .map(|(s, i)| render_view(s, i, resolution))
+        .collect())
+}
+
+pub mod rectified;

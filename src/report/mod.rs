@@ -1,1 +1,6 @@
-//! Reports: plots (SVG via plotters, PNG pictures) and the HTML/Markdown report.
+//! Reports: plots (SVG via plotters), the speed/accuracy trade-off, and the HTML/Markdown report.
+
+pub mod chart;
+pub mod document;
+pub mod pareto;
+pub mod pictures;

@@ -1,10 +1,15 @@
 //! Depth stacks: every surface seen from the light, per shadow-map texel (all layers, sorted),
 //! with receiver-plane depth slopes for biasing. Stored as one OpenEXR file per view plus a JSON
-//! sidecar; also the import format for stacks from other renderers.
+//! sidecar; also the import format for stacks from other renderers (layout: docs/stacks.md).
 //!
 //! OWNER: render/stack helper. Other modules rely on [`DepthStack`] and [`StackMeta`] as below
 //! and on `stack::read(path)` / `stack::write(path, &stack)` / `stack::load_dir(dir)`.
 
+mod io;
+
+pub use io::{channel_name, exr_files, load_dir, read, sidecar_path, write};
+
+use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
 /// The JSON sidecar of a depth-stack file.
@@ -22,6 +27,18 @@ pub struct StackMeta {
     pub width: usize,
     pub height: usize,
     pub layers: usize,
+    /// World-space unit vector of the texel x axis (+x texel step); optional (0 = unknown).
+    #[serde(default)]
+    pub u_axis: [f64; 3],
+    /// World-space unit vector of the texel y axis (+y texel step = next row); optional.
+    #[serde(default)]
+    pub v_axis: [f64; 3],
+    /// Light-space (u, v) coordinates of the corner of texel (0, 0); optional.
+    #[serde(default)]
+    pub uv_origin: [f64; 2],
+    /// Edge length of a (square) texel in world units; optional (0 = unknown).
+    #[serde(default)]
+    pub texel_size: f64,
 }
 
 /// A depth stack in memory.
@@ -57,4 +74,104 @@ impl DepthStack {
             .map(|l| l.iter().filter(|d| d.is_finite()).count())
             .sum()
     }
+    /// Number of surfaces (finite depths) at texel `t`.
+    pub fn layer_count_at(&self, t: usize) -> usize {
+        self.depth.iter().take_while(|l| l[t].is_finite()).count()
+    }
+    /// `(file stem)` used for files of this stack: `<scene>_<view>`.
+    pub fn file_stem(&self) -> String {
+        format!("{}_{}", self.meta.scene, self.meta.view)
+    }
+}
+
+/// Checks every invariant of a depth stack; the error names the first violation (layer, texel
+/// x/y). Invariants: width, height ≥ 1; `layers` ≥ 1 and equal to the number of depth, dzdu and
+/// dzdv channels, each of width·height values; near < far finite; light_dir finite and of unit
+/// length (±1e-3); per texel, depths are finite values in [0,1] followed only by +inf ("no
+/// surface"), strictly increasing over the finite ones; no NaN or −inf anywhere; slopes finite.
+pub fn validate(stack: &DepthStack) -> Result<()> {
+    let m = &stack.meta;
+    if m.width == 0 || m.height == 0 {
+        bail!("empty resolution {}x{}", m.width, m.height);
+    }
+    if m.layers == 0 {
+        bail!("layer count is 0 (need at least one layer)");
+    }
+    if !(m.near.is_finite() && m.far.is_finite() && m.near < m.far) {
+        bail!("near/far planes invalid: near={} far={}", m.near, m.far);
+    }
+    if m.light_dir.iter().any(|c| !c.is_finite()) {
+        bail!("light_dir is not finite: {:?}", m.light_dir);
+    }
+    let norm = m.light_dir.iter().map(|c| c * c).sum::<f64>().sqrt();
+    if (norm - 1.0).abs() > 1e-3 {
+        bail!(
+            "light_dir {:?} is not a unit vector (length {norm})",
+            m.light_dir
+        );
+    }
+    let n = m.width * m.height;
+    for (what, ch) in [
+        ("depth", &stack.depth),
+        ("dzdu", &stack.dzdu),
+        ("dzdv", &stack.dzdv),
+    ] {
+        if ch.len() != m.layers {
+            bail!(
+                "{} {what} channels but the sidecar says {} layers",
+                ch.len(),
+                m.layers
+            );
+        }
+        for (l, c) in ch.iter().enumerate() {
+            if c.len() != n {
+                bail!(
+                    "layer {l} {what} channel has {} values, expected {}x{} = {n}",
+                    c.len(),
+                    m.width,
+                    m.height
+                );
+            }
+        }
+    }
+    let at = |t: usize| (t % m.width, t / m.width);
+    for t in 0..n {
+        let mut prev = f32::NEG_INFINITY;
+        for l in 0..m.layers {
+            let d = stack.depth[l][t];
+            let (x, y) = at(t);
+            if d.is_nan() {
+                bail!("layer {l} texel (x={x}, y={y}): depth is NaN");
+            }
+            if d == f32::INFINITY {
+                prev = d;
+            } else {
+                if !(0.0..=1.0).contains(&d) {
+                    bail!("layer {l} texel (x={x}, y={y}): depth {d} outside [0,1]");
+                }
+                if d <= prev {
+                    if prev == f32::INFINITY {
+                        bail!(
+                            "layer {l} texel (x={x}, y={y}): depth {d} after a missing surface \
+                             (+inf) in layer {}: layers not strictly increasing",
+                            l - 1
+                        );
+                    }
+                    bail!(
+                        "layer {l} texel (x={x}, y={y}): depth {d} not greater than layer {} \
+                         depth {prev}: layers not strictly increasing",
+                        l - 1
+                    );
+                }
+                prev = d;
+            }
+            for (what, ch) in [("dzdu", &stack.dzdu), ("dzdv", &stack.dzdv)] {
+                let s = ch[l][t];
+                if !s.is_finite() {
+                    bail!("layer {l} texel (x={x}, y={y}): slope {what} = {s} is not finite");
+                }
+            }
+        }
+    }
+    Ok(())
 }

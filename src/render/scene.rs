@@ -1,0 +1,764 @@
+//! Scenes: a list of triangles (world space) and the directional lights (views) to render.
+//! Loaded from JSON (procedural primitives and OBJ meshes with transforms; format in
+//! docs/stacks.md) or built in code.
+
+use anyhow::{anyhow, bail, Context, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::Deserialize;
+use std::path::Path;
+
+/// A point / vector in world space.
+pub type V3 = [f64; 3];
+/// A triangle (three world-space vertices).
+pub type Tri = [V3; 3];
+
+/// One view of a scene: a directional light.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Light {
+    /// View name, e.g. "light0".
+    pub name: String,
+    /// Unit direction the light travels (world space).
+    pub dir: V3,
+}
+
+/// A scene ready to render: world-space triangles and its lights.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub lights: Vec<Light>,
+    pub triangles: Vec<Tri>,
+}
+
+impl Scene {
+    /// A scene built in code. Light directions are normalized; zero/non-finite ones are errors.
+    pub fn new(name: &str, triangles: Vec<Tri>, lights: Vec<(String, V3)>) -> Result<Scene> {
+        let lights = lights
+            .into_iter()
+            .map(|(name, d)| {
+                let n = norm(d);
+                if !(n.is_finite() && n > 0.0) {
+                    bail!("light '{name}': direction {d:?} is zero or not finite");
+                }
+                Ok(Light {
+                    name,
+                    dir: scale(d, 1.0 / n),
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if let Some((i, _)) = triangles
+            .iter()
+            .enumerate()
+            .find(|(_, t)| t.iter().flatten().any(|c| !c.is_finite()))
+        {
+            bail!("scene '{name}': triangle {i} has a non-finite vertex");
+        }
+        Ok(Scene {
+            name: name.to_string(),
+            lights,
+            triangles,
+        })
+    }
+
+    /// Loads a scene from a JSON file; mesh paths are relative to the file's directory.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        Scene::from_json(&text, &|rel: &str| {
+            let p = dir.join(rel);
+            std::fs::read(&p).with_context(|| format!("reading mesh {}", p.display()))
+        })
+        .with_context(|| format!("scene {}", path.display()))
+    }
+
+    /// Parses a scene from JSON text; `mesh` returns the bytes of a mesh file given its path
+    /// as written in the JSON.
+    pub fn from_json(text: &str, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Scene> {
+        let desc: SceneDesc = serde_json::from_str(text).context("malformed scene JSON")?;
+        let mut tris = Vec::new();
+        for (i, obj) in desc.objects.iter().enumerate() {
+            let mut local = obj
+                .shape
+                .triangles(mesh)
+                .with_context(|| format!("object {i}"))?;
+            let m = obj.transform.matrix();
+            for t in &mut local {
+                for v in t.iter_mut() {
+                    *v = m.apply(*v);
+                }
+            }
+            tris.extend(local);
+        }
+        let lights = desc
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, l)| {
+                let name = l.name.clone().unwrap_or_else(|| format!("light{i}"));
+                let d = match (l.dir, l.azimuth_deg, l.elevation_deg) {
+                    (Some(d), None, None) => d,
+                    (None, Some(az), Some(el)) => {
+                        if !(0.0 < el && el <= 90.0) {
+                            bail!("light '{name}': elevation_deg {el} outside (0, 90]");
+                        }
+                        let (az, el) = (az.to_radians(), el.to_radians());
+                        [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
+                    }
+                    _ => bail!(
+                        "light '{name}': give either \"dir\" or both \"azimuth_deg\" and \
+                         \"elevation_deg\""
+                    ),
+                };
+                Ok((name, d))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        if lights.is_empty() {
+            bail!("scene '{}' has no lights", desc.name);
+        }
+        if tris.is_empty() {
+            bail!("scene '{}' has no triangles", desc.name);
+        }
+        Scene::new(&desc.name, tris, lights)
+    }
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneDesc {
+    name: String,
+    #[serde(default)]
+    #[allow(dead_code)]
+    description: String,
+    lights: Vec<LightDesc>,
+    objects: Vec<Object>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightDesc {
+    name: Option<String>,
+    dir: Option<V3>,
+    azimuth_deg: Option<f64>,
+    elevation_deg: Option<f64>,
+}
+
+#[derive(Deserialize)]
+struct Object {
+    #[serde(flatten)]
+    shape: Shape,
+    #[serde(default)]
+    transform: Transform,
+}
+
+/// Scale: uniform or per axis.
+#[derive(Deserialize, Clone, Copy)]
+#[serde(untagged)]
+enum Scale {
+    Uniform(f64),
+    Axes(V3),
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct Transform {
+    /// Applied last.
+    #[serde(default)]
+    translate: Option<V3>,
+    /// Euler angles in degrees, applied about X, then Y, then Z (after scaling).
+    #[serde(default)]
+    rotate: Option<V3>,
+    /// Applied first.
+    #[serde(default)]
+    scale: Option<Scale>,
+}
+
+/// Affine map x ↦ A x + t.
+#[derive(Clone, Copy, Debug)]
+pub struct Affine {
+    pub a: [[f64; 3]; 3],
+    pub t: V3,
+}
+
+impl Affine {
+    pub fn apply(&self, p: V3) -> V3 {
+        let mut r = self.t;
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri += self.a[i][0] * p[0] + self.a[i][1] * p[1] + self.a[i][2] * p[2];
+        }
+        r
+    }
+}
+
+fn matmul(x: [[f64; 3]; 3], y: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    let mut r = [[0.0; 3]; 3];
+    for i in 0..3 {
+        for j in 0..3 {
+            r[i][j] = (0..3).map(|k| x[i][k] * y[k][j]).sum();
+        }
+    }
+    r
+}
+
+impl Transform {
+    fn matrix(&self) -> Affine {
+        let s = match self.scale {
+            None => [1.0; 3],
+            Some(Scale::Uniform(s)) => [s; 3],
+            Some(Scale::Axes(s)) => s,
+        };
+        let mut a = [[s[0], 0.0, 0.0], [0.0, s[1], 0.0], [0.0, 0.0, s[2]]];
+        let r = self.rotate.unwrap_or([0.0; 3]);
+        let (sx, cx) = r[0].to_radians().sin_cos();
+        let (sy, cy) = r[1].to_radians().sin_cos();
+        let (sz, cz) = r[2].to_radians().sin_cos();
+        let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
+        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+        let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
+        a = matmul(rx, a);
+        a = matmul(ry, a);
+        a = matmul(rz, a);
+        Affine {
+            a,
+            t: self.translate.unwrap_or([0.0; 3]),
+        }
+    }
+}
+
+/// Procedural primitives (local coordinates; y is up, solids stand on y = 0 unless noted).
+#[derive(Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum Shape {
+    /// Quad in the y = 0 plane, centred, size [x, z], normal +y.
+    Plane { size: [f64; 2] },
+    /// Axis-aligned box: x, z centred, y from 0 to size[1].
+    Box { size: V3 },
+    /// Capped cylinder about the y axis from y = 0 to height.
+    Cylinder {
+        radius: f64,
+        height: f64,
+        #[serde(default = "default_segments")]
+        segments: usize,
+    },
+    /// UV sphere centred at the origin.
+    Sphere {
+        radius: f64,
+        #[serde(default = "default_segments")]
+        segments: usize,
+    },
+    /// Solid staircase rising along +z (one closed surface, no interior faces): step i has
+    /// its tread at y = (i+1)·step_height over z ∈ [i·step_depth, (i+1)·step_depth], x centred.
+    Stairs {
+        steps: usize,
+        width: f64,
+        step_depth: f64,
+        step_height: f64,
+    },
+    /// Fence along x (centred), standing on y = 0: `bars` vertical boxes and `rails` horizontal
+    /// rails, all of the given thickness (z).
+    Fence {
+        width: f64,
+        height: f64,
+        bars: usize,
+        bar_width: f64,
+        #[serde(default = "default_rails")]
+        rails: usize,
+        thickness: f64,
+    },
+    /// Horizontal grating (grid of crossing bars) centred, bars from y = 0 to thickness.
+    Grating {
+        size: [f64; 2],
+        bars: [usize; 2],
+        bar_width: f64,
+        thickness: f64,
+    },
+    /// Random single-sided quads (foliage-like cards) of size [w, h] with random orientation,
+    /// centres uniform in region [x0, y0, z0, x1, y1, z1]; deterministic in `seed`.
+    Cards {
+        count: usize,
+        size: [f64; 2],
+        region: [f64; 6],
+        seed: u64,
+    },
+    /// Random city block: grid[0] × grid[1] boxes with footprint and height ranges on a grid of
+    /// the given spacing (centred), plus `bridges` elevated slabs between neighbours.
+    City {
+        grid: [usize; 2],
+        spacing: f64,
+        footprint: [f64; 2],
+        height: [f64; 2],
+        #[serde(default)]
+        bridges: usize,
+        seed: u64,
+    },
+    /// Arcade along x: two rows (z = ±depth/2) of `columns` cylinders (radius, height) at the
+    /// given spacing, centred, under a roof slab of thickness `roof`.
+    Arcade {
+        columns: usize,
+        spacing: f64,
+        radius: f64,
+        height: f64,
+        depth: f64,
+        roof: f64,
+    },
+    /// Triangle mesh from an OBJ file (path relative to the scene file). With `fit`, it is
+    /// scaled uniformly so that its largest extent is `fit`, centred in x/z, base at y = 0.
+    Mesh { path: String, fit: Option<f64> },
+}
+
+fn default_segments() -> usize {
+    24
+}
+fn default_rails() -> usize {
+    2
+}
+
+fn pos(what: &str, v: f64) -> Result<()> {
+    if !(v.is_finite() && v > 0.0) {
+        bail!("{what} must be positive and finite, got {v}");
+    }
+    Ok(())
+}
+
+impl Shape {
+    fn triangles(&self, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Vec<Tri>> {
+        let mut out = Vec::new();
+        match *self {
+            Shape::Plane { size } => {
+                pos("plane size", size[0])?;
+                pos("plane size", size[1])?;
+                let (x, z) = (size[0] / 2.0, size[1] / 2.0);
+                quad(
+                    &mut out,
+                    [-x, 0.0, -z],
+                    [-x, 0.0, z],
+                    [x, 0.0, z],
+                    [x, 0.0, -z],
+                );
+            }
+            Shape::Box { size } => {
+                for s in size {
+                    pos("box size", s)?;
+                }
+                boxed(
+                    &mut out,
+                    [-size[0] / 2.0, 0.0, -size[2] / 2.0],
+                    [size[0] / 2.0, size[1], size[2] / 2.0],
+                );
+            }
+            Shape::Cylinder {
+                radius,
+                height,
+                segments,
+            } => {
+                pos("cylinder radius", radius)?;
+                pos("cylinder height", height)?;
+                if segments < 3 {
+                    bail!("cylinder segments must be ≥ 3");
+                }
+                cylinder(&mut out, radius, height, segments);
+            }
+            Shape::Sphere { radius, segments } => {
+                pos("sphere radius", radius)?;
+                if segments < 3 {
+                    bail!("sphere segments must be ≥ 3");
+                }
+                sphere(&mut out, radius, segments);
+            }
+            Shape::Stairs {
+                steps,
+                width,
+                step_depth,
+                step_height,
+            } => {
+                pos("stairs width", width)?;
+                pos("stairs step_depth", step_depth)?;
+                pos("stairs step_height", step_height)?;
+                stairs(&mut out, steps, width, step_depth, step_height);
+            }
+            Shape::Fence {
+                width,
+                height,
+                bars,
+                bar_width,
+                rails,
+                thickness,
+            } => {
+                pos("fence width", width)?;
+                pos("fence height", height)?;
+                pos("fence bar_width", bar_width)?;
+                pos("fence thickness", thickness)?;
+                let t = thickness / 2.0;
+                for i in 0..bars {
+                    let x = -width / 2.0 + (i as f64 + 0.5) * width / bars as f64;
+                    boxed(
+                        &mut out,
+                        [x - bar_width / 2.0, 0.0, -t],
+                        [x + bar_width / 2.0, height, t],
+                    );
+                }
+                for r in 0..rails {
+                    let y = height * (r as f64 + 0.5) / rails as f64;
+                    // rails slightly thicker than the bars so faces do not coincide
+                    boxed(
+                        &mut out,
+                        [-width / 2.0, y - bar_width / 2.0, -t * 1.5],
+                        [width / 2.0, y + bar_width / 2.0, t * 1.5],
+                    );
+                }
+            }
+            Shape::Grating {
+                size,
+                bars,
+                bar_width,
+                thickness,
+            } => {
+                pos("grating size", size[0])?;
+                pos("grating size", size[1])?;
+                pos("grating bar_width", bar_width)?;
+                pos("grating thickness", thickness)?;
+                let (hx, hz) = (size[0] / 2.0, size[1] / 2.0);
+                for i in 0..bars[0] {
+                    let x = -hx + (i as f64 + 0.5) * size[0] / bars[0] as f64;
+                    boxed(
+                        &mut out,
+                        [x - bar_width / 2.0, 0.0, -hz],
+                        [x + bar_width / 2.0, thickness, hz],
+                    );
+                }
+                for i in 0..bars[1] {
+                    let z = -hz + (i as f64 + 0.5) * size[1] / bars[1] as f64;
+                    // crossing bars sit half a thickness lower so top faces do not coincide
+                    boxed(
+                        &mut out,
+                        [-hx, -thickness / 2.0, z - bar_width / 2.0],
+                        [hx, thickness / 2.0, z + bar_width / 2.0],
+                    );
+                }
+            }
+            Shape::Cards {
+                count,
+                size,
+                region,
+                seed,
+            } => {
+                pos("cards size", size[0])?;
+                pos("cards size", size[1])?;
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                for _ in 0..count {
+                    let c: V3 = std::array::from_fn(|k| {
+                        let (lo, hi) = (region[k], region[k + 3]);
+                        if hi > lo {
+                            rng.gen_range(lo..hi)
+                        } else {
+                            lo
+                        }
+                    });
+                    let a = random_unit(&mut rng);
+                    let mut b = random_unit(&mut rng);
+                    b = sub(b, scale(a, dot(a, b)));
+                    let nb = norm(b);
+                    let b = if nb > 1e-6 {
+                        scale(b, 1.0 / nb)
+                    } else {
+                        perpendicular(a)
+                    };
+                    let (ha, hb) = (scale(a, size[0] / 2.0), scale(b, size[1] / 2.0));
+                    quad(
+                        &mut out,
+                        sub(sub(c, ha), hb),
+                        add(sub(c, ha), hb),
+                        add(add(c, ha), hb),
+                        sub(add(c, ha), hb),
+                    );
+                }
+            }
+            Shape::City {
+                grid,
+                spacing,
+                footprint,
+                height,
+                bridges,
+                seed,
+            } => {
+                pos("city spacing", spacing)?;
+                if !(0.0 < footprint[0] && footprint[0] <= footprint[1] && footprint[1] < spacing) {
+                    bail!("city footprint range must satisfy 0 < min ≤ max < spacing");
+                }
+                if !(0.0 < height[0] && height[0] <= height[1]) {
+                    bail!("city height range must satisfy 0 < min ≤ max");
+                }
+                let mut rng = ChaCha8Rng::seed_from_u64(seed);
+                let mut tops = vec![0.0; grid[0] * grid[1]];
+                let cx = |i: usize, n: usize| (i as f64 - (n as f64 - 1.0) / 2.0) * spacing;
+                for j in 0..grid[1] {
+                    for i in 0..grid[0] {
+                        let fx = rng.gen_range(footprint[0]..=footprint[1]) / 2.0;
+                        let fz = rng.gen_range(footprint[0]..=footprint[1]) / 2.0;
+                        let h = rng.gen_range(height[0]..=height[1]);
+                        let (x, z) = (cx(i, grid[0]), cx(j, grid[1]));
+                        boxed(&mut out, [x - fx, 0.0, z - fz], [x + fx, h, z + fz]);
+                        tops[j * grid[0] + i] = h;
+                    }
+                }
+                for _ in 0..bridges {
+                    if grid[0] < 2 || grid[1] < 1 {
+                        break;
+                    }
+                    let along_x = grid[1] < 2 || rng.gen_bool(0.5);
+                    let (i, j) = if along_x {
+                        (rng.gen_range(0..grid[0] - 1), rng.gen_range(0..grid[1]))
+                    } else {
+                        (rng.gen_range(0..grid[0]), rng.gen_range(0..grid[1] - 1))
+                    };
+                    let (i2, j2) = if along_x { (i + 1, j) } else { (i, j + 1) };
+                    let top = tops[j * grid[0] + i].min(tops[j2 * grid[0] + i2]);
+                    let y = rng.gen_range(0.3 * top..0.8 * top);
+                    let th = 0.04 * spacing;
+                    let w = 0.15 * spacing;
+                    let (x0, z0) = (cx(i, grid[0]), cx(j, grid[1]));
+                    let (x1, z1) = (cx(i2, grid[0]), cx(j2, grid[1]));
+                    let lo = [x0.min(x1) - w, y, z0.min(z1) - w];
+                    let hi = [x0.max(x1) + w, y + th, z0.max(z1) + w];
+                    boxed(&mut out, lo, hi);
+                }
+            }
+            Shape::Arcade {
+                columns,
+                spacing,
+                radius,
+                height,
+                depth,
+                roof,
+            } => {
+                for (w, v) in [
+                    ("spacing", spacing),
+                    ("radius", radius),
+                    ("height", height),
+                    ("depth", depth),
+                    ("roof", roof),
+                ] {
+                    pos(&format!("arcade {w}"), v)?;
+                }
+                let half = (columns.max(1) as f64 - 1.0) / 2.0 * spacing;
+                for i in 0..columns {
+                    let x = i as f64 * spacing - half;
+                    for z in [-depth / 2.0, depth / 2.0] {
+                        let mut c = Vec::new();
+                        cylinder(&mut c, radius, height, 16);
+                        out.extend(c.into_iter().map(|t| t.map(|p| [p[0] + x, p[1], p[2] + z])));
+                    }
+                }
+                let m = 2.0 * radius;
+                boxed(
+                    &mut out,
+                    [-half - m, height, -depth / 2.0 - m],
+                    [half + m, height + roof, depth / 2.0 + m],
+                );
+            }
+            Shape::Mesh { ref path, fit } => {
+                let bytes = mesh(path)?;
+                let mut tris = load_obj_bytes(&bytes).with_context(|| format!("mesh '{path}'"))?;
+                if let Some(f) = fit {
+                    pos("mesh fit", f)?;
+                    fit_mesh(&mut tris, f);
+                }
+                out = tris;
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// Triangles of an OBJ file (all models, faces triangulated).
+pub fn load_obj_bytes(bytes: &[u8]) -> Result<Vec<Tri>> {
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let mut reader = std::io::BufReader::new(bytes);
+    let (models, _) =
+        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
+            .map_err(|e| anyhow!("OBJ parse error: {e}"))?;
+    let mut tris = Vec::new();
+    for m in &models {
+        let p = &m.mesh.positions;
+        let idx = &m.mesh.indices;
+        let vert = |i: u32| -> Result<V3> {
+            let i = i as usize * 3;
+            if i + 2 >= p.len() {
+                bail!("OBJ index out of range in model '{}'", m.name);
+            }
+            Ok([p[i] as f64, p[i + 1] as f64, p[i + 2] as f64])
+        };
+        for f in idx.chunks_exact(3) {
+            tris.push([vert(f[0])?, vert(f[1])?, vert(f[2])?]);
+        }
+    }
+    if tris.is_empty() {
+        bail!("OBJ has no triangles");
+    }
+    if tris.iter().flatten().flatten().any(|c| !c.is_finite()) {
+        bail!("OBJ has non-finite vertex coordinates");
+    }
+    Ok(tris)
+}
+
+fn fit_mesh(tris: &mut [Tri], fit: f64) {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in tris.iter().flatten() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    let s = if ext > 0.0 { fit / ext } else { 1.0 };
+    let c = [(lo[0] + hi[0]) / 2.0, lo[1], (lo[2] + hi[2]) / 2.0];
+    for v in tris.iter_mut().flatten() {
+        *v = scale(sub(*v, c), s);
+    }
+}
+
+pub(crate) fn add(a: V3, b: V3) -> V3 {
+    [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+}
+pub(crate) fn sub(a: V3, b: V3) -> V3 {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+pub(crate) fn scale(a: V3, s: f64) -> V3 {
+    [a[0] * s, a[1] * s, a[2] * s]
+}
+pub(crate) fn dot(a: V3, b: V3) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+pub(crate) fn cross(a: V3, b: V3) -> V3 {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+pub(crate) fn norm(a: V3) -> f64 {
+    dot(a, a).sqrt()
+}
+fn perpendicular(a: V3) -> V3 {
+    let h = if a[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let c = cross(a, h);
+    scale(c, 1.0 / norm(c))
+}
+fn random_unit(rng: &mut ChaCha8Rng) -> V3 {
+    loop {
+        let v = [
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+            rng.gen_range(-1.0..1.0),
+        ];
+        let n = norm(v);
+        if n > 1e-3 && n <= 1.0 {
+            return scale(v, 1.0 / n);
+        }
+    }
+}
+
+/// Quad a-b-c-d as two triangles.
+pub fn quad(out: &mut Vec<Tri>, a: V3, b: V3, c: V3, d: V3) {
+    out.push([a, b, c]);
+    out.push([a, c, d]);
+}
+
+/// Axis-aligned box from `lo` to `hi` (12 triangles).
+pub fn boxed(out: &mut Vec<Tri>, lo: V3, hi: V3) {
+    let p = |i: usize| -> V3 {
+        [
+            if i & 1 == 0 { lo[0] } else { hi[0] },
+            if i & 2 == 0 { lo[1] } else { hi[1] },
+            if i & 4 == 0 { lo[2] } else { hi[2] },
+        ]
+    };
+    for f in [
+        [0, 2, 6, 4],
+        [1, 5, 7, 3],
+        [0, 4, 5, 1],
+        [2, 3, 7, 6],
+        [0, 1, 3, 2],
+        [4, 6, 7, 5],
+    ] {
+        quad(out, p(f[0]), p(f[1]), p(f[2]), p(f[3]));
+    }
+}
+
+fn stairs(out: &mut Vec<Tri>, n: usize, width: f64, d: f64, h: f64) {
+    let (x0, x1) = (-width / 2.0, width / 2.0);
+    let top = n as f64 * h;
+    let back = n as f64 * d;
+    for i in 0..n {
+        let (z0, z1) = (i as f64 * d, (i + 1) as f64 * d);
+        let (y0, y1) = (i as f64 * h, (i + 1) as f64 * h);
+        // riser (facing −z) and tread (facing +y)
+        quad(out, [x0, y0, z0], [x0, y1, z0], [x1, y1, z0], [x1, y0, z0]);
+        quad(out, [x0, y1, z0], [x0, y1, z1], [x1, y1, z1], [x1, y1, z0]);
+        // the two side faces of this column of the profile
+        for x in [x0, x1] {
+            quad(out, [x, 0.0, z0], [x, y1, z0], [x, y1, z1], [x, 0.0, z1]);
+        }
+    }
+    if n > 0 {
+        quad(
+            out,
+            [x0, 0.0, back],
+            [x1, 0.0, back],
+            [x1, top, back],
+            [x0, top, back],
+        );
+        quad(
+            out,
+            [x0, 0.0, 0.0],
+            [x1, 0.0, 0.0],
+            [x1, 0.0, back],
+            [x0, 0.0, back],
+        );
+    }
+}
+
+fn cylinder(out: &mut Vec<Tri>, r: f64, h: f64, n: usize) {
+    let pt = |i: usize, y: f64| {
+        let a = std::f64::consts::TAU * (i % n) as f64 / n as f64;
+        [r * a.cos(), y, r * a.sin()]
+    };
+    for i in 0..n {
+        quad(out, pt(i, 0.0), pt(i, h), pt(i + 1, h), pt(i + 1, 0.0));
+        out.push([[0.0, 0.0, 0.0], pt(i + 1, 0.0), pt(i, 0.0)]);
+        out.push([[0.0, h, 0.0], pt(i, h), pt(i + 1, h)]);
+    }
+}
+
+fn sphere(out: &mut Vec<Tri>, r: f64, n: usize) {
+    let rings = n.div_ceil(2).max(2);
+    let pt = |i: usize, j: usize| {
+        let th = std::f64::consts::PI * j as f64 / rings as f64;
+        let ph = std::f64::consts::TAU * (i % n) as f64 / n as f64;
+        [
+            r * th.sin() * ph.cos(),
+            r * th.cos(),
+            r * th.sin() * ph.sin(),
+        ]
+    };
+    for j in 0..rings {
+        for i in 0..n {
+            let (a, b, c, d) = (pt(i, j), pt(i + 1, j), pt(i + 1, j + 1), pt(i, j + 1));
+            if j > 0 {
+                out.push([a, b, c]);
+            }
+            if j + 1 < rings {
+                out.push([a, c, d]);
+            }
+        }
+    }
+}

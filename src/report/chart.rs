@@ -1,0 +1,218 @@
+//! Charts written as SVG (plotters' SVG backend: pure Rust, no fonts needed).
+
+use super::pareto::{pareto_front, Entry};
+use anyhow::{anyhow, Result};
+use plotters::prelude::*;
+use std::path::Path;
+
+fn err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> anyhow::Error + '_ {
+    move |e| anyhow!("writing chart {}: {e:?}", path.display())
+}
+
+/// Speed against accuracy: error against PCF (y) over nanoseconds per fragment (x, log scale),
+/// marker area proportional to bits per texel, the Pareto front drawn as a line and its members
+/// labelled.
+pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result<()> {
+    let finite: Vec<&Entry> = entries
+        .iter()
+        .filter(|e| e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0)
+        .collect();
+    let (mut x0, mut x1) = (f64::INFINITY, 0.0f64);
+    let mut y1 = 0.0f64;
+    for e in &finite {
+        x0 = x0.min(e.ns_per_fragment);
+        x1 = x1.max(e.ns_per_fragment);
+        y1 = y1.max(e.error);
+    }
+    if finite.is_empty() {
+        (x0, x1, y1) = (1.0, 10.0, 1.0);
+    }
+    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    root.fill(&WHITE).map_err(err(path))?;
+    let mut chart = ChartBuilder::on(&root)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d((x0 / 2.0..x1 * 2.0).log_scale(), 0.0..y1 * 1.15 + 1e-6)
+        .map_err(err(path))?;
+    chart
+        .configure_mesh()
+        .x_desc("nanoseconds per fragment (one core, log scale)")
+        .y_desc("mean |G − PCF|")
+        .draw()
+        .map_err(err(path))?;
+    let front = pareto_front(entries);
+    let mut front_pts: Vec<(f64, f64)> = front
+        .iter()
+        .map(|&i| (entries[i].ns_per_fragment, entries[i].error))
+        .collect();
+    front_pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    chart
+        .draw_series(LineSeries::new(front_pts, RED.stroke_width(2)))
+        .map_err(err(path))?
+        .label("Pareto front")
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
+    for (i, e) in entries.iter().enumerate() {
+        if !(e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0) {
+            continue;
+        }
+        let on_front = front.contains(&i);
+        let r = (2.0 + (e.bits_per_texel as f64).sqrt() * 0.9) as i32;
+        let color = if e.name.starts_with("lp:") {
+            BLUE.mix(0.6)
+        } else {
+            BLACK.mix(0.7)
+        };
+        let label = format!("{} ({}, {} bit)", e.name, e.precision, e.bits_per_texel);
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (e.ns_per_fragment, e.error),
+                r,
+                color.filled(),
+            )))
+            .map_err(err(path))?;
+        if on_front {
+            chart
+                .draw_series(std::iter::once(Text::new(
+                    label,
+                    (e.ns_per_fragment, e.error),
+                    ("sans-serif", 11),
+                )))
+                .map_err(err(path))?;
+        }
+    }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err(path))?;
+    root.present().map_err(err(path))?;
+    Ok(())
+}
+
+/// A line chart of several named series (x log-scaled when `log_x`).
+pub fn lines_svg(
+    path: &Path,
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    series: &[(String, Vec<(f64, f64)>)],
+    log_x: bool,
+) -> Result<()> {
+    let pts = series.iter().flat_map(|s| s.1.iter());
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    for &(x, y) in pts.filter(|p| p.0.is_finite() && p.1.is_finite()) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+    }
+    if !x0.is_finite() {
+        (x0, x1, y0, y1) = (1.0, 2.0, 0.0, 1.0);
+    }
+    if x1 <= x0 {
+        x1 = x0 + 1.0;
+    }
+    if y1 <= y0 {
+        y1 = y0 + 1e-9;
+    }
+    let pad = 0.05 * (y1 - y0);
+    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
+    root.fill(&WHITE).map_err(err(path))?;
+    let mut builder = ChartBuilder::on(&root);
+    builder
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70);
+    macro_rules! draw {
+        ($chart:expr) => {{
+            let mut chart = $chart;
+            chart
+                .configure_mesh()
+                .x_desc(x_desc)
+                .y_desc(y_desc)
+                .draw()
+                .map_err(err(path))?;
+            for (k, (name, s)) in series.iter().enumerate() {
+                let c = Palette99::pick(k).to_rgba();
+                chart
+                    .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
+                    .map_err(err(path))?
+                    .label(name.as_str())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+                chart
+                    .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                    .map_err(err(path))?;
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .draw()
+                .map_err(err(path))?;
+        }};
+    }
+    if log_x && x0 > 0.0 {
+        draw!(builder
+            .build_cartesian_2d((x0..x1).log_scale(), y0 - pad..y1 + pad)
+            .map_err(err(path))?);
+    } else {
+        draw!(builder
+            .build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)
+            .map_err(err(path))?);
+    }
+    root.present().map_err(err(path))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn speed_accuracy_chart_is_valid_svg_with_front_labels() {
+        let dir = std::env::temp_dir().join(format!("momentlab-chart-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("c.svg");
+        let v = vec![
+            Entry {
+                name: "vsm".into(),
+                precision: "f32".into(),
+                error: 0.05,
+                ns_per_fragment: 3.0,
+                bits_per_texel: 64,
+            },
+            Entry {
+                name: "hamburger4".into(),
+                precision: "f32".into(),
+                error: 0.02,
+                ns_per_fragment: 20.0,
+                bits_per_texel: 128,
+            },
+            Entry {
+                name: "slow-bad".into(),
+                precision: "f32".into(),
+                error: 0.06,
+                ns_per_fragment: 50.0,
+                bits_per_texel: 128,
+            },
+        ];
+        speed_accuracy_svg(&p, "t", &v).unwrap();
+        let s = std::fs::read_to_string(&p).unwrap();
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+        assert!(s.contains("hamburger4 (f32, 128 bit)"));
+        assert!(
+            !s.contains("slow-bad (f32"),
+            "dominated entries are not labelled"
+        );
+        std::fs::remove_dir_all(&dir).ok();
+    }
+}

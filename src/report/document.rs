@@ -1,0 +1,219 @@
+//! A small report model written as both a self-contained folder with `index.html` and
+//! `report.md` (figures are files next to them, referenced by relative paths).
+
+use anyhow::{Context, Result};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One block of content.
+#[derive(Clone, Debug)]
+pub enum Block {
+    Heading(String),
+    Paragraph(String),
+    /// Column headers and rows of cells.
+    Table(Vec<String>, Vec<Vec<String>>),
+    /// A figure file relative to the report folder, and its caption.
+    Figure(String, String),
+    /// Preformatted text (commands, terminal output).
+    Code(String),
+}
+
+/// A report: a title and a flat list of blocks.
+#[derive(Clone, Debug, Default)]
+pub struct Document {
+    pub title: String,
+    pub blocks: Vec<Block>,
+}
+
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+fn md_cell(s: &str) -> String {
+    s.replace('|', "\\|").replace('\n', " ")
+}
+
+impl Document {
+    pub fn new(title: &str) -> Document {
+        Document {
+            title: title.to_string(),
+            blocks: Vec::new(),
+        }
+    }
+    pub fn heading(&mut self, s: impl Into<String>) {
+        self.blocks.push(Block::Heading(s.into()));
+    }
+    pub fn paragraph(&mut self, s: impl Into<String>) {
+        self.blocks.push(Block::Paragraph(s.into()));
+    }
+    pub fn table(&mut self, headers: &[&str], rows: Vec<Vec<String>>) {
+        self.blocks.push(Block::Table(
+            headers.iter().map(|s| s.to_string()).collect(),
+            rows,
+        ));
+    }
+    pub fn figure(&mut self, file: impl Into<String>, caption: impl Into<String>) {
+        self.blocks.push(Block::Figure(file.into(), caption.into()));
+    }
+    pub fn code(&mut self, s: impl Into<String>) {
+        self.blocks.push(Block::Code(s.into()));
+    }
+
+    /// The relative file names of all figures.
+    pub fn figures(&self) -> Vec<&str> {
+        self.blocks
+            .iter()
+            .filter_map(|b| match b {
+                Block::Figure(f, _) => Some(f.as_str()),
+                _ => None,
+            })
+            .collect()
+    }
+
+    pub fn to_html(&self) -> String {
+        let mut h = String::new();
+        let _ = write!(
+            h,
+            "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>{}</title>\n\
+             <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;line-height:1.45}}\
+             table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}\
+             th{{background:#eee}}td:first-child{{text-align:left}}img{{max-width:100%;border:1px solid #ddd}}\
+             figure{{margin:1.5em 0}}pre{{background:#f4f4f4;padding:.6em;overflow-x:auto}}</style></head><body>\n<h1>{}</h1>\n",
+            esc(&self.title),
+            esc(&self.title)
+        );
+        for b in &self.blocks {
+            match b {
+                Block::Heading(s) => {
+                    let _ = writeln!(h, "<h2>{}</h2>", esc(s));
+                }
+                Block::Paragraph(s) => {
+                    let _ = writeln!(h, "<p>{}</p>", esc(s));
+                }
+                Block::Code(s) => {
+                    let _ = writeln!(h, "<pre>{}</pre>", esc(s));
+                }
+                Block::Figure(f, c) => {
+                    let _ = writeln!(
+                        h,
+                        "<figure><a href=\"{f}\"><img src=\"{f}\" alt=\"{c}\"></a><figcaption>{c}</figcaption></figure>",
+                        f = esc(f),
+                        c = esc(c)
+                    );
+                }
+                Block::Table(head, rows) => {
+                    h.push_str("<table><tr>");
+                    for c in head {
+                        let _ = write!(h, "<th>{}</th>", esc(c));
+                    }
+                    h.push_str("</tr>\n");
+                    for r in rows {
+                        h.push_str("<tr>");
+                        for c in r {
+                            let _ = write!(h, "<td>{}</td>", esc(c));
+                        }
+                        h.push_str("</tr>\n");
+                    }
+                    h.push_str("</table>\n");
+                }
+            }
+        }
+        h.push_str("</body></html>\n");
+        h
+    }
+
+    pub fn to_markdown(&self) -> String {
+        let mut m = format!("# {}\n\n", self.title);
+        for b in &self.blocks {
+            match b {
+                Block::Heading(s) => {
+                    let _ = writeln!(m, "## {s}\n");
+                }
+                Block::Paragraph(s) => {
+                    let _ = writeln!(m, "{s}\n");
+                }
+                Block::Code(s) => {
+                    let _ = writeln!(m, "```\n{s}\n```\n");
+                }
+                Block::Figure(f, c) => {
+                    let _ = writeln!(m, "![{}]({f})\n\n*{c}*\n", md_cell(c));
+                }
+                Block::Table(head, rows) => {
+                    let _ = writeln!(
+                        m,
+                        "| {} |",
+                        head.iter()
+                            .map(|c| md_cell(c))
+                            .collect::<Vec<_>>()
+                            .join(" | ")
+                    );
+                    let _ = writeln!(m, "|{}", " --- |".repeat(head.len()));
+                    for r in rows {
+                        let _ = writeln!(
+                            m,
+                            "| {} |",
+                            r.iter().map(|c| md_cell(c)).collect::<Vec<_>>().join(" | ")
+                        );
+                    }
+                    m.push('\n');
+                }
+            }
+        }
+        m
+    }
+
+    /// Write `index.html` and `report.md` into `dir` (which holds the figures).
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        let html = dir.join("index.html");
+        std::fs::write(&html, self.to_html())
+            .with_context(|| format!("writing {}", html.display()))?;
+        let md = dir.join("report.md");
+        std::fs::write(&md, self.to_markdown())
+            .with_context(|| format!("writing {}", md.display()))?;
+        Ok(())
+    }
+}
+
+/// Every `src="…"` / `href="…"` target in an HTML text (for checking a report's links).
+pub fn html_references(html: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    for key in ["src=\"", "href=\""] {
+        let mut rest = html;
+        while let Some(p) = rest.find(key) {
+            rest = &rest[p + key.len()..];
+            if let Some(e) = rest.find('"') {
+                out.push(rest[..e].replace("&amp;", "&"));
+                rest = &rest[e..];
+            }
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn html_and_markdown_escape_and_reference_figures() {
+        let mut d = Document::new("A <b> report");
+        d.paragraph("x < y & z");
+        d.table(&["a", "b|c"], vec![vec!["1".into(), "2".into()]]);
+        d.figure("fig.svg", "caption");
+        let h = d.to_html();
+        assert!(h.contains("A &lt;b&gt; report"));
+        assert!(h.contains("x &lt; y &amp; z"));
+        assert_eq!(
+            html_references(&h),
+            vec!["fig.svg".to_string(), "fig.svg".to_string()]
+        );
+        let m = d.to_markdown();
+        assert!(m.contains("| a | b\\|c |"));
+        assert!(m.contains("![caption](fig.svg)"));
+        assert_eq!(d.figures(), vec!["fig.svg"]);
+    }
+}

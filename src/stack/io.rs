@@ -1,0 +1,201 @@
+//! Depth-stack files: `<name>.exr` (single part, scan lines, ZIP16, one f32 channel per layer
+//! and quantity: `layerNNN.Z`, `layerNNN.dzdu`, `layerNNN.dzdv`, row-major, y = row) plus the
+//! JSON sidecar `<name>.json` (= [`StackMeta`]). Layout: docs/stacks.md.
+
+use super::{validate, DepthStack, StackMeta};
+use anyhow::{anyhow, bail, Context, Result};
+use exr::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Channel name of `quantity` ("Z", "dzdu" or "dzdv") of layer `l`: `layer000.Z` etc.
+pub fn channel_name(l: usize, quantity: &str) -> String {
+    format!("layer{l:03}.{quantity}")
+}
+
+/// The sidecar of `path`: same name with extension `.json`.
+pub fn sidecar_path(path: &Path) -> PathBuf {
+    path.with_extension("json")
+}
+
+/// Writes `stack` to `path` (the `.exr`) and its sidecar (`.json` next to it). The stack is
+/// validated first; f32 values are stored losslessly (ZIP16), +inf included.
+pub fn write(path: &Path, stack: &DepthStack) -> Result<()> {
+    validate(stack).with_context(|| format!("refusing to write {}", path.display()))?;
+    let m = &stack.meta;
+    let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for l in 0..m.layers {
+        for (q, ch) in [
+            ("Z", &stack.depth),
+            ("dzdu", &stack.dzdu),
+            ("dzdv", &stack.dzdv),
+        ] {
+            let name = Text::new_or_none(channel_name(l, q))
+                .ok_or_else(|| anyhow!("channel name for layer {l} not representable"))?;
+            list.push(AnyChannel::new(name, FlatSamples::F32(ch[l].clone())));
+        }
+    }
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let layer = Layer::new(
+        (m.width, m.height),
+        LayerAttributes::default(),
+        encoding,
+        AnyChannels::sort(list),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_file(path)
+        .with_context(|| format!("writing {}", path.display()))?;
+    let side = sidecar_path(path);
+    let json = serde_json::to_string_pretty(m)?;
+    std::fs::write(&side, json + "\n").with_context(|| format!("writing {}", side.display()))?;
+    Ok(())
+}
+
+/// Reads and validates a depth stack: `path` is the `.exr`, the sidecar is `path` with `.json`.
+/// Every error names the file (and layer / texel where relevant).
+pub fn read(path: &Path) -> Result<DepthStack> {
+    read_inner(path).with_context(|| format!("{}", path.display()))
+}
+
+fn read_inner(path: &Path) -> Result<DepthStack> {
+    let side = sidecar_path(path);
+    let text = match std::fs::read_to_string(&side) {
+        Ok(t) => t,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("missing sidecar {}", side.display())
+        }
+        Err(e) => return Err(e).with_context(|| format!("reading sidecar {}", side.display())),
+    };
+    let meta: StackMeta = serde_json::from_str(&text)
+        .with_context(|| format!("malformed sidecar {}", side.display()))?;
+
+    let image = exr::prelude::read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .all_layers()
+        .all_attributes()
+        .from_file(path)
+        .map_err(|e| anyhow!("not a readable OpenEXR file: {e}"))?;
+    if image.layer_data.len() != 1 {
+        bail!(
+            "expected a single-part EXR, found {} parts",
+            image.layer_data.len()
+        );
+    }
+    let layer = image
+        .layer_data
+        .into_iter()
+        .next()
+        .context("EXR has no part")?;
+    let (w, h) = (layer.size.width(), layer.size.height());
+    if (w, h) != (meta.width, meta.height) {
+        bail!(
+            "EXR is {w}x{h} but the sidecar says {}x{}",
+            meta.width,
+            meta.height
+        );
+    }
+    let mut depth: Vec<Option<Vec<f32>>> = vec![None; meta.layers];
+    let mut dzdu = depth.clone();
+    let mut dzdv = depth.clone();
+    for ch in layer.channel_data.list {
+        let name = ch.name.to_string();
+        let (l, q) = parse_channel(&name).ok_or_else(|| {
+            anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
+        })?;
+        if l >= meta.layers {
+            bail!(
+                "channel '{name}' is beyond the sidecar's layer count {}",
+                meta.layers
+            );
+        }
+        let values = match ch.sample_data {
+            FlatSamples::F32(v) => v,
+            FlatSamples::F16(_) => bail!("channel '{name}' is half (f16); 32-bit float required"),
+            FlatSamples::U32(_) => bail!("channel '{name}' is uint; 32-bit float required"),
+        };
+        if values.len() != w * h {
+            bail!(
+                "channel '{name}' has {} values, expected {w}x{h}",
+                values.len()
+            );
+        }
+        let slot = match q {
+            Quantity::Z => &mut depth[l],
+            Quantity::Dzdu => &mut dzdu[l],
+            Quantity::Dzdv => &mut dzdv[l],
+        };
+        *slot = Some(values);
+    }
+    let take = |v: Vec<Option<Vec<f32>>>, q: &str| -> Result<Vec<Vec<f32>>> {
+        v.into_iter()
+            .enumerate()
+            .map(|(l, c)| {
+                c.ok_or_else(|| {
+                    anyhow!(
+                        "channel '{}' missing (sidecar says {} layers)",
+                        channel_name(l, q),
+                        meta.layers
+                    )
+                })
+            })
+            .collect()
+    };
+    let stack = DepthStack {
+        depth: take(depth, "Z")?,
+        dzdu: take(dzdu, "dzdu")?,
+        dzdv: take(dzdv, "dzdv")?,
+        meta,
+    };
+    validate(&stack)?;
+    Ok(stack)
+}
+
+enum Quantity {
+    Z,
+    Dzdu,
+    Dzdv,
+}
+
+fn parse_channel(name: &str) -> Option<(usize, Quantity)> {
+    let rest = name.strip_prefix("layer")?;
+    let (num, q) = rest.split_once('.')?;
+    if num.is_empty() || !num.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    let l = num.parse().ok()?;
+    let q = match q {
+        "Z" => Quantity::Z,
+        "dzdu" => Quantity::Dzdu,
+        "dzdv" => Quantity::Dzdv,
+        _ => return None,
+    };
+    Some((l, q))
+}
+
+/// The `.exr` files of `dir`, sorted by file name.
+pub fn exr_files(dir: &Path) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
+        let p = entry?.path();
+        if p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+            files.push(p);
+        }
+    }
+    files.sort_by(|a, b| a.file_name().cmp(&b.file_name()));
+    Ok(files)
+}
+
+/// Reads every `.exr` depth stack in `dir` (sorted by file name). Errors if there is none.
+pub fn load_dir(dir: &Path) -> Result<Vec<DepthStack>> {
+    let files = exr_files(dir)?;
+    if files.is_empty() {
+        bail!("no .exr depth stacks in {}", dir.display());
+    }
+    files.iter().map(|p| read(p)).collect()
+}

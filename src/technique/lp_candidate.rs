@@ -1,0 +1,108 @@
+//! LP candidates: Algorithm 1 of Peters & Klein 2015 (Section 3.1) with any basis, as a
+//! [`Technique`]. G(b, z_f) = min Σ_{z_i < z_f} w_i s.t. w ≥ 0, Σ w_i = 1, Σ w_i b(z_i) = b on
+//! a fixed grid I. Moments with no representing distribution on I give NaN.
+
+use super::{Evaluator, Technique};
+use crate::basis::{split_list, Basis, Catalog};
+use crate::lp::{make_solver, GridTable, MomentSolver, Status};
+use crate::Grid;
+use anyhow::{bail, Context, Result};
+
+/// Default grid size of "lp:…" techniques (uniform points on [0,1]).
+pub const DEFAULT_GRID_POINTS: usize = 1024;
+
+/// Algorithm 1 with a given basis, grid and LP solver ("fast" or "reference").
+pub struct LpCandidate {
+    basis: Basis,
+    grid: Grid,
+    solver_kind: String,
+    table: GridTable,
+}
+
+impl LpCandidate {
+    /// Tabulates the basis on the grid and checks that `solver_kind` can be built.
+    pub fn new(basis: Basis, grid: Grid, solver_kind: &str) -> Result<LpCandidate> {
+        if basis.is_empty() {
+            bail!("LP candidate: need at least one basis function");
+        }
+        let m = basis.len();
+        let table = GridTable::from_fn(&grid, m, |z, out| basis.eval(z, out))
+            .with_context(|| format!("LP candidate [{}]", basis.names().join(",")))?;
+        make_solver(solver_kind, table.clone())?;
+        Ok(LpCandidate {
+            basis,
+            grid,
+            solver_kind: solver_kind.to_string(),
+            table,
+        })
+    }
+
+    /// "f1,f2,…" (commas inside parentheses do not split) resolved in the embedded catalog, on
+    /// [`DEFAULT_GRID_POINTS`] uniform points, with the "fast" solver, or "reference" when
+    /// the fast solver cannot be built.
+    pub fn from_spec(list: &str) -> Result<LpCandidate> {
+        let names = split_list(list);
+        if names.iter().any(|n| n.is_empty()) {
+            bail!("LP candidate 'lp:{list}': empty function name");
+        }
+        let basis = Catalog::embedded()
+            .basis(&names)
+            .with_context(|| format!("LP candidate 'lp:{list}'"))?;
+        let grid = Grid::uniform(DEFAULT_GRID_POINTS)?;
+        match LpCandidate::new(basis.clone(), grid.clone(), "fast") {
+            Ok(c) => Ok(c),
+            Err(_) => LpCandidate::new(basis, grid, "reference"),
+        }
+    }
+
+    pub fn solver_kind(&self) -> &str {
+        &self.solver_kind
+    }
+
+    pub fn table(&self) -> &GridTable {
+        &self.table
+    }
+
+    pub fn basis_functions(&self) -> &Basis {
+        &self.basis
+    }
+}
+
+/// One solver per evaluator: warm-start state stays per thread.
+struct LpEvaluator {
+    solver: Option<Box<dyn MomentSolver>>,
+}
+
+impl Evaluator for LpEvaluator {
+    /// G(b, z_f); NaN when the moments are infeasible on the grid or the solver fails.
+    fn shadow(&mut self, moments: &[f64], zf: f64) -> f64 {
+        let Some(solver) = self.solver.as_mut() else {
+            return f64::NAN;
+        };
+        match solver.solve(moments, zf) {
+            Ok(s) if s.status == Status::Optimal => s.g,
+            _ => f64::NAN,
+        }
+    }
+}
+
+impl Technique for LpCandidate {
+    fn name(&self) -> String {
+        format!("lp[{}]", self.basis.names().join(","))
+    }
+    fn moment_count(&self) -> usize {
+        self.basis.len()
+    }
+    fn basis(&self, z: f64, out: &mut [f64]) {
+        self.basis.eval(z, out)
+    }
+    fn depth_grid(&self) -> Option<&Grid> {
+        Some(&self.grid)
+    }
+    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
+        // `new` checked that this solver kind builds on this table.
+        Box::new(LpEvaluator {
+            solver: make_solver(&self.solver_kind, self.table.clone()).ok(),
+        })
+    }
+}

@@ -1,0 +1,85 @@
+//! The stability harness detects what it claims to detect.
+
+use momentlab::technique::stability::{self, Config, Mode, Scenario};
+use momentlab::technique::tmsm::{self, Tmsm};
+use momentlab::technique::{Evaluator, Technique};
+
+/// A broken technique with the TMSM basis: returns a fixed value.
+struct Constant(f64);
+struct ConstEval(f64);
+impl Evaluator for ConstEval {
+    fn shadow(&mut self, _: &[f64], _: f64) -> f64 {
+        self.0
+    }
+}
+impl Technique for Constant {
+    fn name(&self) -> String {
+        "constant".into()
+    }
+    fn moment_count(&self) -> usize {
+        4
+    }
+    fn basis(&self, z: f64, out: &mut [f64]) {
+        tmsm::basis(z, out)
+    }
+    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
+        Box::new(ConstEval(self.0))
+    }
+}
+
+#[test]
+fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
+    let cfg = Config {
+        samples: 200,
+        grid_points: 128,
+        ..Config::default()
+    };
+    let samples = stability::generate(&cfg);
+    assert_eq!(samples.len(), 200);
+    for sc in Scenario::ALL {
+        assert!(samples.iter().any(|s| s.scenario == sc));
+    }
+    for s in &samples {
+        let w: f64 = s.atoms.iter().map(|a| a.1).sum();
+        assert!((w - 1.0).abs() < 1e-12 && (0.0..=1.0).contains(&s.zf));
+    }
+    let techs: Vec<(String, Box<dyn Technique>)> = vec![
+        ("nan".into(), Box::new(Constant(f64::NAN))),
+        ("two".into(), Box::new(Constant(2.0))),
+        ("one".into(), Box::new(Constant(1.0))),
+        ("tmsm0".into(), Box::new(Tmsm::new(0.0, false))),
+    ];
+    let r = stability::run(&cfg, &techs, &samples, &|_| {}).unwrap();
+    let f64_of = |t: usize| &r.by_mode[t].iter().find(|e| e.0 == Mode::F64).unwrap().1;
+    assert_eq!(f64_of(0).nan_share, 1.0);
+    assert_eq!(f64_of(1).outside_share, 1.0);
+    assert!(
+        f64_of(2).over_share > 0.3,
+        "G = 1 must exceed the bound for lit fragments"
+    );
+    assert_eq!(f64_of(2).outside_share, 0.0);
+    // Unbiased TMSM at f64 is the sharp bound itself on inputs away from the ill-posed families.
+    // (The oracle grid has 128 points: its own error on three Diracs is ~h²·‖p‖ ≈ 1e-3.)
+    for sc in [Scenario::Random, Scenario::OneDirac, Scenario::ThreeDiracs] {
+        let d: Vec<f64> = r
+            .points
+            .iter()
+            .filter(|p| p.technique == 3 && p.mode == Mode::F64 && p.scenario == sc)
+            .map(|p| p.dev)
+            .collect();
+        let mean = d.iter().map(|x| x.abs()).sum::<f64>() / d.len() as f64;
+        let max_over = d.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+        eprintln!("{sc:?}: mean |dev| {mean:.2e}, max dev {max_over:.2e}");
+        assert!(mean < 2e-3, "{sc:?}: mean |dev| {mean}");
+        // Never darker than the oracle (the oracle is an upper bound of the sharp bound).
+        assert!(max_over < 1e-6, "{sc:?}: above the oracle by {max_over}");
+    }
+    assert_eq!(f64_of(3).nan_share, 0.0);
+    // θ modes only where a θ is known.
+    assert!(r.by_mode[3]
+        .iter()
+        .all(|e| !matches!(e.0, Mode::U16Theta | Mode::F32Theta)));
+    // Heat map cells are finite means where inputs fell.
+    let (cells, _, _) = stability::heat_map(&r.points, 0, Mode::F64, 8, 8);
+    assert!(cells.iter().flatten().flatten().all(|&v| v == 1.0));
+}
