@@ -64,6 +64,8 @@ pub struct FastStats {
     pub phase1_pivots: u64,
     /// Of which degenerate (step 0).
     pub degenerate_pivots: u64,
+    /// Runs that perturbed the moments to leave a degenerate vertex.
+    pub perturbations: u64,
     /// Full pricing passes (partial pricing found nothing, or Bland's rule).
     pub full_pricing: u64,
     /// Of which found an entering column that partial pricing missed.
@@ -132,6 +134,8 @@ pub struct FastSolver {
     alpha: Vec<f64>,
     art: Vec<f64>,
     s: Vec<f64>,
+    /// The transformed moments of the current problem (c may be perturbed during a run).
+    c0: Vec<f64>,
     /// Duals and weights before the last verification refactorisation.
     yold: Vec<f64>,
     xold: Vec<f64>,
@@ -259,6 +263,7 @@ impl FastSolver {
             alpha: vec![0.0; r],
             art: vec![0.0; r],
             s: vec![0.0; n],
+            c0: vec![0.0; r],
             yold: vec![0.0; r],
             xold: vec![0.0; r],
             amax,
@@ -512,6 +517,7 @@ impl FastSolver {
         let mut degenerate = 0usize;
         let mut verified = false;
         let mut rescues = 0;
+        let mut perturbed = false;
         for _iter in 0..cap {
             if since_refactor >= REFACTOR_EVERY {
                 if !self.refactor() {
@@ -527,6 +533,25 @@ impl FastSolver {
                     return Outcome::Failed;
                 }
                 since_refactor = 0;
+            }
+            if degenerate >= DEGENERATE_LIMIT && !perturbed {
+                // Stalling on a degenerate vertex (moments on the boundary of the moment
+                // space): perturb c = B x into c + B δ with small distinct δ_t > 0, which makes
+                // the vertex non-degenerate; the true c is restored at the optimum.
+                for t in 0..r {
+                    let bt = self.basis[t];
+                    if bt == ART {
+                        continue; // never feed the artificial: c stays feasible iff it was
+                    }
+                    let dt = 1e-7 * (1.0 + t as f64 / r as f64);
+                    self.x[t] += dt;
+                    for k in 0..r {
+                        self.c[k] += dt * self.rows[bt * r + k];
+                    }
+                }
+                perturbed = true;
+                degenerate = 0;
+                self.stats.perturbations += 1;
             }
             let bland = bland_always || degenerate >= DEGENERATE_LIMIT;
             self.duals(phase1, kf);
@@ -582,6 +607,17 @@ impl FastSolver {
                 }
                 if phase1 {
                     let xa = self.x[art_pos].max(0.0);
+                    if xa * art_norm > TOL_INF * (1.0 + c_norm) && perturbed {
+                        // Decide feasibility on the true moments.
+                        self.c.copy_from_slice(&self.c0);
+                        perturbed = false;
+                        verified = false;
+                        if !self.refactor() {
+                            return Outcome::Failed;
+                        }
+                        since_refactor = 0;
+                        continue;
+                    }
                     if xa * art_norm > TOL_INF * (1.0 + c_norm) {
                         if rescues < 3 && self.rescue() {
                             rescues += 1;
@@ -612,6 +648,22 @@ impl FastSolver {
                     since_refactor += 1;
                     phase1 = false;
                     verified = false;
+                    continue;
+                }
+                if perturbed {
+                    // Restore the true moments at this (dual-feasible) basis and continue.
+                    self.c.copy_from_slice(&self.c0);
+                    perturbed = false;
+                    verified = false;
+                    if !self.refactor() {
+                        if rescues < 3 && self.rescue() {
+                            rescues += 1;
+                            since_refactor = 0;
+                            continue;
+                        }
+                        return Outcome::Failed;
+                    }
+                    since_refactor = 0;
                     continue;
                 }
                 // Phase 2 optimum. Any non-negative w on the basic columns with B w = c is
@@ -1017,6 +1069,7 @@ impl MomentSolver for FastSolver {
             self.stats.infeasible += 1;
             return Ok(Solution::infeasible());
         }
+        self.c0.copy_from_slice(&self.c);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
         #[derive(Clone, Copy)]
         enum Start {
@@ -1047,6 +1100,7 @@ impl MomentSolver for FastSolver {
                 Start::Current => {}
             }
             // The second cold run uses Bland's rule throughout.
+            self.c.copy_from_slice(&self.c0);
             let out = self.run(kf, cold_runs >= 2);
             match out {
                 Outcome::Optimal => {
