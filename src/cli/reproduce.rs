@@ -26,14 +26,14 @@ pub struct Args {
     /// Name of the run: the report goes to <reports>/<run>/, bulky data to <results>/<run>/.
     #[arg(long, default_value = "default")]
     pub run: String,
-    /// The larger configuration (512² stacks, every fragment for the LP candidates, θ₆,
-    /// larger stability and sweep samples). Takes hours rather than minutes.
+    /// The larger configuration (every fragment for the LP candidates, θ₆, larger stability,
+    /// speed and sweep samples). Takes hours rather than minutes.
     #[arg(long)]
     pub full: bool,
     /// A tiny configuration for tests and smoke runs (64² stacks, small samples).
     #[arg(long, conflicts_with = "full")]
     pub tiny: bool,
-    /// Shadow-map resolution of the rendered views (default 256, --full 512, --tiny 64).
+    /// Shadow-map resolution of the rendered views (default 512, --tiny 64).
     #[arg(long)]
     pub resolution: Option<usize>,
     /// Recommendation tolerance: absolute error above the best technique that is acceptable.
@@ -107,7 +107,7 @@ impl Plan {
             }
         } else {
             Plan {
-                resolution: 256,
+                resolution: 512,
                 lp_stride: 16,
                 grid_sizes: vec![64, 128, 256, 512, 1024],
                 speed_inputs: 200_000,
@@ -252,7 +252,12 @@ fn measured(
     Ok(Measured {
         name: name.to_string(),
         precision: precision.to_string(),
-        bits_per_texel: t.bits_per_texel(),
+        // f64 storage doubles the texel size of the f32 layout the techniques report.
+        bits_per_texel: if precision == "f64" {
+            2 * t.bits_per_texel()
+        } else {
+            t.bits_per_texel()
+        },
         ns_per_fragment: ns,
         error: r.error,
         fragments: r.fragments,
@@ -386,10 +391,12 @@ pub fn run(args: Args) -> Result<()> {
         jobs.push((s(spec), s("f64"), t, plan.lp_stride, plan.lp_speed_inputs));
     }
     for (name, prec, t, stride, inputs) in &jobs {
-        let file = eval_dir.join(format!(
-            "{}_{prec}.json",
-            name.replace([':', ',', '(', ')', '^'], "_")
-        ));
+        let safe: String = name
+            .replace('π', "pi")
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .collect();
+        let file = eval_dir.join(format!("{safe}_{prec}.json"));
         let m = match read_json::<Measured>(&file) {
             Ok(m) => m,
             Err(_) => {
