@@ -21,10 +21,7 @@ pub fn meta(name: &str, w: usize, h: usize, layers: usize) -> StackMeta {
         width: w,
         height: h,
         layers,
-        u_axis: [0.0; 3],
-        v_axis: [0.0; 3],
-        uv_origin: [0.0; 2],
-        texel_size: 0.0,
+        ..Default::default()
     }
 }
 
