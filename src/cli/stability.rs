@@ -19,7 +19,7 @@ pub struct Args {
     #[arg(long, default_value = "reports/stability")]
     pub out: PathBuf,
     /// Number of inputs (cycled over the scenarios).
-    #[arg(long, default_value_t = 1200)]
+    #[arg(long, default_value_t = 3000)]
     pub samples: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
@@ -144,27 +144,46 @@ fn markdown(r: &Report, skipped: &[String], secs: f64, args: &Args) -> String {
             );
         }
     }
-    let _ = writeln!(
-        s,
-        "\n## Mean abs deviation per scenario (all precisions; NaN/inf share in brackets if > 0)\n"
-    );
     let mut head = "| technique |".to_string();
     let mut line = "|---|".to_string();
     for sc in Scenario::ALL {
         let _ = write!(head, " {} |", sc.name());
         line.push_str("---|");
     }
-    let _ = writeln!(s, "{head}\n{line}");
-    for (t, name) in r.techniques.iter().enumerate() {
-        let mut row = format!("| {name} |");
-        for (_, sm) in &r.by_scenario[t] {
-            if sm.nan_share > 0.0 {
-                let _ = write!(row, " {} ({}%) |", sci(sm.mean_abs_dev), pct(sm.nan_share));
-            } else {
-                let _ = write!(row, " {} |", sci(sm.mean_abs_dev));
+    for mode in [Mode::F64, Mode::F32, Mode::U16] {
+        let _ = writeln!(
+            s,
+            "\n## Moments {}: mean abs deviation per scenario (share above the bound by > {} in brackets if > 0)\n",
+            mode.name(),
+            r.config.over_tolerance
+        );
+        let _ = writeln!(s, "{head}\n{line}");
+        for (t, name) in r.techniques.iter().enumerate() {
+            let mut row = format!("| {name} |");
+            for sc in Scenario::ALL {
+                let d: Vec<f64> = r
+                    .points
+                    .iter()
+                    .filter(|p| p.technique == t && p.mode == mode && p.scenario == sc)
+                    .map(|p| if p.g_finite { p.dev } else { f64::INFINITY })
+                    .filter(|d| !d.is_nan())
+                    .collect();
+                let finite: Vec<f64> = d.iter().copied().filter(|x| x.is_finite()).collect();
+                let mean = finite.iter().map(|x| x.abs()).sum::<f64>() / finite.len().max(1) as f64;
+                let over = d.iter().filter(|&&x| x > r.config.over_tolerance).count();
+                if over > 0 {
+                    let _ = write!(
+                        row,
+                        " {} ({}%) |",
+                        sci(mean),
+                        pct(over as f64 / d.len() as f64)
+                    );
+                } else {
+                    let _ = write!(row, " {} |", sci(mean));
+                }
             }
+            let _ = writeln!(s, "{row}");
         }
-        let _ = writeln!(s, "{row}");
     }
     let _ = writeln!(
         s,
@@ -199,8 +218,8 @@ fn heat_maps(path: &Path, r: &Report, mode: Mode) -> Result<()> {
     let nt = r.techniques.len();
     let cols = 4.min(nt).max(1);
     let rows_p = nt.div_ceil(cols);
-    let root = SVGBackend::new(path, (300 * cols as u32 + 20, 270 * rows_p as u32 + 70))
-        .into_drawing_area();
+    let width = (300 * cols as u32 + 20).max(760);
+    let root = SVGBackend::new(path, (width, 270 * rows_p as u32 + 70)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let (title, body) = root.split_vertically(50);
     title

@@ -139,7 +139,7 @@ pub struct Config {
 impl Default for Config {
     fn default() -> Self {
         Config {
-            samples: 1200,
+            samples: 3000,
             seed: 1,
             grid_points: 256,
             over_tolerance: 1e-3,
