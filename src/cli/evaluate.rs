@@ -1,10 +1,235 @@
-//! `momentlab evaluate` (scaffold: owned by the helper building it).
+//! `momentlab evaluate`: error of a technique against PCF over all fragments of the depth
+//! stacks (mean |G − PCF|, Peters & Klein 2015, Section 3.2), a table per view, JSON, pictures.
 
-use anyhow::{bail, Result};
+use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
+use crate::report::pictures;
+use crate::stack::DepthStack;
+use anyhow::{bail, Context, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
-pub struct Args {}
+pub struct Args {
+    /// Technique: a closed form (vsm, esm, hamburger4, …), an LP candidate
+    /// ("lp:z,z^2,z^3,z^4"), "pcf" (the reference itself; error 0) or "cdf" (the exact
+    /// F_Z(z_f − ε′): the error floor set by the technique bias).
+    #[arg(long)]
+    pub technique: String,
+    /// Directory of depth-stack files; default: render the embedded default dataset.
+    #[arg(long)]
+    pub stacks: Option<PathBuf>,
+    /// Shadow-map resolution when rendering the default dataset.
+    #[arg(long, default_value_t = 512)]
+    pub resolution: usize,
+    /// Write one five-panel PNG per view into this directory (see docs/evaluation.md).
+    #[arg(long)]
+    pub pictures: Option<PathBuf>,
+    /// Print the full report as JSON on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Evaluate every k-th fragment only (quick runs).
+    #[arg(long, conflicts_with = "sample")]
+    pub stride: Option<usize>,
+    /// Evaluate a seeded random fraction of the fragments, e.g. 0.05 (quick runs).
+    #[arg(long)]
+    pub sample: Option<f64>,
+    /// Seed of --sample.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Only views whose "scene/view" name contains this string.
+    #[arg(long)]
+    pub only: Option<String>,
+    /// PCF bias ε.
+    #[arg(long, default_value_t = Bias::default().pcf_epsilon)]
+    pub pcf_epsilon: f64,
+    /// PCF receiver-plane slope scale s.
+    #[arg(long, default_value_t = Bias::default().slope_scale)]
+    pub slope_scale: f64,
+    /// Constant part of the technique bias ε′.
+    #[arg(long, default_value_t = Bias::default().technique_epsilon)]
+    pub technique_epsilon: f64,
+    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|).
+    #[arg(long, default_value_t = Bias::default().technique_slope_scale)]
+    pub technique_slope_scale: f64,
+}
 
-pub fn run(_args: Args) -> Result<()> {
-    bail!("'evaluate' is not implemented yet")
+fn load_stacks(args: &Args) -> Result<Vec<DepthStack>> {
+    match &args.stacks {
+        // PENDING: stack::load_dir (render/stack engineer) — switch when merged into main.
+        Some(dir) => bail!(
+            "--stacks {}: reading depth-stack files is not available yet (stack::load_dir)",
+            dir.display()
+        ),
+        None => {
+            if args.resolution == 0 || args.resolution > 8192 {
+                bail!("--resolution must be in 1..=8192, got {}", args.resolution);
+            }
+            eprintln!(
+                "rendering the default dataset at {0}×{0} …",
+                args.resolution
+            );
+            // PENDING: render::default_dataset (render engineer) — switch when merged.
+            bail!("the default dataset is not available yet (render::default_dataset)")
+        }
+    }
+}
+
+fn sanitize(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let technique = match args.technique.as_str() {
+        "pcf" | "cdf" => None,
+        spec => Some(crate::technique::by_name(spec)?),
+    };
+    let subject = match &technique {
+        Some(t) => Subject::Technique(t.as_ref()),
+        None if args.technique == "pcf" => Subject::Pcf,
+        None => Subject::Cdf,
+    };
+    let bias = Bias {
+        pcf_epsilon: args.pcf_epsilon,
+        slope_scale: args.slope_scale,
+        technique_epsilon: args.technique_epsilon,
+        technique_slope_scale: args.technique_slope_scale,
+    };
+    bias.validate()?;
+    let subsample = match (args.stride, args.sample) {
+        (Some(k), _) => Subsample::Stride(k),
+        (None, Some(f)) => Subsample::Random {
+            fraction: f,
+            seed: args.seed,
+        },
+        (None, None) => Subsample::All,
+    };
+    let mut stacks = load_stacks(&args)?;
+    if let Some(only) = &args.only {
+        stacks.retain(|s| format!("{}/{}", s.meta.scene, s.meta.view).contains(only.as_str()));
+        if stacks.is_empty() {
+            bail!("--only '{only}': no view matches");
+        }
+    }
+    if stacks.is_empty() {
+        bail!("no depth stacks to evaluate");
+    }
+
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} evaluate [{elapsed_precise}] {bar:40} {pos}/{len} fragments ({per_sec}, eta {eta})",
+        )
+        .expect("valid template"),
+    );
+    let pb = bar.clone();
+    let opts = EvalOptions {
+        bias,
+        subsample,
+        progress: Some(Arc::new(move |done, total| {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        })),
+        ..Default::default()
+    };
+    let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
+    bar.finish_and_clear();
+
+    if let Some(dir) = &args.pictures {
+        write_pictures(dir, &stacks, subject, &bias)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        print_table(&report);
+    }
+    Ok(())
+}
+
+fn write_pictures(dir: &Path, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("cannot create picture directory {}", dir.display()))?;
+    let bar = ProgressBar::new(stacks.len() as u64);
+    bar.set_style(
+        ProgressStyle::with_template("pictures {bar:30} {pos}/{len} views").expect("template"),
+    );
+    for s in stacks {
+        let shadows = metrics::front_shadows(s, subject, bias)?;
+        let img = pictures::view_picture(s, &shadows)?;
+        let name = format!(
+            "{}_{}_{}.png",
+            sanitize(&s.meta.scene),
+            sanitize(&s.meta.view),
+            sanitize(&subject.name())
+        );
+        pictures::write_png(&dir.join(name), &img)?;
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    eprintln!(
+        "wrote {} pictures to {} (panels: front depth | layers | PCF | technique | |error|)",
+        stacks.len(),
+        dir.display()
+    );
+    Ok(())
+}
+
+fn print_table(r: &EvalReport) {
+    println!("technique: {}", r.technique);
+    println!(
+        "bias: pcf ε = {:e}, slope scale s = {}, technique ε′ = {:e} + {}·(|dz/du|+|dz/dv|)",
+        r.bias.pcf_epsilon,
+        r.bias.slope_scale,
+        r.bias.technique_epsilon,
+        r.bias.technique_slope_scale
+    );
+    println!(
+        "{:<14} {:<10} {:>10} {:>10} {:>8} {:>8} {:>10} {:>8}",
+        "scene", "view", "fragments", "of total", "trivial", "NaN/inf", "error %", "time s"
+    );
+    for v in &r.views {
+        println!(
+            "{:<14} {:<10} {:>10} {:>10} {:>7.1}% {:>8} {:>10.4} {:>8.2}",
+            v.scene,
+            v.view,
+            v.fragments,
+            v.fragments_total,
+            100.0 * v.trivial as f64 / v.fragments.max(1) as f64,
+            v.non_finite,
+            100.0 * v.error,
+            v.seconds
+        );
+    }
+    println!(
+        "{:<14} {:<10} {:>10} {:>10} {:>7.1}% {:>8} {:>10.4} {:>8.2}",
+        "all",
+        "",
+        r.fragments,
+        r.fragments_total,
+        100.0 * r.trivial as f64 / r.fragments.max(1) as f64,
+        r.non_finite,
+        100.0 * r.error,
+        r.seconds
+    );
+    if r.out_of_range > 0 {
+        println!("warning: {} outputs outside [0,1]", r.out_of_range);
+    }
+    if r.non_finite > 0 {
+        println!(
+            "warning: {} non-finite outputs (excluded from the mean)",
+            r.non_finite
+        );
+    }
+    println!(
+        "throughput: {:.0} technique calls/s over {} non-skipped fragments; {:.0} fragments/s overall",
+        r.solves_per_second, r.solved, r.fragments_per_second
+    );
 }

@@ -1,4 +1,777 @@
 //! Error of a technique against the PCF reference: mean |G − PCF| over all fragments of all
 //! layers (Peters & Klein 2015, Section 3.2).
 //!
-//! OWNER: kernel/evaluate helper.
+//! A *fragment* is one surface seen from the light: texel t, layer k, depth z_f = depth[k][t].
+//! Its reference is PCF with the paper's 9×9 Gaussian (σ = 2.4) over the front-layer depths z0
+//! and a receiver-plane bias (see [`Bias`], [`pcf`]):
+//!
+//! PCF(t, k) = Σ_l w_l [ z0(t+l) < z_f + s·Δ_l − ε ],  Δ_l = dz/du·dx_l + dz/dv·dy_l,
+//!
+//! and every technique is evaluated from the filtered moments b_t at the biased depth
+//! z_f − ε′ (ε′ = technique_epsilon + technique_slope_scale·(|dz/du| + |dz/dv|)).
+//! The error of a technique is mean_{fragments} |G − PCF| (for a directional light this is the
+//! L¹ error of the irradiance field divided by the total radiant power, Section 3.2).
+
+use crate::kernel::{self, Gaussian};
+use crate::stack::DepthStack;
+use crate::technique::{Evaluator, Technique};
+use crate::Grid;
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Depth biases of the PCF reference and of the techniques (all in normalised depth [0,1]).
+///
+/// Defaults (see docs/evaluation.md): the PCF test uses the exact receiver plane (s = 1) plus
+/// ε = 1e-4, so every front-layer fragment of a planar lit surface is lit (its neighbours lie
+/// on its own plane) up to rounding of the f32 depths; techniques see z_f − ε′ with
+/// ε′ = 1e-4 + 4·(|dz/du| + |dz/dv|), which on a plane lies at or below the smallest depth of
+/// the 9×9 kernel, so F_Z(z_f − ε′) = 0 and every sharp lower bound returns G = 0 (lit).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Bias {
+    /// ε: constant bias of the PCF depth test.
+    pub pcf_epsilon: f64,
+    /// s: scale of the receiver-plane offset Δ_l in the PCF depth test.
+    pub slope_scale: f64,
+    /// Constant part of ε′, the bias subtracted from z_f before a technique is evaluated.
+    pub technique_epsilon: f64,
+    /// Slope part of ε′: ε′ += technique_slope_scale · (|dz/du| + |dz/dv|) (texels).
+    pub technique_slope_scale: f64,
+}
+
+impl Default for Bias {
+    fn default() -> Self {
+        Bias {
+            pcf_epsilon: 1e-4,
+            slope_scale: 1.0,
+            technique_epsilon: 1e-4,
+            technique_slope_scale: 4.0,
+        }
+    }
+}
+
+impl Bias {
+    /// Rejects non-finite or negative values with a one-line error.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [
+            ("pcf_epsilon", self.pcf_epsilon),
+            ("slope_scale", self.slope_scale),
+            ("technique_epsilon", self.technique_epsilon),
+            ("technique_slope_scale", self.technique_slope_scale),
+        ] {
+            if !(v.is_finite() && v >= 0.0) {
+                bail!("bias: {name} must be finite and >= 0, got {v}");
+            }
+        }
+        Ok(())
+    }
+
+    /// ε′ for a fragment with receiver-plane slopes (dz/du, dz/dv).
+    pub fn technique_offset(&self, dzdu: f64, dzdv: f64) -> f64 {
+        self.technique_epsilon + self.technique_slope_scale * (dzdu.abs() + dzdv.abs())
+    }
+}
+
+/// One fragment of a depth stack with its PCF reference.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Fragment {
+    /// Index of the view (stack) in the evaluated list.
+    pub view: usize,
+    /// Texel index t = y·width + x.
+    pub texel: usize,
+    /// Layer k (0 = front).
+    pub layer: usize,
+    /// The depth a technique sees: z_f − ε′.
+    pub zf: f64,
+    /// The PCF reference shadow intensity ∈ [0,1].
+    pub pcf: f64,
+    /// F_Z(zf) = 0 (no kernel depth below zf): G = 0 for every sharp lower bound.
+    pub trivial: bool,
+}
+
+/// A finite slope, or 0 (defensive: stacks are validated on load).
+#[inline]
+fn slope(v: f32) -> f64 {
+    if v.is_finite() {
+        v as f64
+    } else {
+        0.0
+    }
+}
+
+/// PCF of a fragment at texel (x, y) with depth `zf` and receiver-plane slopes (dzdu, dzdv):
+/// Σ_l w_l [z0(t+l) < zf + s·Δ_l − ε], Δ_l = dzdu·dx + dzdv·dy where (dx, dy) is the offset to
+/// the (edge-clamped) neighbour texel actually read.
+#[allow(clippy::too_many_arguments)]
+pub fn pcf(
+    front: &[f64],
+    width: usize,
+    height: usize,
+    kernel: &Gaussian,
+    x: usize,
+    y: usize,
+    zf: f64,
+    dzdu: f64,
+    dzdv: f64,
+    bias: &Bias,
+) -> f64 {
+    let r = kernel.radius() as i64;
+    let g = kernel.weights_1d();
+    let mut total = 0.0;
+    for (iy, &wy) in g.iter().enumerate() {
+        let yy = kernel::clamp_coord(y, iy as i64 - r, height);
+        let dy = yy as f64 - y as f64;
+        let row = &front[yy * width..(yy + 1) * width];
+        let mut s = 0.0;
+        for (ix, &wx) in g.iter().enumerate() {
+            let xx = kernel::clamp_coord(x, ix as i64 - r, width);
+            let dx = xx as f64 - x as f64;
+            let delta = dzdu * dx + dzdv * dy;
+            if row[xx] < zf + bias.slope_scale * delta - bias.pcf_epsilon {
+                s += wx;
+            }
+        }
+        total += wy * s;
+    }
+    total
+}
+
+/// PCF of fragment (texel, layer) of a stack with the paper's kernel (see [`pcf`]).
+pub fn pcf_of(stack: &DepthStack, front: &[f64], texel: usize, layer: usize, bias: &Bias) -> f64 {
+    let w = stack.meta.width;
+    let zf = stack.depth[layer][texel] as f64;
+    pcf(
+        front,
+        w,
+        stack.meta.height,
+        &Gaussian::paper(),
+        texel % w,
+        texel / w,
+        zf,
+        slope(stack.dzdu[layer][texel]),
+        slope(stack.dzdv[layer][texel]),
+        bias,
+    )
+}
+
+/// Checks the shape of a stack (so that indexing cannot panic) with a one-line error.
+pub fn check_stack(stack: &DepthStack) -> Result<()> {
+    let m = &stack.meta;
+    let n = m.width * m.height;
+    let name = format!("{}/{}", m.scene, m.view);
+    if n == 0 {
+        bail!("stack {name}: empty ({}×{})", m.width, m.height);
+    }
+    if stack.depth.len() != stack.dzdu.len() || stack.depth.len() != stack.dzdv.len() {
+        bail!(
+            "stack {name}: {} depth layers but {}/{} slope layers",
+            stack.depth.len(),
+            stack.dzdu.len(),
+            stack.dzdv.len()
+        );
+    }
+    for (l, ((d, u), v)) in stack
+        .depth
+        .iter()
+        .zip(&stack.dzdu)
+        .zip(&stack.dzdv)
+        .enumerate()
+    {
+        if d.len() != n || u.len() != n || v.len() != n {
+            bail!(
+                "stack {name}: layer {l} has {}/{}/{} values, expected {n}",
+                d.len(),
+                u.len(),
+                v.len()
+            );
+        }
+        if let Some(t) = d
+            .iter()
+            .position(|z| z.is_nan() || *z < 0.0 || (*z > 1.0 && z.is_finite()))
+        {
+            bail!(
+                "stack {name}: layer {l} texel ({}, {}) has depth {} outside [0,1]",
+                t % m.width,
+                t / m.width,
+                d[t]
+            );
+        }
+    }
+    Ok(())
+}
+
+/// Which fragments of a view to evaluate.
+#[derive(Clone, Copy, Debug, PartialEq, Default, Serialize, Deserialize)]
+pub enum Subsample {
+    /// Every fragment.
+    #[default]
+    All,
+    /// Every k-th fragment in layer-major, texel order (k ≥ 1).
+    Stride(usize),
+    /// Each fragment independently with probability `fraction`, decided by a hash of
+    /// (seed, view, layer, texel): deterministic and independent of thread timing.
+    Random { fraction: f64, seed: u64 },
+}
+
+impl Subsample {
+    fn validate(&self) -> Result<()> {
+        match *self {
+            Subsample::All => Ok(()),
+            Subsample::Stride(0) => bail!("subsample: stride must be >= 1"),
+            Subsample::Stride(_) => Ok(()),
+            Subsample::Random { fraction, .. } => {
+                if !(fraction > 0.0 && fraction <= 1.0) {
+                    bail!("subsample: fraction must be in (0, 1], got {fraction}");
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+fn splitmix64(mut x: u64) -> u64 {
+    x = x.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    x = (x ^ (x >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    x = (x ^ (x >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    x ^ (x >> 31)
+}
+
+/// (layer, texel) of the selected fragments of a view, layer-major.
+fn select(stack: &DepthStack, view: usize, sub: &Subsample) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0usize;
+    for (l, layer) in stack.depth.iter().enumerate() {
+        for (t, z) in layer.iter().enumerate() {
+            if !z.is_finite() {
+                continue;
+            }
+            let keep = match *sub {
+                Subsample::All => true,
+                Subsample::Stride(k) => i.is_multiple_of(k),
+                Subsample::Random { fraction, seed } => {
+                    let h = splitmix64(
+                        seed ^ splitmix64((view as u64) << 40 ^ (l as u64) << 32 ^ t as u64),
+                    );
+                    ((h >> 11) as f64) * (1.0 / (1u64 << 53) as f64) < fraction
+                }
+            };
+            if keep {
+                out.push((l, t));
+            }
+            i += 1;
+        }
+    }
+    out
+}
+
+fn build_fragments(
+    stack: &DepthStack,
+    view: usize,
+    bias: &Bias,
+    picked: &[(usize, usize)],
+) -> Vec<Fragment> {
+    let w = stack.meta.width;
+    let h = stack.meta.height;
+    let front = kernel::front_map(stack);
+    let kern = Gaussian::paper();
+    let min_map = kernel::min_filter(&front, w, h, kern.radius());
+    picked
+        .par_iter()
+        .with_min_len(1024)
+        .map(|&(layer, texel)| {
+            let z = stack.depth[layer][texel] as f64;
+            let (du, dv) = (
+                slope(stack.dzdu[layer][texel]),
+                slope(stack.dzdv[layer][texel]),
+            );
+            let p = pcf(&front, w, h, &kern, texel % w, texel / w, z, du, dv, bias);
+            let zf = z - bias.technique_offset(du, dv);
+            Fragment {
+                view,
+                texel,
+                layer,
+                zf,
+                pcf: p,
+                trivial: min_map[texel] >= zf,
+            }
+        })
+        .collect()
+}
+
+/// All fragments of a stack (every finite depth of every layer, layer-major, texel order) with
+/// their PCF reference, biased technique depth and trivial flag. `view_index` is stored in each
+/// fragment. Panics on a malformed stack; call [`check_stack`] first for user data.
+pub fn fragments(stack: &DepthStack, view_index: usize, bias: &Bias) -> Vec<Fragment> {
+    let picked = select(stack, view_index, &Subsample::All);
+    build_fragments(stack, view_index, bias, &picked)
+}
+
+/// Like [`fragments`] but only a subsample.
+pub fn fragments_subsampled(
+    stack: &DepthStack,
+    view_index: usize,
+    bias: &Bias,
+    sub: &Subsample,
+) -> Vec<Fragment> {
+    let picked = select(stack, view_index, sub);
+    build_fragments(stack, view_index, bias, &picked)
+}
+
+/// Index of the grid point nearest to z (ties to the lower point; outside the grid: an end).
+pub fn snap_index(grid: &Grid, z: f64) -> usize {
+    let p = grid.points();
+    let i = p.partition_point(|&g| g < z);
+    if i == 0 {
+        0
+    } else if i == p.len() {
+        p.len() - 1
+    } else if z - p[i - 1] <= p[i] - z {
+        i - 1
+    } else {
+        i
+    }
+}
+
+/// The grid point nearest to z (monotone in z).
+pub fn snap(grid: &Grid, z: f64) -> f64 {
+    grid.points()[snap_index(grid, z)]
+}
+
+/// What is evaluated against PCF.
+#[derive(Clone, Copy)]
+pub enum Subject<'a> {
+    /// A moment technique (closed form or LP candidate).
+    Technique(&'a dyn Technique),
+    /// PCF itself, recomputed per fragment through the same loop (its error is 0).
+    Pcf,
+    /// The exact F_Z(z_f − ε′) of the unsnapped depth distribution: what an ideal technique
+    /// that knew Z_t would return. Its error is the floor set by the technique bias ε′ (it
+    /// differs from PCF only through the biases), not a technique.
+    Cdf,
+}
+
+impl Subject<'_> {
+    pub fn name(&self) -> String {
+        match self {
+            Subject::Technique(t) => t.name(),
+            Subject::Pcf => "pcf".to_string(),
+            Subject::Cdf => "cdf".to_string(),
+        }
+    }
+}
+
+/// Progress callback: (fragments done, fragments planned), over all views.
+pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
+
+/// Options of [`evaluate`].
+#[derive(Clone, Default)]
+pub struct EvalOptions {
+    pub bias: Bias,
+    pub subsample: Subsample,
+    /// Skip the evaluation of trivial fragments (G := 0). `None` = automatic: skip for grid
+    /// techniques (LP candidates, sharp lower bounds by construction), evaluate closed forms
+    /// everywhere (they are cheap and not all of them are lower bounds, e.g. CSM).
+    pub skip_trivial: Option<bool>,
+    /// Keep per-fragment values (G, PCF) in the report ([`ViewReport::values`]).
+    pub keep_values: bool,
+    pub progress: Option<Progress>,
+}
+
+/// One evaluated fragment (kept with [`EvalOptions::keep_values`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FragmentValue {
+    pub texel: usize,
+    pub layer: usize,
+    pub pcf: f64,
+    pub g: f64,
+    pub trivial: bool,
+}
+
+/// Result for one view.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewReport {
+    pub scene: String,
+    pub view: String,
+    pub width: usize,
+    pub height: usize,
+    pub layers: usize,
+    /// All fragments of the view.
+    pub fragments_total: usize,
+    /// Evaluated fragments (after subsampling).
+    pub fragments: usize,
+    /// Evaluated fragments with F_Z(z_f − ε′) = 0 (after grid snapping for LP candidates).
+    pub trivial: usize,
+    /// Fragments for which the technique was called (not skipped as trivial).
+    pub solved: usize,
+    /// Fragments with non-finite G (excluded from the mean, reported here).
+    pub non_finite: usize,
+    /// Fragments with finite G outside [0,1] (more than 1e-9; included in the mean as is).
+    pub out_of_range: usize,
+    /// Σ |G − PCF| over the finite fragments.
+    pub sum_abs_error: f64,
+    /// Mean |G − PCF| over the finite fragments (0 when there are none).
+    pub error: f64,
+    /// Wall time of the view (fragments, moment maps, shading), seconds.
+    pub seconds: f64,
+    /// Wall time of the shading loop alone, seconds.
+    pub shade_seconds: f64,
+    #[serde(skip)]
+    pub values: Option<Vec<FragmentValue>>,
+}
+
+/// Result over all views.
+#[derive(Clone, Debug, Serialize)]
+pub struct EvalReport {
+    pub technique: String,
+    pub bias: Bias,
+    pub subsample: Subsample,
+    pub fragments_total: usize,
+    pub fragments: usize,
+    pub trivial: usize,
+    pub solved: usize,
+    pub non_finite: usize,
+    pub out_of_range: usize,
+    /// Mean |G − PCF| over all finite evaluated fragments of all views.
+    pub error: f64,
+    pub seconds: f64,
+    /// Technique calls per second of shading time (throughput over real, non-trivial fragments
+    /// when trivial ones are skipped).
+    pub solves_per_second: f64,
+    /// Evaluated fragments per second of total wall time.
+    pub fragments_per_second: f64,
+    pub views: Vec<ViewReport>,
+}
+
+/// Error of a technique against PCF over all fragments of all layers of `stacks`.
+pub fn evaluate(
+    stacks: &[DepthStack],
+    technique: &dyn Technique,
+    opts: &EvalOptions,
+) -> Result<EvalReport> {
+    evaluate_subject(stacks, Subject::Technique(technique), opts)
+}
+
+/// Per-view state of the shading loop.
+struct ViewShader<'a> {
+    subject: Subject<'a>,
+    stack: &'a DepthStack,
+    front: Vec<f64>,
+    /// Moment maps (of the snapped front map for grid techniques).
+    maps: Vec<Vec<f64>>,
+    /// 9×9 min of the (snapped) front map.
+    min_map: Vec<f64>,
+    grid: Option<&'a Grid>,
+    skip_trivial: bool,
+    bias: Bias,
+}
+
+impl<'a> ViewShader<'a> {
+    fn new(subject: Subject<'a>, stack: &'a DepthStack, opts: &EvalOptions) -> ViewShader<'a> {
+        let (w, h) = (stack.meta.width, stack.meta.height);
+        let kern = Gaussian::paper();
+        let front = kernel::front_map(stack);
+        let (grid, maps, min_map, skip) = match subject {
+            Subject::Pcf | Subject::Cdf => (None, Vec::new(), Vec::new(), false),
+            Subject::Technique(t) => {
+                let grid = t.depth_grid();
+                let snapped: Vec<f64> = match grid {
+                    Some(g) => front.iter().map(|&z| snap(g, z)).collect(),
+                    None => front.clone(),
+                };
+                let maps =
+                    kernel::moment_maps_of(&snapped, w, h, t.moment_count(), &kern, |z, o| {
+                        t.basis(z, o)
+                    });
+                let min_map = kernel::min_filter(&snapped, w, h, kern.radius());
+                (
+                    grid,
+                    maps,
+                    min_map,
+                    opts.skip_trivial.unwrap_or(grid.is_some()),
+                )
+            }
+        };
+        ViewShader {
+            subject,
+            stack,
+            front,
+            maps,
+            min_map,
+            grid,
+            skip_trivial: skip,
+            bias: opts.bias,
+        }
+    }
+
+    /// (G, trivial, solved) of one fragment.
+    fn shade(
+        &self,
+        ev: &mut Option<Box<dyn Evaluator + 'a>>,
+        buf: &mut [f64],
+        f: &Fragment,
+    ) -> (f64, bool, bool) {
+        match self.subject {
+            Subject::Pcf => {
+                let g = pcf_of(self.stack, &self.front, f.texel, f.layer, &self.bias);
+                (g, f.trivial, true)
+            }
+            Subject::Cdf => {
+                let (w, h) = (self.stack.meta.width, self.stack.meta.height);
+                let g = kernel::depth_distribution(
+                    &self.front,
+                    w,
+                    h,
+                    f.texel % w,
+                    f.texel / w,
+                    &Gaussian::paper(),
+                )
+                .iter()
+                .filter(|(z, _)| *z < f.zf)
+                .map(|(_, wt)| wt)
+                .sum();
+                (g, f.trivial, true)
+            }
+            Subject::Technique(_) => {
+                let zf = match self.grid {
+                    Some(g) => snap(g, f.zf),
+                    None => f.zf,
+                };
+                let trivial = self.min_map[f.texel] >= zf;
+                if trivial && self.skip_trivial {
+                    return (0.0, true, false);
+                }
+                for (j, map) in self.maps.iter().enumerate() {
+                    buf[j] = map[f.texel];
+                }
+                let ev = ev.as_mut().expect("technique evaluator");
+                (ev.shadow(buf, zf), trivial, true)
+            }
+        }
+    }
+}
+
+#[derive(Default)]
+struct Partial {
+    sum: f64,
+    trivial: usize,
+    solved: usize,
+    non_finite: usize,
+    out_of_range: usize,
+    values: Vec<FragmentValue>,
+}
+
+/// [`evaluate`] for a technique or PCF itself.
+pub fn evaluate_subject(
+    stacks: &[DepthStack],
+    subject: Subject<'_>,
+    opts: &EvalOptions,
+) -> Result<EvalReport> {
+    opts.bias.validate()?;
+    opts.subsample.validate()?;
+    if let Subject::Technique(t) = subject {
+        if t.moment_count() == 0 {
+            bail!("technique {}: no moments", t.name());
+        }
+    }
+    for s in stacks {
+        check_stack(s)?;
+    }
+    let start = Instant::now();
+    let picks: Vec<Vec<(usize, usize)>> = stacks
+        .iter()
+        .enumerate()
+        .map(|(v, s)| select(s, v, &opts.subsample))
+        .collect();
+    let planned: usize = picks.iter().map(|p| p.len()).sum();
+    let done = AtomicUsize::new(0);
+    let m = match subject {
+        Subject::Technique(t) => t.moment_count(),
+        Subject::Pcf | Subject::Cdf => 0,
+    };
+    let mut views = Vec::with_capacity(stacks.len());
+    for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
+        let t0 = Instant::now();
+        let frags = build_fragments(stack, v, &opts.bias, picked);
+        let shader = ViewShader::new(subject, stack, opts);
+        let t1 = Instant::now();
+        let keep = opts.keep_values;
+        let partials: Vec<Partial> = frags
+            .par_chunks(512)
+            .map_init(
+                || {
+                    (
+                        match subject {
+                            Subject::Technique(t) => Some(t.evaluator()),
+                            Subject::Pcf | Subject::Cdf => None,
+                        },
+                        vec![0.0; m],
+                    )
+                },
+                |(ev, buf), chunk| {
+                    let mut p = Partial::default();
+                    for f in chunk {
+                        let (g, trivial, solved) = shader.shade(ev, buf, f);
+                        p.trivial += trivial as usize;
+                        p.solved += solved as usize;
+                        if g.is_finite() {
+                            p.sum += (g - f.pcf).abs();
+                            if !(-1e-9..=1.0 + 1e-9).contains(&g) {
+                                p.out_of_range += 1;
+                            }
+                        } else {
+                            p.non_finite += 1;
+                        }
+                        if keep {
+                            p.values.push(FragmentValue {
+                                texel: f.texel,
+                                layer: f.layer,
+                                pcf: f.pcf,
+                                g,
+                                trivial,
+                            });
+                        }
+                    }
+                    let d = done.fetch_add(chunk.len(), Ordering::Relaxed) + chunk.len();
+                    if let Some(cb) = &opts.progress {
+                        cb(d, planned);
+                    }
+                    p
+                },
+            )
+            .collect();
+        let shade_seconds = t1.elapsed().as_secs_f64();
+        let mut total = Partial::default();
+        let mut values = Vec::new();
+        for p in partials {
+            total.sum += p.sum;
+            total.trivial += p.trivial;
+            total.solved += p.solved;
+            total.non_finite += p.non_finite;
+            total.out_of_range += p.out_of_range;
+            values.extend(p.values);
+        }
+        let finite = frags.len() - total.non_finite;
+        views.push(ViewReport {
+            scene: stack.meta.scene.clone(),
+            view: stack.meta.view.clone(),
+            width: stack.meta.width,
+            height: stack.meta.height,
+            layers: stack.depth.len(),
+            fragments_total: stack.fragment_count(),
+            fragments: frags.len(),
+            trivial: total.trivial,
+            solved: total.solved,
+            non_finite: total.non_finite,
+            out_of_range: total.out_of_range,
+            sum_abs_error: total.sum,
+            error: if finite > 0 {
+                total.sum / finite as f64
+            } else {
+                0.0
+            },
+            seconds: t0.elapsed().as_secs_f64(),
+            shade_seconds,
+            values: keep.then_some(values),
+        });
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    let sum = |f: fn(&ViewReport) -> usize| views.iter().map(f).sum::<usize>();
+    let fragments = sum(|v| v.fragments);
+    let non_finite = sum(|v| v.non_finite);
+    let solved = sum(|v| v.solved);
+    let sum_abs: f64 = views.iter().map(|v| v.sum_abs_error).sum();
+    let shade: f64 = views.iter().map(|v| v.shade_seconds).sum();
+    Ok(EvalReport {
+        technique: subject.name(),
+        bias: opts.bias,
+        subsample: opts.subsample,
+        fragments_total: sum(|v| v.fragments_total),
+        fragments,
+        trivial: sum(|v| v.trivial),
+        solved,
+        non_finite,
+        out_of_range: sum(|v| v.out_of_range),
+        error: if fragments > non_finite {
+            sum_abs / (fragments - non_finite) as f64
+        } else {
+            0.0
+        },
+        seconds,
+        solves_per_second: if shade > 0.0 {
+            solved as f64 / shade
+        } else {
+            0.0
+        },
+        fragments_per_second: if seconds > 0.0 {
+            fragments as f64 / seconds
+        } else {
+            0.0
+        },
+        views,
+    })
+}
+
+/// Front-layer shadow maps of one view for pictures: per texel the PCF and the subject's G of
+/// the front-layer fragment (NaN where the texel has no surface).
+pub struct FrontShadows {
+    pub pcf: Vec<f64>,
+    pub g: Vec<f64>,
+}
+
+/// PCF and G of every front-layer fragment of `stack` (full resolution, no subsampling).
+pub fn front_shadows(
+    stack: &DepthStack,
+    subject: Subject<'_>,
+    bias: &Bias,
+) -> Result<FrontShadows> {
+    check_stack(stack)?;
+    bias.validate()?;
+    let n = stack.texel_count();
+    let picked: Vec<(usize, usize)> = match stack.depth.first() {
+        Some(l) => (0..n)
+            .filter(|&t| l[t].is_finite())
+            .map(|t| (0, t))
+            .collect(),
+        None => Vec::new(),
+    };
+    let opts = EvalOptions {
+        bias: *bias,
+        ..Default::default()
+    };
+    let frags = build_fragments(stack, 0, bias, &picked);
+    let shader = ViewShader::new(subject, stack, &opts);
+    let m = shader.maps.len();
+    let gs: Vec<f64> = frags
+        .par_chunks(512)
+        .map_init(
+            || {
+                (
+                    match subject {
+                        Subject::Technique(t) => Some(t.evaluator()),
+                        Subject::Pcf | Subject::Cdf => None,
+                    },
+                    vec![0.0; m],
+                )
+            },
+            |(ev, buf), chunk| {
+                chunk
+                    .iter()
+                    .map(|f| shader.shade(ev, buf, f).0)
+                    .collect::<Vec<f64>>()
+            },
+        )
+        .flatten()
+        .collect();
+    let mut out = FrontShadows {
+        pcf: vec![f64::NAN; n],
+        g: vec![f64::NAN; n],
+    };
+    for (f, g) in frags.iter().zip(gs) {
+        out.pcf[f.texel] = f.pcf;
+        out.g[f.texel] = g;
+    }
+    Ok(out)
+}

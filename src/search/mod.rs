@@ -1,2 +1,175 @@
 //! The candidate sweep (Peters & Klein 2015, Section 3.2, Fig. 4): every m-subset of the catalog
 //! scored by Algorithm 1 over the depth stacks, with racing, shards and resumable results.
+//!
+//! Pieces:
+//! * [`FunctionTable`]: every catalog function tabulated on the LP grid once (n × N).
+//! * [`span`]: numerical rank (degenerate candidates) and span keys (duplicate candidates).
+//! * [`combo`]: candidates ↔ indices (lexicographic rank of the sorted m-subset).
+//! * [`dataset`]: the sampled fragments with their depth distributions on the grid.
+//! * [`score`]: Algorithm 1 errors |G − PCF| of one candidate over a list of fragments.
+//! * [`sweep`]: racing / successive halving, resumable results files, shards.
+//! * [`results`]: the results rows, reading/writing them, `merge`.
+//! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown).
+
+pub mod combo;
+pub mod dataset;
+pub mod report;
+pub mod results;
+pub mod score;
+pub mod span;
+pub mod sweep;
+
+pub use dataset::{Dataset, DatasetBuilder, Fragment};
+pub use results::{merge_dirs, read_rows, Row};
+pub use score::Scorer;
+pub use sweep::{run_sweep, Hooks, Outcome, Progress, SweepConfig, SweepSummary};
+
+use crate::lp::GridTable;
+use crate::Grid;
+use anyhow::{bail, Result};
+
+/// N functions tabulated on a grid: `value(i, j) = f_j(z_i)`, row-major n × N.
+#[derive(Clone, Debug)]
+pub struct FunctionTable {
+    grid: Grid,
+    names: Vec<String>,
+    values: Vec<f64>,
+}
+
+impl FunctionTable {
+    /// Tabulate `f(j, z)` for j = 0..names.len() on every grid point; a non-finite value is an
+    /// error naming the function and the depth.
+    pub fn new(grid: &Grid, names: Vec<String>, f: impl Fn(usize, f64) -> f64) -> Result<Self> {
+        let nf = names.len();
+        if nf == 0 {
+            bail!("function table: no functions");
+        }
+        let mut values = Vec::with_capacity(grid.len() * nf);
+        for &z in grid.points() {
+            for (j, name) in names.iter().enumerate() {
+                let v = f(j, z);
+                if !v.is_finite() {
+                    bail!("function '{name}' is not finite at z = {z} ({v})");
+                }
+                values.push(v);
+            }
+        }
+        Ok(FunctionTable {
+            grid: grid.clone(),
+            names,
+            values,
+        })
+    }
+
+    /// Every function of a catalog on `grid`.
+    pub fn from_functions(grid: &Grid, functions: &[crate::basis::Function]) -> Result<Self> {
+        let names = functions.iter().map(|f| f.name().to_string()).collect();
+        FunctionTable::new(grid, names, |j, z| functions[j].eval(z))
+    }
+
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    /// Number of functions N.
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+    /// f_j(z_i).
+    pub fn value(&self, i: usize, j: usize) -> f64 {
+        self.values[i * self.names.len() + j]
+    }
+    /// Row i: all N function values at z_i.
+    pub fn row(&self, i: usize) -> &[f64] {
+        let nf = self.names.len();
+        &self.values[i * nf..(i + 1) * nf]
+    }
+    /// The Algorithm 1 constraint table of the candidate `cols` (a gather of m columns).
+    pub fn grid_table(&self, cols: &[usize]) -> Result<GridTable> {
+        if let Some(&c) = cols.iter().find(|&&c| c >= self.len()) {
+            bail!("function index {c} out of range (table has {})", self.len());
+        }
+        let mut i = 0;
+        GridTable::from_fn(&self.grid, cols.len(), |_, out| {
+            let row = self.row(i);
+            for (o, &c) in out.iter_mut().zip(cols) {
+                *o = row[c];
+            }
+            i += 1;
+        })
+    }
+    /// The names of the functions `cols`.
+    pub fn names_of(&self, cols: &[usize]) -> Vec<String> {
+        cols.iter().map(|&c| self.names[c].clone()).collect()
+    }
+    /// A 64-bit fingerprint of names and tabulated values (FNV-1a), to refuse resuming a run
+    /// with a different catalog or grid.
+    pub fn fingerprint(&self) -> u64 {
+        let mut h = Fnv::new();
+        for n in &self.names {
+            h.bytes(n.as_bytes());
+            h.bytes(&[0]);
+        }
+        for z in self.grid.points() {
+            h.u64(z.to_bits());
+        }
+        for v in &self.values {
+            h.u64(v.to_bits());
+        }
+        h.finish()
+    }
+}
+
+/// FNV-1a, 64 bit: a stable (platform independent) fingerprint for configs.
+pub(crate) struct Fnv(u64);
+
+impl Fnv {
+    pub(crate) fn new() -> Fnv {
+        Fnv(0xcbf29ce484222325)
+    }
+    pub(crate) fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 ^= x as u64;
+            self.0 = self.0.wrapping_mul(0x100000001b3);
+        }
+    }
+    pub(crate) fn u64(&mut self, v: u64) {
+        self.bytes(&v.to_le_bytes());
+    }
+    pub(crate) fn finish(&self) -> u64 {
+        self.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_table_gathers_columns() {
+        let g = Grid::uniform(5).unwrap();
+        let t = FunctionTable::new(&g, vec!["z".into(), "z^2".into(), "z^3".into()], |j, z| {
+            z.powi(j as i32 + 1)
+        })
+        .unwrap();
+        let gt = t.grid_table(&[2, 0]).unwrap();
+        assert_eq!(gt.m(), 2);
+        for (i, &z) in g.points().iter().enumerate() {
+            assert_eq!(gt.row(i), &[z.powi(3), z]);
+        }
+        assert!(t.grid_table(&[3]).is_err());
+        assert_eq!(t.names_of(&[1]), vec!["z^2".to_string()]);
+    }
+
+    #[test]
+    fn non_finite_function_is_an_error() {
+        let g = Grid::uniform(5).unwrap();
+        let e = FunctionTable::new(&g, vec!["1/z".into()], |_, z| 1.0 / z).unwrap_err();
+        assert!(e.to_string().contains("1/z"), "{e}");
+    }
+}

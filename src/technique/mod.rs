@@ -51,8 +51,17 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
     }
 }
 
+pub mod csm;
+pub mod esm;
+pub mod evsm;
+pub mod hamburger;
+pub mod hamburger4;
+pub mod hamburger6;
+pub mod hausdorff4;
+pub mod linalg;
 pub mod lp_candidate;
 pub mod registry;
+pub mod vsm;
 pub use registry::by_name;
 pub mod sparse;
 pub mod stability;

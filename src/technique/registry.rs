@@ -3,11 +3,283 @@
 //! Closed-form names: vsm, esm, evsm, csm, hamburger, hamburger4, hausdorff4, hamburger6, tmsm
 //! (OWNERS: closed-form helpers). LP candidates: "lp:f1,f2,…" with catalog names or formulas
 //! (OWNER: basis helper).
+//!
+//! [`build`] takes the technique parameters ([`Params`], all optional with documented
+//! defaults); [`by_name`] uses the defaults.
 
+use super::csm::Csm;
+use super::esm::Esm;
+use super::evsm::Evsm;
+use super::hamburger::Hamburger;
+use super::hamburger4::{Hamburger4, ALPHA_16BIT, ALPHA_32BIT};
+use super::hamburger6::Hamburger6;
+use super::hausdorff4::Hausdorff4;
+pub use super::linalg::Precision;
+use super::vsm::Vsm;
 use super::Technique;
 use anyhow::{bail, Result};
 
-/// The technique named by `spec`; a one-line error for unknown names.
+/// Closed-form technique names handled here (for error messages).
+pub const CLOSED_FORM_NAMES: &[&str] = &[
+    "vsm",
+    "esm",
+    "evsm",
+    "csm",
+    "hamburger",
+    "hamburger4",
+    "hausdorff4",
+    "hamburger6",
+    "tmsm",
+];
+
+/// Which constant moment vector b* the bias b' = (1 − α) b + α b* pulls towards.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum BiasPreset {
+    /// b* = E_{Z*}[b] with Z* = ½(δ₀ + δ₁); for power moments (½, …, ½) (Peters & Klein 2015,
+    /// Section 4.2).
+    Standard,
+    /// Clamped depths (supplementary Section 4, power moments only): four moments
+    /// b* = ⅘·(½,…) + ⅕·(½,⅓,¼,⅕), α = 3·10⁻⁵; six moments b* = ½·(½,…) + ½·(½,…,⅐), α = 4·10⁻³.
+    Clamped,
+}
+
+/// Parameters of the closed-form techniques; every field is optional (serde default).
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct Params {
+    /// Bias strength α. Default: MSM techniques 2·10⁻⁶ (3·10⁻⁵ with `quant_bits` = 16; the
+    /// clamped preset's own α), baselines (vsm, esm, evsm, csm) 0.
+    pub alpha: Option<f64>,
+    /// Explicit b* (length m); overrides `bias`.
+    pub b_star: Option<Vec<f64>>,
+    /// Bias preset; default `standard`, except hamburger6: `clamped`.
+    pub bias: Option<BiasPreset>,
+    /// Storage bits per moment, used only to pick the default α (32 or 16).
+    pub quant_bits: u32,
+    /// Arithmetic precision (f64 default).
+    pub precision: Precision,
+    /// Moment count m for "hamburger" (even, 2..=30; default 4).
+    pub moment_count: Option<usize>,
+    /// ESM exponent c (default 80).
+    pub esm_c: f64,
+    /// EVSM exponents c₊, c₋ (default 40, 5).
+    pub evsm_c_pos: f64,
+    pub evsm_c_neg: f64,
+    /// CSM Fourier terms M (default 4, m = 2M; at most 32).
+    pub csm_terms: usize,
+    /// VSM/EVSM minimum depth-space variance; default 10⁻⁶ at f32, 0 at f64.
+    pub min_variance: Option<f64>,
+}
+
+impl Default for Params {
+    fn default() -> Params {
+        Params {
+            alpha: None,
+            b_star: None,
+            bias: None,
+            quant_bits: 32,
+            precision: Precision::F64,
+            moment_count: None,
+            esm_c: super::esm::DEFAULT_C,
+            evsm_c_pos: super::evsm::DEFAULT_C_POS,
+            evsm_c_neg: super::evsm::DEFAULT_C_NEG,
+            csm_terms: super::csm::DEFAULT_TERMS,
+            min_variance: None,
+        }
+    }
+}
+
+impl Params {
+    /// Defaults with the given precision and α.
+    pub fn with(precision: Precision, alpha: Option<f64>) -> Params {
+        Params {
+            precision,
+            alpha,
+            ..Params::default()
+        }
+    }
+
+    fn check(&self) -> Result<()> {
+        if let Some(a) = self.alpha {
+            if !(a.is_finite() && (0.0..1.0).contains(&a)) {
+                bail!("alpha must be in [0, 1), got {a}");
+            }
+        }
+        if let Some(s) = &self.b_star {
+            if let Some(v) = s.iter().find(|v| !v.is_finite()) {
+                bail!("b_star contains a non-finite value ({v})");
+            }
+        }
+        if self.quant_bits != 16 && self.quant_bits != 32 {
+            bail!("quant_bits must be 16 or 32, got {}", self.quant_bits);
+        }
+        for (name, v) in [
+            ("esm_c", self.esm_c),
+            ("evsm_c_pos", self.evsm_c_pos),
+            ("evsm_c_neg", self.evsm_c_neg),
+        ] {
+            if !(v.is_finite() && v > 0.0 && v <= 200.0) {
+                bail!("{name} must be in (0, 200], got {v}");
+            }
+        }
+        if let Some(v) = self.min_variance {
+            if !(v.is_finite() && v >= 0.0) {
+                bail!("min_variance must be finite and ≥ 0, got {v}");
+            }
+        }
+        Ok(())
+    }
+
+    fn min_variance(&self) -> f64 {
+        self.min_variance.unwrap_or(match self.precision {
+            Precision::F32 => 1e-6,
+            Precision::F64 => 0.0,
+        })
+    }
+
+    /// α for a power-moment (MSM) technique with m moments.
+    fn msm_alpha(&self, m: usize) -> f64 {
+        if let Some(a) = self.alpha {
+            return a;
+        }
+        match (self.bias, m) {
+            (Some(BiasPreset::Clamped), 6) => super::hamburger6::ALPHA_CLAMPED,
+            (Some(BiasPreset::Clamped), _) => ALPHA_16BIT,
+            _ if self.quant_bits == 16 => ALPHA_16BIT,
+            _ => ALPHA_32BIT,
+        }
+    }
+
+    /// b* for power moments of count m under the chosen preset.
+    fn msm_b_star(&self, name: &str, m: usize) -> Result<Vec<f64>> {
+        if let Some(s) = &self.b_star {
+            if s.len() != m {
+                bail!("{name}: b_star has {} values, expected {m}", s.len());
+            }
+            return Ok(s.clone());
+        }
+        Ok(match self.bias.unwrap_or(BiasPreset::Standard) {
+            BiasPreset::Standard => vec![0.5; m],
+            BiasPreset::Clamped => match m {
+                4 => super::hamburger4::B_STAR_CLAMPED.to_vec(),
+                6 => super::hamburger6::B_STAR_CLAMPED.to_vec(),
+                _ => bail!("{name}: the clamped bias is defined for 4 and 6 moments only, not {m}"),
+            },
+        })
+    }
+
+    /// b* of a non-power basis: explicit, or the moments of ½(δ₀ + δ₁).
+    fn basis_b_star(&self, name: &str, t: &dyn Technique) -> Result<Vec<f64>> {
+        let m = t.moment_count();
+        if let Some(s) = &self.b_star {
+            if s.len() != m {
+                bail!("{name}: b_star has {} values, expected {m}", s.len());
+            }
+            return Ok(s.clone());
+        }
+        if self.bias == Some(BiasPreset::Clamped) {
+            bail!("{name}: the clamped bias is defined for power moments only");
+        }
+        let (mut b0, mut b1) = (vec![0.0; m], vec![0.0; m]);
+        t.basis(0.0, &mut b0);
+        t.basis(1.0, &mut b1);
+        Ok(b0.iter().zip(&b1).map(|(a, b)| 0.5 * (a + b)).collect())
+    }
+}
+
+fn arr<const N: usize>(v: Vec<f64>) -> [f64; N] {
+    let mut a = [0.0; N];
+    a.copy_from_slice(&v[..N]);
+    a
+}
+
+/// The closed-form technique `name` with parameters `p`.
+pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
+    p.check()?;
+    let prec = p.precision;
+    let t: Box<dyn Technique> = match name {
+        "vsm" => {
+            let mut t = Vsm {
+                alpha: p.alpha.unwrap_or(0.0),
+                b_star: [0.0; 2],
+                min_variance: p.min_variance(),
+                precision: prec,
+            };
+            t.b_star = arr(p.basis_b_star(name, &t)?);
+            Box::new(t)
+        }
+        "esm" => {
+            let mut t = Esm {
+                c: p.esm_c,
+                alpha: p.alpha.unwrap_or(0.0),
+                b_star: 0.0,
+                precision: prec,
+            };
+            t.b_star = p.basis_b_star(name, &t)?[0];
+            Box::new(t)
+        }
+        "evsm" => {
+            let mut t = Evsm {
+                c_pos: p.evsm_c_pos,
+                c_neg: p.evsm_c_neg,
+                alpha: p.alpha.unwrap_or(0.0),
+                b_star: [0.0; 4],
+                min_variance: p.min_variance(),
+                precision: prec,
+            };
+            t.b_star = arr(p.basis_b_star(name, &t)?);
+            Box::new(t)
+        }
+        "csm" => {
+            if !(1..=32).contains(&p.csm_terms) {
+                bail!("csm_terms must be in 1..=32, got {}", p.csm_terms);
+            }
+            let mut t = Csm {
+                b_star: vec![0.0; 2 * p.csm_terms],
+                alpha: p.alpha.unwrap_or(0.0),
+                precision: prec,
+            };
+            t.b_star = p.basis_b_star(name, &t)?;
+            Box::new(t)
+        }
+        "hamburger" => {
+            let m = p.moment_count.unwrap_or(4);
+            if !(2..=30).contains(&m) || !m.is_multiple_of(2) {
+                bail!("hamburger: moment count must be even and in 2..=30, got {m}");
+            }
+            let b_star = p.msm_b_star(name, m)?;
+            Box::new(Hamburger::new(p.msm_alpha(m), b_star, prec))
+        }
+        "hamburger4" => Box::new(Hamburger4::new(
+            p.msm_alpha(4),
+            arr(p.msm_b_star(name, 4)?),
+            prec,
+        )),
+        "hausdorff4" => Box::new(Hausdorff4::new(
+            p.msm_alpha(4),
+            arr(p.msm_b_star(name, 4)?),
+            prec,
+        )),
+        "hamburger6" => {
+            let mut q = p.clone();
+            q.bias = Some(p.bias.unwrap_or(BiasPreset::Clamped));
+            Box::new(Hamburger6::new(
+                q.msm_alpha(6),
+                arr(q.msm_b_star(name, 6)?),
+                prec,
+            ))
+        }
+        // "tmsm": OWNER TMSM helper.
+        other => bail!(
+            "unknown technique '{other}' (valid: {}, lp:f1,f2,…)",
+            CLOSED_FORM_NAMES.join(", ")
+        ),
+    };
+    Ok(t)
+}
+
+/// The technique named by `spec` with default parameters; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
     if spec == "tmsm" {
         return Ok(Box::new(super::tmsm::Tmsm::default()));
@@ -15,5 +287,5 @@ pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
     if let Some(list) = spec.strip_prefix("lp:") {
         return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
     }
-    bail!("unknown technique '{spec}'")
+    build(spec, &Params::default())
 }

@@ -1,0 +1,480 @@
+//! Search for θ maximising log₂|det A| under exact containment (Section 4.3 of the 2015 paper).
+//!
+//! Method: block-coordinate (row-wise) LP ascent. det A is linear in each row a_i with the
+//! cofactor vector c_i as gradient, and each row's feasible set K = {a : max_z a·b(z) −
+//! min_z a·b(z) ≤ 1} is convex and symmetric, so the best row given the others is the LP
+//! max c_i·a s.t. 0 ≤ a·b(z) + t ≤ 1. The semi-infinite constraint is handled by cutting
+//! planes: solve on a finite set of z, ask the curve's extrema oracle (exact derivative roots
+//! for polynomials) for the true extrema, add the violated ones, repeat. Work happens in a
+//! whitened coordinate system q = W(b − μ) (covariance of b over Chebyshev nodes = I), which
+//! keeps the LPs well conditioned; the result is mapped back and verified in the original
+//! basis. Independent random restarts run in parallel (rayon); the best is kept. A final
+//! tie-break sweep picks, among rows of equal gain, the one with the smallest degree-weighted
+//! L1 norm Σ_j e_j |a_j| (prefers low-degree rows, e.g. z instead of z² in θ₂).
+
+use super::curve::{row_min_max, Curve};
+use super::linalg::Lu;
+use super::theta::{normalize_rows, Theta};
+use anyhow::{bail, Result};
+use good_lp::{microlp, variable, variables, Expression, Solution as _, SolverModel, Variable};
+use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
+
+/// Options of [`optimize`].
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub seed: u64,
+    /// Independent random starts.
+    pub restarts: usize,
+    /// Maximum sweeps over all rows per start.
+    pub max_sweeps: usize,
+    /// Stop a start when a sweep gains less than this many bits.
+    pub tol_bits: f64,
+    /// Relative shrink that makes the final θ strictly feasible.
+    pub margin: f64,
+    /// Basin-hopping steps per start: perturb all rows by relative noise `hop_sigma`,
+    /// re-ascend, keep if better.
+    pub hops: usize,
+    pub hop_sigma: f64,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            seed: 1,
+            restarts: 16,
+            max_sweeps: 400,
+            tol_bits: 1e-9,
+            margin: 1e-9,
+            hops: 0,
+            hop_sigma: 0.2,
+        }
+    }
+}
+
+/// Result of [`optimize`].
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    pub theta: Theta,
+    /// Gain of each start after convergence (bits), in start order.
+    pub start_gains: Vec<f64>,
+    pub best_start: usize,
+    /// Total LPs solved.
+    pub lps: usize,
+}
+
+/// Whitened coordinates q = W (b − μ).
+struct Frame {
+    m: usize,
+    w: Vec<Vec<f64>>,
+    mu: Vec<f64>,
+}
+
+impl Frame {
+    fn new(curve: &dyn Curve) -> Result<Frame> {
+        let m = curve.dim();
+        let n = 2000;
+        let mut xs = Vec::with_capacity(n);
+        let mut mu = vec![0.0; m];
+        for k in 0..n {
+            let z = 0.5 * (1.0 - (std::f64::consts::PI * (k as f64 + 0.5) / n as f64).cos());
+            let mut b = vec![0.0; m];
+            curve.eval(z, &mut b);
+            for (u, v) in mu.iter_mut().zip(&b) {
+                *u += v / n as f64;
+            }
+            xs.push(b);
+        }
+        let mut cov = vec![vec![0.0; m]; m];
+        for x in &xs {
+            for i in 0..m {
+                for j in 0..m {
+                    cov[i][j] += (x[i] - mu[i]) * (x[j] - mu[j]) / n as f64;
+                }
+            }
+        }
+        // Cholesky cov = L Lᵀ, W = L⁻¹.
+        let mut l = vec![vec![0.0; m]; m];
+        for i in 0..m {
+            for j in 0..=i {
+                let s: f64 = cov[i][j] - (0..j).map(|k| l[i][k] * l[j][k]).sum::<f64>();
+                if i == j {
+                    if !(s > 1e-300) {
+                        bail!(
+                            "basis functions are linearly dependent (with the constant) on [0,1]"
+                        );
+                    }
+                    l[i][i] = s.sqrt();
+                } else {
+                    l[i][j] = s / l[j][j];
+                }
+            }
+        }
+        let Some(lu) = Lu::new(&l) else {
+            bail!("basis functions are linearly dependent on [0,1]");
+        };
+        Ok(Frame {
+            m,
+            w: lu.inverse(),
+            mu,
+        })
+    }
+
+    fn q(&self, curve: &dyn Curve, z: f64) -> Vec<f64> {
+        let mut b = vec![0.0; self.m];
+        curve.eval(z, &mut b);
+        let d: Vec<f64> = b.iter().zip(&self.mu).map(|(p, q)| p - q).collect();
+        self.w
+            .iter()
+            .map(|r| r.iter().zip(&d).map(|(p, q)| p * q).sum())
+            .collect()
+    }
+
+    /// b-space coefficients Wᵀ ã.
+    fn to_b(&self, aq: &[f64]) -> Vec<f64> {
+        (0..self.m)
+            .map(|j| (0..self.m).map(|i| aq[i] * self.w[i][j]).sum())
+            .collect()
+    }
+
+    /// Extrema of ã·q(z) over [0,1]: all candidates (z, value) in q-space values.
+    fn extrema(&self, curve: &dyn Curve, aq: &[f64]) -> Vec<(f64, f64)> {
+        let ab = self.to_b(aq);
+        let shift: f64 = ab.iter().zip(&self.mu).map(|(p, q)| p * q).sum();
+        curve
+            .extrema(&ab)
+            .into_iter()
+            .map(|(z, v)| (z, v - shift))
+            .collect()
+    }
+}
+
+/// One row: q-space coefficients, offset, and its working set of constraint points.
+#[derive(Clone)]
+struct Row {
+    a: Vec<f64>,
+    pts: Vec<(f64, Vec<f64>)>,
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(p, q)| p * q).sum()
+}
+
+/// What the row LP optimises.
+enum Goal<'a> {
+    /// max c·ã.
+    Ascend(&'a [f64]),
+    /// min Σ w_j |(Wᵀã)_j| subject to c·ã ≥ floor.
+    TieBreak(&'a [f64], f64, &'a [f64]),
+}
+
+/// Solve the row LP with cutting planes; returns ã scaled to range exactly 1 (true range).
+fn row_lp(
+    frame: &Frame,
+    curve: &dyn Curve,
+    goal: &Goal,
+    pts: &mut Vec<(f64, Vec<f64>)>,
+    lps: &mut usize,
+) -> Option<Vec<f64>> {
+    let m = frame.m;
+    for _ in 0..40 {
+        *lps += 1;
+        let (av, tv) = match goal {
+            Goal::Ascend(c) => {
+                let mut obj = c.to_vec();
+                obj.push(0.0);
+                let mut g = Vec::with_capacity(2 * pts.len());
+                let mut h = Vec::with_capacity(2 * pts.len());
+                for (_, q) in pts.iter() {
+                    let mut up = q.clone();
+                    up.push(1.0);
+                    g.push(up.iter().map(|v| -v).collect());
+                    h.push(0.0);
+                    g.push(up);
+                    h.push(1.0);
+                }
+                match super::lpsmall::max_free(&obj, &g, &h) {
+                    Some(x) => (x[..m].to_vec(), x[m]),
+                    None => microlp_row(frame, goal, pts)?,
+                }
+            }
+            Goal::TieBreak(..) => microlp_row(frame, goal, pts)?,
+        };
+        let ext = frame.extrema(curve, &av);
+        let (lo, hi) = ext.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, e| {
+            (r.0.min(e.1), r.1.max(e.1))
+        });
+        let range = hi - lo;
+        if !(range > 0.0) || !range.is_finite() {
+            return None;
+        }
+        let mut added = false;
+        for &(z, v) in &ext {
+            let violated = v + tv > 1.0 + 1e-12 || v + tv < -1e-12;
+            if violated && pts.iter().all(|p| (p.0 - z).abs() > 1e-13) {
+                pts.push((z, frame.q(curve, z)));
+                added = true;
+            }
+        }
+        if range <= 1.0 + 1e-12 || !added {
+            // prune the working set: drop points far from both bounds
+            if pts.len() > 10 * m {
+                pts.retain(|(_, q)| {
+                    let v = dot(&av, q) + tv;
+                    !(v > 1e-3 && v < 1.0 - 1e-3)
+                });
+            }
+            return Some(av.iter().map(|v| v / range).collect());
+        }
+    }
+    None
+}
+
+/// The row LP through good_lp + microlp (tie-break goal, and fallback).
+fn microlp_row(frame: &Frame, goal: &Goal, pts: &[(f64, Vec<f64>)]) -> Option<(Vec<f64>, f64)> {
+    let m = frame.m;
+    let bound = 1e6;
+    let mut vars = variables!();
+    let a: Vec<Variable> = (0..m)
+        .map(|_| vars.add(variable().min(-bound).max(bound)))
+        .collect();
+    let t = vars.add(variable().min(-bound).max(bound));
+    let mut cons = Vec::new();
+    let mut model = match goal {
+        Goal::Ascend(c) => {
+            let obj: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
+            vars.maximise(obj).using(microlp)
+        }
+        Goal::TieBreak(c, floor, w) => {
+            let u: Vec<Variable> = (0..m).map(|_| vars.add(variable().min(0.0))).collect();
+            let obj: Expression = u.iter().zip(w.iter()).map(|(v, &wj)| wj * *v).sum();
+            let ab: Vec<Expression> = (0..m)
+                .map(|j| (0..m).map(|i| frame.w[i][j] * a[i]).sum())
+                .collect();
+            for (e, uj) in ab.into_iter().zip(&u) {
+                cons.push(e.clone().leq(*uj));
+                cons.push((-e).leq(*uj));
+            }
+            let ca: Expression = a.iter().zip(c.iter()).map(|(v, &ci)| ci * *v).sum();
+            cons.push(ca.geq(*floor));
+            vars.minimise(obj).using(microlp)
+        }
+    };
+    for (_, q) in pts.iter() {
+        let e: Expression = a.iter().zip(q).map(|(v, &qj)| qj * *v).sum::<Expression>() + t;
+        cons.push(e.clone().geq(0.0));
+        cons.push(e.leq(1.0));
+    }
+    for c in cons {
+        model = model.with(c);
+    }
+    let sol = model.solve().ok()?;
+    let av: Vec<f64> = a.iter().map(|v| sol.value(*v)).collect();
+    let tv = sol.value(t);
+    Some((av, tv))
+}
+
+fn initial_points(frame: &Frame, curve: &dyn Curve) -> Vec<(f64, Vec<f64>)> {
+    let n = 2 * frame.m + 2;
+    (0..=n)
+        .map(|k| {
+            let z = 0.5 * (1.0 - (std::f64::consts::PI * k as f64 / n as f64).cos());
+            (z, frame.q(curve, z))
+        })
+        .collect()
+}
+
+fn log2det(rows: &[Row]) -> f64 {
+    let a: Vec<Vec<f64>> = rows.iter().map(|r| r.a.clone()).collect();
+    Lu::new(&a)
+        .map(|lu| lu.log2_abs_det().0)
+        .unwrap_or(f64::NEG_INFINITY)
+}
+
+/// Cofactor direction of row i (∝ gradient of det with respect to row i), unit length.
+fn cofactor_dir(rows: &[Row], i: usize) -> Option<Vec<f64>> {
+    let m = rows.len();
+    let a: Vec<Vec<f64>> = rows.iter().map(|r| r.a.clone()).collect();
+    let lu = Lu::new(&a)?;
+    let mut e = vec![0.0; m];
+    e[i] = 1.0;
+    let c = lu.solve(&e); // column i of A⁻¹ = cofactors of row i / det
+    let n = dot(&c, &c).sqrt();
+    Some(c.iter().map(|v| v / n).collect())
+}
+
+fn ascend(
+    frame: &Frame,
+    curve: &dyn Curve,
+    rows: &mut [Row],
+    opts: &Options,
+    rng: &mut impl Rng,
+    lps: &mut usize,
+) -> f64 {
+    let m = rows.len();
+    let mut cur = log2det(rows);
+    for _ in 0..opts.max_sweeps {
+        let before = cur;
+        let mut order: Vec<usize> = (0..m).collect();
+        for k in (1..m).rev() {
+            order.swap(k, rng.gen_range(0..=k));
+        }
+        for &i in &order {
+            let Some(c) = cofactor_dir(rows, i) else {
+                continue;
+            };
+            let old = dot(&c, &rows[i].a).abs();
+            let mut pts = std::mem::take(&mut rows[i].pts);
+            if let Some(a) = row_lp(frame, curve, &Goal::Ascend(&c), &mut pts, lps) {
+                if dot(&c, &a) > old {
+                    rows[i].a = a;
+                }
+            }
+            rows[i].pts = pts;
+        }
+        cur = log2det(rows);
+        if cur - before < opts.tol_bits {
+            break;
+        }
+    }
+    cur
+}
+
+fn tie_break(frame: &Frame, curve: &dyn Curve, rows: &mut [Row], weights: &[f64], lps: &mut usize) {
+    let m = rows.len();
+    for i in 0..m {
+        let before = log2det(rows);
+        let Some(c) = cofactor_dir(rows, i) else {
+            continue;
+        };
+        let sgn = dot(&c, &rows[i].a).signum();
+        let c: Vec<f64> = c.iter().map(|v| v * sgn).collect();
+        let floor = dot(&c, &rows[i].a) * (1.0 - 1e-11);
+        let mut pts = rows[i].pts.clone();
+        let res = row_lp(
+            frame,
+            curve,
+            &Goal::TieBreak(&c, floor, weights),
+            &mut pts,
+            lps,
+        );
+        if let Some(a) = res {
+            let old = std::mem::replace(&mut rows[i].a, a);
+            if log2det(rows) < before - 1e-9 {
+                rows[i].a = old;
+            } else {
+                rows[i].pts = pts;
+            }
+        }
+    }
+}
+
+/// Maximise log₂|det A| over θ(b) = A b + t with θ(b([0,1])) ⊆ [0,1]^m. `progress` is called
+/// after each start with (start index, its gain in bits).
+pub fn optimize(
+    curve: &dyn Curve,
+    opts: &Options,
+    progress: &(dyn Fn(usize, f64) + Sync),
+) -> Result<Outcome> {
+    let m = curve.dim();
+    if m == 0 {
+        bail!("empty basis");
+    }
+    if opts.restarts == 0 {
+        bail!("--restarts must be at least 1");
+    }
+    let frame = Frame::new(curve)?;
+    let init_pts = initial_points(&frame, curve);
+    let runs: Vec<(f64, Vec<Row>, usize)> = (0..opts.restarts)
+        .into_par_iter()
+        .map(|k| {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
+                opts.seed
+                    .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                    .wrapping_add(k as u64),
+            );
+            let mut lps = 0;
+            let mut rows: Vec<Row> = (0..m)
+                .map(|_| {
+                    let mut a: Vec<f64> = (0..m).map(|_| normal(&mut rng)).collect();
+                    normalize_row(&frame, curve, &mut a);
+                    Row {
+                        a,
+                        pts: init_pts.clone(),
+                    }
+                })
+                .collect();
+            let mut g = ascend(&frame, curve, &mut rows, opts, &mut rng, &mut lps);
+            for _ in 0..opts.hops {
+                let mut trial = rows.clone();
+                for r in trial.iter_mut() {
+                    let n = dot(&r.a, &r.a).sqrt();
+                    for v in r.a.iter_mut() {
+                        *v += opts.hop_sigma * n * normal(&mut rng) / (m as f64).sqrt();
+                    }
+                    normalize_row(&frame, curve, &mut r.a);
+                }
+                let gt = ascend(&frame, curve, &mut trial, opts, &mut rng, &mut lps);
+                if gt > g {
+                    g = gt;
+                    rows = trial;
+                }
+            }
+            progress(k, g + frame_gain(&frame));
+            (g, rows, lps)
+        })
+        .collect();
+    let mut lps: usize = runs.iter().map(|r| r.2).sum();
+    let start_gains: Vec<f64> = runs.iter().map(|r| r.0 + frame_gain(&frame)).collect();
+    let best_start = (0..runs.len())
+        .max_by(|&i, &j| runs[i].0.total_cmp(&runs[j].0))
+        .unwrap();
+    let mut rows = runs[best_start].1.clone();
+    let weights: Vec<f64> = match curve.monomial_exponents() {
+        Some(e) => e.iter().map(|&v| v as f64).collect(),
+        None => (1..=m).map(|v| v as f64).collect(),
+    };
+    for _ in 0..3 {
+        tie_break(&frame, curve, &mut rows, &weights, &mut lps);
+    }
+    // Map back: A = Ã W, t = −min over z of the row (set by normalisation).
+    let a_b: Vec<Vec<f64>> = rows.iter().map(|r| frame.to_b(&r.a)).collect();
+    let mut offset = Vec::with_capacity(m);
+    for row in &a_b {
+        let (_, lo, _, _) = row_min_max(curve, row);
+        offset.push(-lo);
+    }
+    let raw = Theta::new(curve.names(), a_b, offset)?;
+    let theta = normalize_rows(&raw, curve, opts.margin)?;
+    Ok(Outcome {
+        theta,
+        start_gains,
+        best_start,
+        lps,
+    })
+}
+
+/// Standard normal sample (Box–Muller).
+fn normal(rng: &mut impl Rng) -> f64 {
+    let u: f64 = rng.gen_range(1e-12..1.0);
+    let v: f64 = rng.gen_range(0.0..1.0);
+    (-2.0 * u.ln()).sqrt() * (std::f64::consts::TAU * v).cos()
+}
+
+/// Scale a q-space row to range exactly 1 over [0,1].
+fn normalize_row(frame: &Frame, curve: &dyn Curve, a: &mut [f64]) {
+    let ext = frame.extrema(curve, a);
+    let (lo, hi) = ext.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |r, e| {
+        (r.0.min(e.1), r.1.max(e.1))
+    });
+    if hi > lo {
+        a.iter_mut().for_each(|v| *v /= hi - lo);
+    }
+}
+
+/// log₂|det W|: gain of the whitening itself (q-space det + this = b-space det).
+fn frame_gain(frame: &Frame) -> f64 {
+    Lu::new(&frame.w)
+        .map(|lu| lu.log2_abs_det().0)
+        .unwrap_or(f64::NAN)
+}

@@ -1,0 +1,205 @@
+//! Per-view PNG pictures: where does a technique leak light?
+//!
+//! One image per view with five panels of the shadow-map resolution side by side (no labels),
+//! separated by 4-pixel mid-grey gaps, always in this order:
+//!
+//! 1. **front depth**: grey = 1 − z0 (near = bright);
+//! 2. **layer count**: surfaces per texel, viridis over 1..=8 (dark purple = 1, yellow ≥ 8);
+//! 3. **PCF shadow** of the front-layer fragment: grey = 1 − PCF (lit = white, shadow = black);
+//! 4. **technique shadow** of the front-layer fragment: grey = 1 − G (same scale);
+//! 5. **|error|** = |G − PCF| through the inferno colour map on a square-root scale
+//!    (black = 0, purple ≈ 0.04, orange ≈ 0.5, pale yellow = 1), so small leaks are visible.
+//!
+//! Texels without any surface are drawn in a dark blue-grey (`BACKGROUND`) in every panel;
+//! a non-finite G is drawn magenta in panels 4 and 5.
+
+use crate::metrics::FrontShadows;
+use crate::stack::DepthStack;
+use anyhow::{bail, Context, Result};
+use std::path::Path;
+
+/// Colour of texels without a surface.
+pub const BACKGROUND: [u8; 3] = [28, 36, 52];
+/// Colour of non-finite technique outputs.
+pub const INVALID: [u8; 3] = [255, 0, 255];
+/// Colour of the gaps between panels.
+pub const GAP: [u8; 3] = [128, 128, 128];
+/// Gap width in pixels.
+pub const GAP_PX: usize = 4;
+/// Number of panels.
+pub const PANELS: usize = 5;
+
+/// An 8-bit RGB image.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    /// Row-major RGB bytes, 3 per pixel.
+    pub data: Vec<u8>,
+}
+
+impl RgbImage {
+    pub fn new(width: usize, height: usize, fill: [u8; 3]) -> RgbImage {
+        RgbImage {
+            width,
+            height,
+            data: fill.repeat(width * height),
+        }
+    }
+    pub fn get(&self, x: usize, y: usize) -> [u8; 3] {
+        let i = 3 * (y * self.width + x);
+        [self.data[i], self.data[i + 1], self.data[i + 2]]
+    }
+    pub fn set(&mut self, x: usize, y: usize, c: [u8; 3]) {
+        let i = 3 * (y * self.width + x);
+        self.data[i..i + 3].copy_from_slice(&c);
+    }
+}
+
+const INFERNO: [[u8; 3]; 11] = [
+    [0x00, 0x00, 0x04],
+    [0x16, 0x0b, 0x39],
+    [0x42, 0x0a, 0x68],
+    [0x6a, 0x17, 0x6e],
+    [0x93, 0x26, 0x67],
+    [0xbc, 0x37, 0x54],
+    [0xdd, 0x51, 0x3a],
+    [0xf3, 0x78, 0x19],
+    [0xfc, 0xa5, 0x0a],
+    [0xf6, 0xd7, 0x46],
+    [0xfc, 0xff, 0xa4],
+];
+
+const VIRIDIS: [[u8; 3]; 11] = [
+    [0x44, 0x01, 0x54],
+    [0x48, 0x24, 0x75],
+    [0x41, 0x44, 0x87],
+    [0x35, 0x5f, 0x8d],
+    [0x2a, 0x78, 0x8e],
+    [0x21, 0x91, 0x8c],
+    [0x22, 0xa8, 0x84],
+    [0x44, 0xbf, 0x70],
+    [0x7a, 0xd1, 0x51],
+    [0xbd, 0xdf, 0x26],
+    [0xfd, 0xe7, 0x25],
+];
+
+fn lut(table: &[[u8; 3]; 11], t: f64) -> [u8; 3] {
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    let s = t * 10.0;
+    let i = (s.floor() as usize).min(9);
+    let f = s - i as f64;
+    let mut c = [0u8; 3];
+    for k in 0..3 {
+        let a = table[i][k] as f64;
+        let b = table[i + 1][k] as f64;
+        c[k] = (a + (b - a) * f).round() as u8;
+    }
+    c
+}
+
+/// The inferno colour map (matplotlib, sampled at tenths, linear in between), t ∈ [0,1].
+pub fn inferno(t: f64) -> [u8; 3] {
+    lut(&INFERNO, t)
+}
+
+/// The viridis colour map (matplotlib, sampled at tenths, linear in between), t ∈ [0,1].
+pub fn viridis(t: f64) -> [u8; 3] {
+    lut(&VIRIDIS, t)
+}
+
+fn grey(v: f64) -> [u8; 3] {
+    let g = (v.clamp(0.0, 1.0) * 255.0).round() as u8;
+    [g, g, g]
+}
+
+/// The five-panel picture of one view (see the module doc for the panel order and colours).
+/// `shadows` holds the front-layer PCF and technique values ([`crate::metrics::front_shadows`]).
+pub fn view_picture(stack: &DepthStack, shadows: &FrontShadows) -> Result<RgbImage> {
+    let (w, h) = (stack.meta.width, stack.meta.height);
+    let n = w * h;
+    if shadows.pcf.len() != n || shadows.g.len() != n {
+        bail!(
+            "pictures: {}/{}: shadow maps have {} / {} values, expected {n}",
+            stack.meta.scene,
+            stack.meta.view,
+            shadows.pcf.len(),
+            shadows.g.len()
+        );
+    }
+    let mut img = RgbImage::new(PANELS * w + (PANELS - 1) * GAP_PX, h, GAP);
+    for y in 0..h {
+        for x in 0..w {
+            let t = y * w + x;
+            let z0 = stack.depth.first().map_or(f32::INFINITY, |l| l[t]);
+            let layers = stack.depth.iter().filter(|l| l[t].is_finite()).count();
+            let cols: [[u8; 3]; PANELS] = if !z0.is_finite() {
+                [BACKGROUND; PANELS]
+            } else {
+                let pcf = shadows.pcf[t];
+                let g = shadows.g[t];
+                let (tech, err) = if g.is_finite() {
+                    (grey(1.0 - g), inferno((g - pcf).abs().sqrt()))
+                } else {
+                    (INVALID, INVALID)
+                };
+                [
+                    grey(1.0 - z0 as f64),
+                    viridis((layers as f64 - 1.0) / 7.0),
+                    grey(1.0 - pcf),
+                    tech,
+                    err,
+                ]
+            };
+            for (p, c) in cols.iter().enumerate() {
+                img.set(p * (w + GAP_PX) + x, y, *c);
+            }
+        }
+    }
+    Ok(img)
+}
+
+/// Writes an RGB image as an 8-bit PNG.
+pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
+    let file = std::fs::File::create(path)
+        .with_context(|| format!("cannot create picture {}", path.display()))?;
+    let mut enc = png::Encoder::new(
+        std::io::BufWriter::new(file),
+        img.width as u32,
+        img.height as u32,
+    );
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut writer = enc
+        .write_header()
+        .with_context(|| format!("cannot write picture {}", path.display()))?;
+    writer
+        .write_image_data(&img.data)
+        .with_context(|| format!("cannot write picture {}", path.display()))?;
+    writer
+        .finish()
+        .with_context(|| format!("cannot write picture {}", path.display()))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn colour_maps_hit_their_samples() {
+        assert_eq!(inferno(0.0), INFERNO[0]);
+        assert_eq!(inferno(1.0), INFERNO[10]);
+        assert_eq!(viridis(0.5), VIRIDIS[5]);
+        assert_eq!(inferno(f64::NAN), INFERNO[0]);
+        // inferno is monotone in luminance-ish (sum of channels) at the samples
+        let s: Vec<u32> = (0..=10)
+            .map(|i| inferno(i as f64 / 10.0).iter().map(|&c| c as u32).sum())
+            .collect();
+        assert!(s.windows(2).all(|w| w[0] < w[1]), "{s:?}");
+    }
+}

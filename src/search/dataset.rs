@@ -1,0 +1,372 @@
+//! The fragments the sweep scores candidates on.
+//!
+//! Each fragment has a depth distribution Z on the LP grid (the 9×9 Gaussian weights over the
+//! front-layer depths around its texel, snapped to grid points; all layers of a texel share it),
+//! a fragment depth z_f as a grid index (snapped after the technique bias), and its PCF value.
+//! Moments of any function f are Σ_l w_l f(z_{idx_l}) (Section 3.2: the filtered shadow map).
+//!
+//! Trivial fragments (F_Z(z_f) = Σ_{z_i < z_f} w_i = 0) have G = 0 for every candidate (Z itself
+//! is feasible and G ≥ 0), so they are not stored: their error contribution Σ |0 − PCF| is kept in
+//! closed form ([`Dataset::trivial_error`]).
+
+use crate::Grid;
+use anyhow::{bail, Result};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// One non-trivial fragment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fragment {
+    /// View (shadow map) number, for stratification.
+    pub view: u32,
+    /// Layer (0 = front surface), for stratification.
+    pub layer: u32,
+    /// Texel within the view.
+    pub texel: u32,
+    /// Index of its depth distribution.
+    pub dist: u32,
+    /// Fragment depth as a grid index.
+    pub zf: u32,
+    /// The PCF reference value.
+    pub pcf: f64,
+}
+
+/// Fragments with their depth distributions (see the module documentation).
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    grid: Grid,
+    /// (grid index, weight) entries of all distributions.
+    entries: Vec<(u32, f64)>,
+    /// (start, len) into `entries` per distribution.
+    dists: Vec<(u32, u32)>,
+    /// Non-trivial fragments sorted by (dist, zf, layer): consecutive fragments share moments.
+    fragments: Vec<Fragment>,
+    trivial_count: u64,
+    trivial_error: f64,
+    views: Vec<String>,
+}
+
+/// Builds a [`Dataset`] from raw kernels and fragments (depths in [0,1], snapped here).
+#[derive(Debug)]
+pub struct DatasetBuilder {
+    data: Dataset,
+}
+
+impl DatasetBuilder {
+    pub fn new(grid: &Grid) -> DatasetBuilder {
+        DatasetBuilder {
+            data: Dataset {
+                grid: grid.clone(),
+                entries: Vec::new(),
+                dists: Vec::new(),
+                fragments: Vec::new(),
+                trivial_count: 0,
+                trivial_error: 0.0,
+                views: Vec::new(),
+            },
+        }
+    }
+
+    /// Register a view name; returns its number.
+    pub fn add_view(&mut self, name: &str) -> u32 {
+        self.data.views.push(name.to_string());
+        (self.data.views.len() - 1) as u32
+    }
+
+    /// Add a depth distribution given as (depth, weight) pairs; depths are snapped to the grid,
+    /// weights merged per grid point and normalised to sum 1. Returns its id.
+    pub fn add_distribution(&mut self, kernel: &[(f64, f64)]) -> Result<u32> {
+        let mut pairs: Vec<(u32, f64)> = Vec::with_capacity(kernel.len());
+        let mut total = 0.0;
+        for (k, &(z, w)) in kernel.iter().enumerate() {
+            if !z.is_finite() || !w.is_finite() || w < 0.0 {
+                bail!("depth distribution entry {k}: invalid depth {z} or weight {w}");
+            }
+            if w > 0.0 {
+                pairs.push((self.data.snap(z) as u32, w));
+                total += w;
+            }
+        }
+        if total <= 0.0 {
+            bail!("depth distribution with zero total weight");
+        }
+        pairs.sort_by_key(|p| p.0);
+        let start = self.data.entries.len();
+        for (i, w) in pairs {
+            let entries = &mut self.data.entries;
+            if entries.len() > start && entries[entries.len() - 1].0 == i {
+                let k = entries.len() - 1;
+                entries[k].1 += w / total;
+            } else {
+                entries.push((i, w / total));
+            }
+        }
+        let len = self.data.entries.len() - start;
+        self.data.dists.push((start as u32, len as u32));
+        Ok((self.data.dists.len() - 1) as u32)
+    }
+
+    /// Add a fragment at depth `zf` (snapped) with PCF value `pcf`; trivial fragments are only
+    /// counted. Returns whether it was kept (non-trivial).
+    pub fn add_fragment(
+        &mut self,
+        view: u32,
+        layer: u32,
+        texel: u32,
+        dist: u32,
+        zf: f64,
+        pcf: f64,
+    ) -> Result<bool> {
+        if !zf.is_finite() || !(0.0..=1.0).contains(&pcf) {
+            bail!("fragment (view {view}, layer {layer}, texel {texel}): invalid z_f {zf} or PCF {pcf}");
+        }
+        if dist as usize >= self.data.dists.len() {
+            bail!("fragment (view {view}, texel {texel}): unknown distribution {dist}");
+        }
+        let zf = self.data.snap(zf) as u32;
+        if self.data.cdf(dist, zf) <= 0.0 {
+            self.data.trivial_count += 1;
+            self.data.trivial_error += pcf;
+            return Ok(false);
+        }
+        self.data.fragments.push(Fragment {
+            view,
+            layer,
+            texel,
+            dist,
+            zf,
+            pcf,
+        });
+        Ok(true)
+    }
+
+    pub fn finish(mut self) -> Dataset {
+        self.data.fragments.sort_by_key(|f| (f.dist, f.zf, f.layer));
+        self.data
+    }
+}
+
+impl Dataset {
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+    /// Non-trivial fragments, sorted for warm starts.
+    pub fn fragments(&self) -> &[Fragment] {
+        &self.fragments
+    }
+    pub fn distribution_count(&self) -> usize {
+        self.dists.len()
+    }
+    /// (grid index, weight) pairs of distribution `d`.
+    pub fn distribution(&self, d: u32) -> &[(u32, f64)] {
+        let (s, l) = self.dists[d as usize];
+        &self.entries[s as usize..(s + l) as usize]
+    }
+    pub fn trivial_count(&self) -> u64 {
+        self.trivial_count
+    }
+    /// Σ PCF over trivial fragments (their error, since G = 0 there).
+    pub fn trivial_error(&self) -> f64 {
+        self.trivial_error
+    }
+    /// All fragments, trivial ones included.
+    pub fn total_count(&self) -> u64 {
+        self.trivial_count + self.fragments.len() as u64
+    }
+    pub fn views(&self) -> &[String] {
+        &self.views
+    }
+
+    /// Index of the grid point nearest to z.
+    pub fn snap(&self, z: f64) -> usize {
+        let p = self.grid.points();
+        let k = p.partition_point(|&v| v < z);
+        if k == 0 {
+            0
+        } else if k == p.len() {
+            p.len() - 1
+        } else if z - p[k - 1] <= p[k] - z {
+            k - 1
+        } else {
+            k
+        }
+    }
+
+    /// F_Z(z_f) = Σ_{idx < zf} w for distribution `d`.
+    pub fn cdf(&self, d: u32, zf: u32) -> f64 {
+        self.distribution(d)
+            .iter()
+            .filter(|e| e.0 < zf)
+            .map(|e| e.1)
+            .sum()
+    }
+
+    /// Filtered values of every function of `table` for every distribution: row-major
+    /// (distributions × N), `out[d*N + j] = Σ_l w_l f_j(z_{idx_l})`.
+    pub fn filtered(&self, table: &super::FunctionTable) -> Vec<f64> {
+        let nf = table.len();
+        let mut out = vec![0.0; self.dists.len() * nf];
+        for d in 0..self.dists.len() {
+            let o = &mut out[d * nf..(d + 1) * nf];
+            for &(i, w) in self.distribution(d as u32) {
+                for (a, v) in o.iter_mut().zip(table.row(i as usize)) {
+                    *a += w * v;
+                }
+            }
+        }
+        out
+    }
+
+    /// A seeded ordering of the non-trivial fragments such that every prefix (and every
+    /// consecutive block) is a stratified sample: strata are (view, min(layer, 3)), each stratum
+    /// is shuffled and its members spread evenly over the order (proportional allocation).
+    pub fn stratified_order(&self, seed: u64) -> Vec<u32> {
+        use std::collections::BTreeMap;
+        let mut strata: BTreeMap<(u32, u32), Vec<u32>> = BTreeMap::new();
+        for (k, f) in self.fragments.iter().enumerate() {
+            strata
+                .entry((f.view, f.layer.min(3)))
+                .or_default()
+                .push(k as u32);
+        }
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut keyed: Vec<(f64, u32)> = Vec::with_capacity(self.fragments.len());
+        for members in strata.values_mut() {
+            // Fisher–Yates with our seeded generator (stable across platforms).
+            for i in (1..members.len()).rev() {
+                let j = rng.gen_range(0..=i);
+                members.swap(i, j);
+            }
+            let u: f64 = rng.gen();
+            let len = members.len() as f64;
+            for (r, &k) in members.iter().enumerate() {
+                keyed.push(((r as f64 + u) / len, k));
+            }
+        }
+        keyed.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        keyed.into_iter().map(|(_, k)| k).collect()
+    }
+
+    /// Fingerprint of the fragments (refuse resuming on different data).
+    pub fn fingerprint(&self) -> u64 {
+        let mut h = super::Fnv::new();
+        for z in self.grid.points() {
+            h.u64(z.to_bits());
+        }
+        for &(i, w) in &self.entries {
+            h.u64(i as u64);
+            h.u64(w.to_bits());
+        }
+        for f in &self.fragments {
+            h.u64(((f.view as u64) << 32) | f.layer as u64);
+            h.u64(((f.texel as u64) << 32) | f.dist as u64);
+            h.u64(f.zf as u64);
+            h.u64(f.pcf.to_bits());
+        }
+        h.u64(self.trivial_count);
+        h.u64(self.trivial_error.to_bits());
+        h.finish()
+    }
+
+    /// A random synthetic dataset for tests and demos: per texel a distribution of 1–3 clusters
+    /// of nearby depths, fragments at `layers` depths per texel (cluster depths plus a small
+    /// offset), PCF = the exact F_Z(z_f) on the grid.
+    pub fn synthetic(
+        seed: u64,
+        grid: &Grid,
+        views: usize,
+        texels: usize,
+        layers: usize,
+    ) -> Result<Dataset> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut b = DatasetBuilder::new(grid);
+        for v in 0..views {
+            let view = b.add_view(&format!("synthetic{v}"));
+            for t in 0..texels {
+                let clusters = rng.gen_range(1..=3);
+                let centres: Vec<f64> = (0..clusters).map(|_| rng.gen_range(0.05..0.95)).collect();
+                let mut kernel = Vec::new();
+                for &c in &centres {
+                    let spread: f64 = rng.gen_range(0.0..0.05);
+                    let mass: f64 = rng.gen_range(0.2..1.0);
+                    for _ in 0..rng.gen_range(1..6) {
+                        let z: f64 = (c + rng.gen_range(-spread..=spread)).clamp(0.0, 1.0);
+                        kernel.push((z, mass * rng.gen_range(0.1..1.0)));
+                    }
+                }
+                let d = b.add_distribution(&kernel)?;
+                let mut depths = centres.clone();
+                depths.sort_by(f64::total_cmp);
+                for (l, &c) in depths.iter().take(layers).enumerate() {
+                    let zf = (c + rng.gen_range(0.0..0.08)).clamp(0.0, 1.0);
+                    let zi = b.data.snap(zf) as u32;
+                    let pcf = b.data.cdf(d, zi).min(1.0);
+                    b.add_fragment(view, l as u32, t as u32, d, zf, pcf)?;
+                }
+            }
+        }
+        Ok(b.finish())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::search::FunctionTable;
+
+    #[test]
+    fn snapping_merging_and_trivial_fragments() {
+        let g = Grid::uniform(11).unwrap();
+        let mut b = DatasetBuilder::new(&g);
+        let v = b.add_view("v");
+        let d = b
+            .add_distribution(&[(0.31, 1.0), (0.29, 1.0), (0.72, 2.0)])
+            .unwrap();
+        assert!(b.add_distribution(&[(f64::NAN, 1.0)]).is_err());
+        assert!(b.add_distribution(&[(0.5, 0.0)]).is_err());
+        // z_f at 0.3: nothing strictly in front -> trivial, error = PCF.
+        assert!(!b.add_fragment(v, 0, 0, d, 0.3, 0.25).unwrap());
+        assert!(b.add_fragment(v, 1, 0, d, 0.7, 0.5).unwrap());
+        assert!(b.add_fragment(v, 1, 0, d, 0.7, 1.5).is_err());
+        assert!(b.add_fragment(v, 1, 0, 9, 0.7, 0.5).is_err());
+        let ds = b.finish();
+        assert_eq!(ds.distribution(d), &[(3, 0.5), (7, 0.5)]);
+        assert_eq!(ds.trivial_count(), 1);
+        assert_eq!(ds.trivial_error(), 0.25);
+        assert_eq!(ds.fragments().len(), 1);
+        assert_eq!(ds.cdf(d, 7), 0.5);
+        let t = FunctionTable::new(&g, vec!["z".into(), "z^2".into()], |j, z| {
+            z.powi(j as i32 + 1)
+        })
+        .unwrap();
+        let f = ds.filtered(&t);
+        assert!((f[0] - 0.5).abs() < 1e-12 && (f[1] - (0.09 + 0.49) / 2.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn stratified_prefixes_are_proportional() {
+        let g = Grid::uniform(64).unwrap();
+        let ds = Dataset::synthetic(7, &g, 3, 200, 3).unwrap();
+        let order = ds.stratified_order(1);
+        let mut sorted = order.clone();
+        sorted.sort();
+        assert_eq!(sorted, (0..ds.fragments().len() as u32).collect::<Vec<_>>());
+        assert_eq!(order, ds.stratified_order(1));
+        assert_ne!(order, ds.stratified_order(2));
+        // Any prefix holds each view in proportion (±1 per stratum).
+        let total = ds.fragments().len() as f64;
+        for prefix in [50usize, 200, 333] {
+            for v in 0..3 {
+                let all = ds.fragments().iter().filter(|f| f.view == v).count() as f64;
+                let got = order[..prefix]
+                    .iter()
+                    .filter(|&&k| ds.fragments()[k as usize].view == v)
+                    .count() as f64;
+                assert!(
+                    (got - all * prefix as f64 / total).abs() <= 4.0 + 1e-9,
+                    "{got} {all}"
+                );
+            }
+        }
+    }
+}

@@ -1,0 +1,124 @@
+//! Five-panel pictures: written PNG decodes to the documented panel layout and colours.
+
+mod kernel_common;
+use kernel_common::*;
+use momentlab::metrics::{self, Bias, Subject};
+use momentlab::report::pictures::{self, BACKGROUND, GAP, GAP_PX, PANELS};
+use momentlab::technique::{Evaluator, Technique};
+
+/// A technique that always says "lit" (G = 0): the error panel then shows PCF itself.
+struct AlwaysLit;
+struct AlwaysLitEval;
+impl Evaluator for AlwaysLitEval {
+    fn shadow(&mut self, _: &[f64], _: f64) -> f64 {
+        0.0
+    }
+}
+impl Technique for AlwaysLit {
+    fn name(&self) -> String {
+        "always-lit".into()
+    }
+    fn moment_count(&self) -> usize {
+        1
+    }
+    fn basis(&self, z: f64, out: &mut [f64]) {
+        out[0] = z;
+    }
+    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
+        Box::new(AlwaysLitEval)
+    }
+}
+
+/// 48×32: a tilted ground plane (two layers under a floating box at x,y ∈ 16..28), and an
+/// empty strip x ≥ 44.
+fn scene() -> momentlab::stack::DepthStack {
+    stack_from("box", 48, 32, 2, |l, x, y| {
+        if x >= 44 {
+            return None;
+        }
+        let ground = (0.7 + 0.001 * x as f64) as f32;
+        let in_box = (16..28).contains(&x) && (16..28).contains(&y);
+        match (l, in_box) {
+            (0, true) => Some((0.2, 0.0, 0.0)),
+            (0, false) => Some((ground, 0.001, 0.0)),
+            (1, true) => Some((ground, 0.001, 0.0)),
+            _ => None,
+        }
+    })
+}
+
+fn decode(path: &std::path::Path) -> (usize, usize, Vec<u8>) {
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    let mut reader = dec.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+    buf.truncate(info.buffer_size());
+    (info.width as usize, info.height as usize, buf)
+}
+
+#[test]
+fn picture_layout_and_colours() {
+    let s = scene();
+    let t = AlwaysLit;
+    let shadows = metrics::front_shadows(&s, Subject::Technique(&t), &Bias::default()).unwrap();
+    let img = pictures::view_picture(&s, &shadows).unwrap();
+    let (w, h) = (48, 32);
+    assert_eq!(img.width, PANELS * w + (PANELS - 1) * GAP_PX);
+    assert_eq!(img.height, h);
+
+    let dir = std::env::temp_dir().join(format!("momentlab-pictures-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("box.png");
+    pictures::write_png(&path, &img).unwrap();
+    let (pw, ph, data) = decode(&path);
+    assert_eq!((pw, ph), (img.width, img.height));
+    assert_eq!(data, img.data, "PNG round trip is lossless");
+
+    let px = |panel: usize, x: usize, y: usize| img.get(panel * (w + GAP_PX) + x, y);
+    // gaps
+    assert_eq!(img.get(w, 0), GAP);
+    // background strip in every panel
+    for p in 0..PANELS {
+        assert_eq!(px(p, 46, 5), BACKGROUND);
+    }
+    // front depth: box (0.2) brighter than ground (≥ 0.7)
+    assert!(px(0, 20, 20)[0] > px(0, 5, 5)[0]);
+    assert_eq!(
+        px(0, 20, 20)[0],
+        ((1.0f64 - 0.2f32 as f64) * 255.0).round() as u8
+    );
+    // layer count differs between box (2 layers) and open ground (1)
+    assert_ne!(px(1, 20, 20), px(1, 5, 5));
+    // PCF: open ground far from the box is lit (white), ground right next to the box is
+    // partly shadowed (the receiver is the front layer there)
+    assert_eq!(px(2, 5, 5), [255, 255, 255]);
+    assert!(px(2, 15, 20)[0] < 255);
+    // box top is lit
+    assert_eq!(px(2, 22, 22), [255, 255, 255]);
+    // technique (always lit): white everywhere with a surface
+    assert_eq!(px(3, 15, 20), [255, 255, 255]);
+    // error panel: black where PCF = 0, coloured where PCF > 0
+    assert_eq!(px(4, 5, 5), pictures::inferno(0.0));
+    let pcf = shadows.pcf[20 * w + 15];
+    assert!(pcf > 0.0);
+    assert_eq!(px(4, 15, 20), pictures::inferno(pcf.sqrt()));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn mismatched_shadow_maps_are_rejected() {
+    let s = scene();
+    let bad = metrics::FrontShadows {
+        pcf: vec![0.0; 3],
+        g: vec![0.0; 3],
+    };
+    let e = pictures::view_picture(&s, &bad).unwrap_err().to_string();
+    assert!(e.contains("test/box"), "{e}");
+    let e = pictures::write_png(
+        std::path::Path::new("/nonexistent-dir/x.png"),
+        &pictures::RgbImage::new(2, 2, GAP),
+    )
+    .unwrap_err();
+    assert!(format!("{e:#}").contains("/nonexistent-dir/x.png"));
+}
