@@ -87,7 +87,11 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
             image.layer_data.len()
         );
     }
-    let layer = &image.layer_data[0];
+    let layer = image
+        .layer_data
+        .into_iter()
+        .next()
+        .context("EXR has no part")?;
     let (w, h) = (layer.size.width(), layer.size.height());
     if (w, h) != (meta.width, meta.height) {
         bail!(
@@ -99,7 +103,7 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
     let mut depth: Vec<Option<Vec<f32>>> = vec![None; meta.layers];
     let mut dzdu = depth.clone();
     let mut dzdv = depth.clone();
-    for ch in &layer.channel_data.list {
+    for ch in layer.channel_data.list {
         let name = ch.name.to_string();
         let (l, q) = parse_channel(&name).ok_or_else(|| {
             anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
@@ -110,8 +114,8 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
                 meta.layers
             );
         }
-        let values = match &ch.sample_data {
-            FlatSamples::F32(v) => v.clone(),
+        let values = match ch.sample_data {
+            FlatSamples::F32(v) => v,
             FlatSamples::F16(_) => bail!("channel '{name}' is half (f16); 32-bit float required"),
             FlatSamples::U32(_) => bail!("channel '{name}' is uint; 32-bit float required"),
         };

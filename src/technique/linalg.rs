@@ -251,12 +251,11 @@ pub fn cubic_roots<T: Real>(c0: T, c1: T, c2: T, c3: T) -> [T; 3] {
         // cos(3φ) = 3q / (p·m)
         let arg = (T::of(3.0) * q / (p * m)).max(-T::ONE).min(T::ONE);
         let phi = arg.acos() * third;
-        let tau = T::of(2.0 * std::f64::consts::PI / 3.0);
-        [
-            m * phi.cos() - shift,
-            m * (phi - tau).cos() - shift,
-            m * (phi + tau).cos() - shift,
-        ]
+        // cos(φ ∓ 2π/3) = −½ cos φ ± (√3/2) sin φ; φ ∈ [0, π/3] so sin φ ≥ 0.
+        let (cp, sp) = (phi.cos(), phi.sin());
+        let h = T::of(0.5) * cp;
+        let s3 = T::of(0.75f64.sqrt()) * sp;
+        [m * cp - shift, m * (s3 - h) - shift, m * (-h - s3) - shift]
     } else {
         // Only one real root (or a triple root): not expected for valid input; return it thrice.
         let d = (q * q * T::of(0.25) + p * p * p * T::of(1.0 / 27.0)).max(T::ZERO);
