@@ -844,8 +844,9 @@ impl Tmsm {
     /// Default bias for f64/f32 evaluation of 32-bit moments.
     pub const DEFAULT_ALPHA: f64 = 1e-6;
 
-    /// Default bias for moments stored with 16 bits (docs/stability.md).
-    pub const ALPHA_16BIT: f64 = 1e-4;
+    /// Default bias for moments stored with 16 bits: the smallest of 1e-5, 3e-5, 1e-4, 1e-3 with
+    /// no G above the sharp bound in `momentlab stability` (docs/stability.md).
+    pub const ALPHA_16BIT: f64 = 3e-5;
 
     /// TMSM with bias α toward b* = 0, evaluated in f32 if `single`.
     pub fn new(alpha: f64, single: bool) -> Tmsm {
