@@ -18,6 +18,7 @@ pub mod linalg;
 pub mod lpsmall;
 pub mod optimize;
 pub mod poly;
+pub mod study;
 pub mod theta;
 pub mod volume;
 

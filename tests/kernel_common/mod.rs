@@ -21,6 +21,7 @@ pub fn meta(name: &str, w: usize, h: usize, layers: usize) -> StackMeta {
         width: w,
         height: h,
         layers,
+        ..Default::default()
     }
 }
 

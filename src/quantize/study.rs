@@ -1,0 +1,291 @@
+//! The quantized moment-shadow-map study (Peters & Klein 2015, Section 4.3): store θ(b(z)) per
+//! texel at a given bit depth (rounded to nearest like a GPU UNORM or float format), filter the
+//! stored maps with the 9×9 Gaussian, decode with θ⁻¹, reconstruct with bias α
+//! (b' = (1−α)·b + α·b*, b* = (½, …, ½)) and measure the mean |G − PCF| over all fragments.
+//! Quantization happens per texel BEFORE filtering, as in a real shadow map.
+
+use super::theta::Theta;
+use crate::kernel::{filter_separable, front_map, Gaussian};
+use crate::metrics::{fragments_subsampled, Bias, Subsample};
+use crate::stack::DepthStack;
+use crate::technique::hamburger4::Hamburger4;
+use crate::technique::hamburger6::Hamburger6;
+use crate::technique::linalg::Precision;
+use crate::technique::vsm::Vsm;
+use crate::technique::ClosedForm;
+use anyhow::Result;
+use rayon::prelude::*;
+use serde::Serialize;
+
+/// Per-texel storage format of the moment channels.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum Storage {
+    /// n-bit UNORM: clamp to [0,1], round to the nearest of 2^n − 1 steps.
+    Unorm(u32),
+    /// IEEE single precision (round to nearest).
+    Float32,
+    /// No rounding (f64): the reference for the quantization deviation.
+    Exact,
+}
+
+impl Storage {
+    /// The value a texture of this format returns for `v`.
+    pub fn store(self, v: f64) -> f64 {
+        match self {
+            Storage::Unorm(bits) => {
+                let q = ((1u64 << bits) - 1) as f64;
+                (v.clamp(0.0, 1.0) * q).round() / q
+            }
+            Storage::Float32 => v as f32 as f64,
+            Storage::Exact => v,
+        }
+    }
+}
+
+/// A reconstruction technique of the study with its m (power basis z, …, z^m).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+pub enum Tech {
+    /// VSM (m = 2, Cantelli), θ₂.
+    Vsm,
+    /// Hamburger 4MSM (Algorithm 3), θ₄.
+    Msm4,
+    /// Hamburger 6MSM, θ₆.
+    Msm6,
+}
+
+impl Tech {
+    pub fn m(self) -> usize {
+        match self {
+            Tech::Vsm => 2,
+            Tech::Msm4 => 4,
+            Tech::Msm6 => 6,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Tech::Vsm => "vsm",
+            Tech::Msm4 => "4msm",
+            Tech::Msm6 => "6msm",
+        }
+    }
+    /// G(b, z_f) with bias α towards b* = (½, …, ½), double precision arithmetic.
+    pub fn shadower(self, alpha: f64) -> Box<dyn ClosedForm + Send + Sync> {
+        match self {
+            Tech::Vsm => Box::new(Vsm {
+                alpha,
+                b_star: [0.5; 2],
+                min_variance: 0.0,
+                precision: Precision::F64,
+            }),
+            Tech::Msm4 => Box::new(Hamburger4::new(alpha, [0.5; 4], Precision::F64)),
+            Tech::Msm6 => Box::new(Hamburger6::new(alpha, [0.5; 6], Precision::F64)),
+        }
+    }
+}
+
+/// Filtered, decoded moment maps of a front-depth map: per texel store θ(b(z0)) in `storage`,
+/// filter each stored channel with `kernel`, decode with θ⁻¹. Result: `[t][j]`.
+pub fn decoded_moments(
+    front: &[f64],
+    width: usize,
+    height: usize,
+    theta: &Theta,
+    storage: Storage,
+    kernel: &Gaussian,
+) -> Vec<Vec<f64>> {
+    let m = theta.m();
+    let mut stored = vec![vec![0.0; front.len()]; m];
+    let mut b = vec![0.0; m];
+    let mut s = vec![0.0; m];
+    for (t, &z) in front.iter().enumerate() {
+        let mut p = 1.0;
+        for v in b.iter_mut() {
+            p *= z;
+            *v = p;
+        }
+        theta.encode(&b, &mut s);
+        for j in 0..m {
+            stored[j][t] = storage.store(s[j]);
+        }
+    }
+    let filtered: Vec<Vec<f64>> = stored
+        .iter()
+        .map(|c| filter_separable(c, width, height, kernel.weights_1d()))
+        .collect();
+    (0..front.len())
+        .map(|t| {
+            let sv: Vec<f64> = filtered.iter().map(|c| c[t]).collect();
+            let mut out = vec![0.0; m];
+            theta.decode(&sv, &mut out);
+            out
+        })
+        .collect()
+}
+
+/// θ = identity (canonical storage of b itself).
+pub fn identity_theta(m: usize) -> Theta {
+    let names = (1..=m).map(|e| format!("z^{e}")).collect();
+    let id = (0..m)
+        .map(|i| (0..m).map(|j| if i == j { 1.0 } else { 0.0 }).collect())
+        .collect();
+    Theta::new(names, id, vec![0.0; m]).expect("identity is regular")
+}
+
+/// One storage configuration of the study.
+#[derive(Clone, Debug)]
+pub struct Config {
+    pub name: String,
+    pub theta: Theta,
+    pub storage: Storage,
+}
+
+/// Error against α for one technique and configuration.
+#[derive(Clone, Debug, Serialize)]
+pub struct Sweep {
+    pub technique: String,
+    pub config: String,
+    pub alphas: Vec<f64>,
+    /// Mean |G − PCF| over all evaluated fragments, per α.
+    pub errors: Vec<f64>,
+    /// Mean |G − G_exact| per α: deviation from the same technique and α on unquantized
+    /// (f64) moments, i.e. the error caused by storage alone (non-finite counted as 1).
+    pub deviation: Vec<f64>,
+    /// Fragments with non-finite G per α (counted as error 1).
+    pub non_finite: Vec<usize>,
+    pub best_alpha: f64,
+    pub best_error: f64,
+    pub fragments: usize,
+}
+
+/// Run the sweep over all stacks: for every config, the error of `tech` for every α.
+pub fn sweep(
+    stacks: &[DepthStack],
+    tech: Tech,
+    configs: &[Config],
+    alphas: &[f64],
+    bias: &Bias,
+    sub: &Subsample,
+) -> Result<Vec<Sweep>> {
+    for s in stacks {
+        crate::metrics::check_stack(s)?;
+    }
+    let kernel = Gaussian::paper();
+    let frags: Vec<_> = stacks
+        .par_iter()
+        .enumerate()
+        .map(|(v, s)| fragments_subsampled(s, v, bias, sub))
+        .collect();
+    let fronts: Vec<Vec<f64>> = stacks.iter().map(front_map).collect();
+    let n_frag: usize = frags.iter().map(|f| f.len()).sum();
+    let exact: Vec<Vec<Vec<f64>>> = stacks
+        .par_iter()
+        .zip(&fronts)
+        .map(|(s, f)| {
+            let id = identity_theta(tech.m());
+            decoded_moments(f, s.meta.width, s.meta.height, &id, Storage::Exact, &kernel)
+        })
+        .collect();
+    let mut out = Vec::new();
+    for cfg in configs {
+        let maps: Vec<Vec<Vec<f64>>> = stacks
+            .par_iter()
+            .zip(&fronts)
+            .map(|(s, f)| {
+                decoded_moments(
+                    f,
+                    s.meta.width,
+                    s.meta.height,
+                    &cfg.theta,
+                    cfg.storage,
+                    &kernel,
+                )
+            })
+            .collect();
+        let per_alpha: Vec<(f64, usize, f64)> = alphas
+            .par_iter()
+            .map(|&a| {
+                let sh = tech.shadower(a);
+                let mut sum = 0.0;
+                let mut dev = 0.0;
+                let mut bad = 0;
+                for ((fr, mp), ex) in frags.iter().zip(&maps).zip(&exact) {
+                    for f in fr {
+                        let g = sh.shadow(&mp[f.texel], f.zf);
+                        let ge = sh.shadow(&ex[f.texel], f.zf);
+                        if g.is_finite() {
+                            sum += (g - f.pcf).abs();
+                            dev += if ge.is_finite() { (g - ge).abs() } else { 1.0 };
+                        } else {
+                            sum += 1.0;
+                            dev += 1.0;
+                            bad += 1;
+                        }
+                    }
+                }
+                let n = n_frag.max(1) as f64;
+                (sum / n, bad, dev / n)
+            })
+            .collect();
+        let errors: Vec<f64> = per_alpha.iter().map(|p| p.0).collect();
+        let k = (0..errors.len())
+            .min_by(|&i, &j| errors[i].total_cmp(&errors[j]))
+            .unwrap_or(0);
+        out.push(Sweep {
+            technique: tech.name().into(),
+            config: cfg.name.clone(),
+            alphas: alphas.to_vec(),
+            best_alpha: alphas.get(k).copied().unwrap_or(f64::NAN),
+            best_error: errors.get(k).copied().unwrap_or(f64::NAN),
+            errors,
+            non_finite: per_alpha.iter().map(|p| p.1).collect(),
+            deviation: per_alpha.iter().map(|p| p.2).collect(),
+            fragments: n_frag,
+        });
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::quantize::theta::published_theta4;
+
+    #[test]
+    fn storage_rounds_like_a_texture() {
+        assert_eq!(Storage::Unorm(8).store(0.5), 128.0 / 255.0);
+        assert_eq!(Storage::Unorm(16).store(-0.1), 0.0);
+        assert_eq!(Storage::Unorm(16).store(1.3), 1.0);
+        let v = 0.123456789123;
+        assert!((Storage::Float32.store(v) - v).abs() < 1e-8);
+        assert!((Storage::Unorm(16).store(v) - v).abs() <= 0.5 / 65535.0 + 1e-15);
+    }
+
+    #[test]
+    fn decoded_maps_match_filtered_moments_at_f32() {
+        // constant-free check: filter(θ(b)) decoded = filter(b) by linearity, up to f32 storage
+        let (w, h) = (12, 9);
+        let front: Vec<f64> = (0..w * h)
+            .map(|i| ((i * 7919) % 97) as f64 / 97.0)
+            .collect();
+        let k = Gaussian::paper();
+        let th = published_theta4();
+        let dec = decoded_moments(&front, w, h, &th, Storage::Float32, &k);
+        let raw = decoded_moments(&front, w, h, &identity_theta(4), Storage::Float32, &k);
+        for (a, b) in dec.iter().zip(&raw) {
+            for (p, q) in a.iter().zip(b) {
+                assert!((p - q).abs() < 1e-6, "{p} {q}");
+            }
+        }
+        // canonical 16-bit: filtering averages the rounded texels, so the error stays within
+        // half a quantum
+        let exact = decoded_moments(&front, w, h, &identity_theta(4), Storage::Float32, &k);
+        let err = |d: &Vec<Vec<f64>>| {
+            d.iter()
+                .zip(&exact)
+                .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))
+                .fold(0.0f64, f64::max)
+        };
+        let canon = decoded_moments(&front, w, h, &identity_theta(4), Storage::Unorm(16), &k);
+        assert!(err(&canon) <= 0.5 / 65535.0 + 1e-7);
+    }
+}

@@ -1,0 +1,78 @@
+//! `momentlab theta` end to end: JSON fields, snippets, summary, and one-line errors.
+
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_momentlab"))
+}
+
+#[test]
+fn theta2_json_and_snippets() {
+    let dir = std::env::temp_dir().join(format!("momentlab_theta_cli_{}", std::process::id()));
+    let out = bin()
+        .args(["theta", "--moments", "2", "--restarts", "2", "--snippets"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for k in [
+        "m",
+        "basis",
+        "matrix",
+        "offset",
+        "inverse",
+        "gain_bits",
+        "max_violation",
+        "seconds",
+    ] {
+        assert!(v.get(k).is_some(), "missing {k}");
+    }
+    assert_eq!(v["m"], 2);
+    assert!((v["gain_bits"].as_f64().unwrap() - 2.0).abs() < 1e-7);
+    assert!(v["max_violation"].as_f64().unwrap() < 0.0);
+    for f in ["theta2.hlsl", "theta2.glsl"] {
+        let s = std::fs::read_to_string(dir.join(f)).unwrap();
+        assert!(s.contains("ncodeMoments2") && s.contains("ecodeMoments2"));
+    }
+    // summary over a directory with only θ2: table lists ours and the published ones
+    let j = serde_json::to_string(&v).unwrap();
+    std::fs::write(dir.join("theta2.json"), j).unwrap();
+    let out = bin()
+        .args(["theta", "--summary"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let md = std::fs::read_to_string(dir.join("comparison.md")).unwrap();
+    assert!(md.contains("| 2 | 2.0000000") && md.contains("30.511"));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_input_gives_one_line_errors() {
+    for args in [
+        vec!["theta", "--moments", "0"],
+        vec!["theta", "--basis", "z,z"],
+        vec!["theta", "--basis", "z,2*z"],
+        vec!["theta", "--basis", "z,no_such_function(z"],
+        vec!["theta", "--moments", "2", "--restarts", "0"],
+        vec!["theta"],
+    ] {
+        let out = bin().args(&args).output().unwrap();
+        assert!(!out.status.success(), "{args:?} succeeded");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.starts_with("error: ") && err.trim_end().lines().count() == 1,
+            "{args:?}: {err}"
+        );
+    }
+}
