@@ -1,6 +1,6 @@
 //! The stability harness detects what it claims to detect.
 
-use momentlab::technique::stability::{self, Config, Mode, Scenario};
+use momentlab::technique::stability::{self, Config, Entry, Mode, Scenario};
 use momentlab::technique::tmsm::{self, Tmsm};
 use momentlab::technique::{Evaluator, Technique};
 
@@ -43,11 +43,24 @@ fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
         let w: f64 = s.atoms.iter().map(|a| a.1).sum();
         assert!((w - 1.0).abs() < 1e-12 && (0.0..=1.0).contains(&s.zf));
     }
-    let techs: Vec<(String, Box<dyn Technique>)> = vec![
-        ("nan".into(), Box::new(Constant(f64::NAN))),
-        ("two".into(), Box::new(Constant(2.0))),
-        ("one".into(), Box::new(Constant(1.0))),
-        ("tmsm0".into(), Box::new(Tmsm::new(0.0, false))),
+    let e = |name: &str, t: Box<dyn Technique>, t16: Box<dyn Technique>| Entry {
+        name: name.into(),
+        t32: t,
+        t16,
+    };
+    let techs = vec![
+        e(
+            "nan",
+            Box::new(Constant(f64::NAN)),
+            Box::new(Constant(f64::NAN)),
+        ),
+        e("two", Box::new(Constant(2.0)), Box::new(Constant(2.0))),
+        e("one", Box::new(Constant(1.0)), Box::new(Constant(1.0))),
+        e(
+            "tmsm0",
+            Box::new(Tmsm::new(0.0, false)),
+            Box::new(Tmsm::new(0.0, false)),
+        ),
     ];
     let r = stability::run(&cfg, &techs, &samples, &|_| {}).unwrap();
     let f64_of = |t: usize| &r.by_mode[t].iter().find(|e| e.0 == Mode::F64).unwrap().1;

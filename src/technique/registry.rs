@@ -270,7 +270,26 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
                 prec,
             ))
         }
-        // "tmsm": OWNER TMSM helper.
+        "tmsm" => {
+            if p.bias == Some(BiasPreset::Clamped) {
+                bail!("tmsm: the clamped bias is defined for power moments only");
+            }
+            let mut t = super::tmsm::Tmsm::new(
+                p.alpha.unwrap_or(if p.quant_bits == 16 {
+                    super::tmsm::Tmsm::ALPHA_16BIT
+                } else {
+                    super::tmsm::Tmsm::DEFAULT_ALPHA
+                }),
+                prec == Precision::F32,
+            );
+            if let Some(b) = &p.b_star {
+                if b.len() != 4 {
+                    bail!("tmsm: b_star needs 4 values, got {}", b.len());
+                }
+                t.b_star = arr(b.clone());
+            }
+            Box::new(t)
+        }
         other => bail!(
             "unknown technique '{other}' (valid: {}, lp:f1,f2,…)",
             CLOSED_FORM_NAMES.join(", ")
@@ -281,9 +300,6 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
 
 /// The technique named by `spec` with default parameters; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
-    if spec == "tmsm" {
-        return Ok(Box::new(super::tmsm::Tmsm::default()));
-    }
     if let Some(list) = spec.strip_prefix("lp:") {
         return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
     }

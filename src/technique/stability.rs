@@ -8,6 +8,7 @@
 
 use super::Technique;
 use crate::lp::{make_solver, GridTable, Status};
+use crate::quantize::theta::{self, Theta};
 use crate::Grid;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
@@ -132,108 +133,37 @@ pub struct Config {
     pub seed: u64,
     /// Uniform points of the oracle's grid on [0,1] (plus the sample's Diracs and z_f).
     pub grid_points: usize,
-    /// Deviation above the sharp bound counted as a violated lower bound.
+    /// Deviation above the sharp bound counted as a violated lower bound. The bias alone may
+    /// lift G by up to α·F_{Z*}(z_f) ≤ α (≤ 4·10⁻³ for every default), hence 10⁻².
     pub over_tolerance: f64,
 }
 
 impl Default for Config {
     fn default() -> Self {
         Config {
-            samples: 1200,
+            samples: 3000,
             seed: 1,
             grid_points: 256,
-            over_tolerance: 1e-3,
+            over_tolerance: 1e-2,
         }
     }
 }
 
-/// The published θ₄ of Peters & Klein 2015, Section 4.3 (for b = (z, z², z³, z⁴)):
-/// θ₄(b) = offset + M·b.
-pub const THETA4_OFFSET: [f64; 4] = [0.0359558848, 0.0, 0.0, 0.0];
-pub const THETA4: [[f64; 4]; 4] = [
-    [-2.07224649, 32.2370378, -68.5710746, 39.3703274],
-    [13.7948857, -59.4683976, 82.035975, -35.3649032],
-    [0.105877704, -1.90774663, 9.34965551, -6.65434907],
-    [9.79240621, -33.76521106, 47.9456097, -23.9728048],
-];
-/// θ₂ of Section 4.3 for VSM's b = (z, z²).
-pub const THETA2: [[f64; 2]; 2] = [[1.0, 0.0], [4.0, -4.0]];
-
-/// An affine transform θ(b) = offset + M·b with its inverse.
-#[derive(Clone, Debug)]
-pub struct Affine {
-    pub m: Vec<Vec<f64>>,
-    pub offset: Vec<f64>,
-    inv: Vec<Vec<f64>>,
-}
-
-impl Affine {
-    pub fn new(m: Vec<Vec<f64>>, offset: Vec<f64>) -> Option<Affine> {
-        let inv = invert(&m)?;
-        Some(Affine { m, offset, inv })
-    }
-    pub fn apply(&self, b: &[f64]) -> Vec<f64> {
-        (0..b.len())
-            .map(|i| self.offset[i] + (0..b.len()).map(|j| self.m[i][j] * b[j]).sum::<f64>())
-            .collect()
-    }
-    pub fn unapply(&self, t: &[f64]) -> Vec<f64> {
-        (0..t.len())
-            .map(|i| {
-                (0..t.len())
-                    .map(|j| self.inv[i][j] * (t[j] - self.offset[j]))
-                    .sum::<f64>()
-            })
-            .collect()
-    }
-}
-
-fn invert(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    let n = m.len();
-    let mut a: Vec<Vec<f64>> = m
-        .iter()
-        .enumerate()
-        .map(|(i, r)| {
-            let mut row = r.clone();
-            row.extend((0..n).map(|j| if i == j { 1.0 } else { 0.0 }));
-            row
-        })
-        .collect();
-    for c in 0..n {
-        let p = (c..n).max_by(|&x, &y| a[x][c].abs().total_cmp(&a[y][c].abs()))?;
-        if a[p][c].abs() < 1e-300 {
-            return None;
-        }
-        a.swap(c, p);
-        let d = a[c][c];
-        for v in a[c].iter_mut() {
-            *v /= d;
-        }
-        for r in 0..n {
-            if r != c {
-                let f = a[r][c];
-                if f != 0.0 {
-                    let pivot = a[c].clone();
-                    for (x, p) in a[r].iter_mut().zip(&pivot) {
-                        *x -= f * p;
-                    }
-                }
-            }
-        }
-    }
-    Some(a.into_iter().map(|r| r[n..].to_vec()).collect())
-}
-
-/// The θ transform known for a technique name (θ₄ for Hamburger/Hausdorff 4MSM, θ₂ for VSM).
-pub fn theta_for(spec: &str) -> Option<Affine> {
+/// The published θ for a technique name (crate::quantize::theta): θ₄ of Peters & Klein 2015,
+/// Section 4.3, for Hamburger/Hausdorff 4MSM; θ₆ of the supplementary document (Table 1) for
+/// 6MSM; θ₂ of Section 4.3 for VSM. None for the other techniques.
+pub fn theta_for(spec: &str) -> Option<Theta> {
     match spec {
-        "hamburger4" | "hausdorff4" => Affine::new(
-            THETA4.iter().map(|r| r.to_vec()).collect(),
-            THETA4_OFFSET.to_vec(),
-        ),
-        "vsm" => Affine::new(THETA2.iter().map(|r| r.to_vec()).collect(), vec![0.0; 2]),
+        "hamburger4" | "hausdorff4" => Some(theta::published_theta4()),
+        "hamburger6" => Some(theta::published_theta6()),
+        "vsm" => Some(theta::published_theta2()),
         _ => None,
     }
+}
+
+/// Inverse of a small matrix (LU of crate::quantize::linalg); None when singular.
+fn invert(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
+    crate::quantize::linalg::Lu::new(m).map(|lu| lu.inverse())
 }
 
 /// Moments E_Z[b] of a Dirac mixture under a technique's basis.
@@ -472,7 +402,7 @@ pub struct Report {
 struct Quant {
     lo: Vec<f64>,
     hi: Vec<f64>,
-    theta: Option<Affine>,
+    theta: Option<Theta>,
 }
 
 impl Quant {
@@ -487,7 +417,7 @@ impl Quant {
                 hi[j] = hi[j].max(row[j]);
             }
         }
-        let theta = theta_for(spec).filter(|t| t.m.len() == m);
+        let theta = theta_for(spec).filter(|t| t.m() == m);
         Quant { lo, hi, theta }
     }
     fn applies(&self, mode: Mode) -> bool {
@@ -508,18 +438,18 @@ impl Quant {
                 .collect(),
             Mode::F32Theta | Mode::U16Theta => {
                 let th = self.theta.as_ref().expect("checked by applies");
-                let t: Vec<f64> = th
-                    .apply(b)
-                    .into_iter()
-                    .map(|v| {
-                        if mode == Mode::U16Theta {
-                            u16r(v)
-                        } else {
-                            v as f32 as f64
-                        }
-                    })
-                    .collect();
-                th.unapply(&t)
+                let mut t = vec![0.0; b.len()];
+                th.encode(b, &mut t);
+                for v in t.iter_mut() {
+                    *v = if mode == Mode::U16Theta {
+                        u16r(*v)
+                    } else {
+                        *v as f32 as f64
+                    };
+                }
+                let mut out = vec![0.0; b.len()];
+                th.decode(&t, &mut out);
+                out
             }
         }
     }
@@ -537,10 +467,39 @@ pub fn sharp_bound(tech: &dyn Technique, sample: &Sample, grid_points: usize, so
         return f64::NAN;
     };
     let m = tech.moment_count();
-    let Ok(table) = GridTable::from_fn(&grid, m, |z, out| tech.basis(z, out)) else {
+    // Scale each basis function by its largest magnitude on the grid (an equivalent LP; keeps
+    // e.g. ESM's exp(80z) ~ 1e34 within the solver's tolerances).
+    let mut scale = vec![0.0f64; m];
+    let mut row = vec![0.0; m];
+    for &z in grid.points() {
+        tech.basis(z, &mut row);
+        for j in 0..m {
+            scale[j] = scale[j].max(row[j].abs());
+        }
+    }
+    let scale: Vec<f64> = scale
+        .iter()
+        .map(|&s| {
+            if s > 0.0 && s.is_finite() {
+                1.0 / s
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let Ok(table) = GridTable::from_fn(&grid, m, |z, out| {
+        tech.basis(z, out);
+        for (o, s) in out.iter_mut().zip(&scale) {
+            *o *= s;
+        }
+    }) else {
         return f64::NAN;
     };
-    let b = moments(tech, &sample.atoms);
+    let b: Vec<f64> = moments(tech, &sample.atoms)
+        .iter()
+        .zip(&scale)
+        .map(|(b, s)| b * s)
+        .collect();
     let Ok(mut s) = make_solver(solver, table) else {
         return f64::NAN;
     };
@@ -567,18 +526,26 @@ type TechResult = (f64, Vec<(Mode, f64)>);
 /// Heat-map cells `[row][col]` (None: no input fell in the cell).
 pub type Cells = Vec<Vec<Option<f64>>>;
 
+/// A technique under test: its name, the instance for f64/f32 moments and the instance for
+/// 16-bit moments (e.g. a stronger default bias).
+pub struct Entry {
+    pub name: String,
+    pub t32: Box<dyn Technique>,
+    pub t16: Box<dyn Technique>,
+}
+
 /// Evaluate every technique (spec name, technique) on every sample and mode. `progress` is
 /// called with the number of samples finished (from worker threads).
 pub fn run(
     cfg: &Config,
-    techniques: &[(String, Box<dyn Technique>)],
+    techniques: &[Entry],
     samples: &[Sample],
     progress: &(dyn Fn(usize) + Sync),
 ) -> Result<Report> {
     let solver = oracle_solver();
     let quants: Vec<Quant> = techniques
         .iter()
-        .map(|(s, t)| Quant::new(s, t.as_ref()))
+        .map(|e| Quant::new(&e.name, e.t32.as_ref()))
         .collect();
     // Per sample: for each technique, the sharp bound and G per applicable mode.
     let per_sample: Vec<Vec<TechResult>> = samples
@@ -587,14 +554,24 @@ pub fn run(
             let r = techniques
                 .iter()
                 .zip(&quants)
-                .map(|((_, t), q)| {
-                    let sharp = sharp_bound(t.as_ref(), s, cfg.grid_points, &solver);
-                    let b = moments(t.as_ref(), &s.atoms);
+                .map(|(e, q)| {
+                    let t = e.t32.as_ref();
+                    let sharp = sharp_bound(t, s, cfg.grid_points, &solver);
+                    let b = moments(t, &s.atoms);
                     let mut ev = t.evaluator();
+                    let mut ev16 = e.t16.evaluator();
                     let gs = Mode::ALL
                         .iter()
                         .filter(|&&m| q.applies(m))
-                        .map(|&m| (m, ev.shadow(&q.quantize(&b, m), s.zf)))
+                        .map(|&m| {
+                            let bq = q.quantize(&b, m);
+                            let g = if matches!(m, Mode::U16 | Mode::U16Theta) {
+                                ev16.shadow(&bq, s.zf)
+                            } else {
+                                ev.shadow(&bq, s.zf)
+                            };
+                            (m, g)
+                        })
                         .collect();
                     (sharp, gs)
                 })
@@ -658,7 +635,7 @@ pub fn run(
     Ok(Report {
         config: cfg.clone(),
         lp_solver: solver,
-        techniques: techniques.iter().map(|(s, _)| s.clone()).collect(),
+        techniques: techniques.iter().map(|e| e.name.clone()).collect(),
         by_mode,
         by_scenario,
         points,
@@ -711,22 +688,11 @@ mod tests {
     use super::*;
 
     #[test]
-    fn theta4_inverse_roundtrip() {
-        let t = theta_for("hamburger4").unwrap();
-        let b = [0.3, 0.09, 0.027, 0.0081];
-        let back = t.unapply(&t.apply(&b));
-        for (x, y) in b.iter().zip(&back) {
-            assert!((x - y).abs() < 1e-9);
-        }
-        // θ₄ maps b([0,1]) into [0,1]⁴ (paper, Section 4.3).
-        for i in 0..=100 {
-            let z = i as f64 / 100.0;
-            let v = t.apply(&[z, z * z, z * z * z, z * z * z * z]);
-            assert!(
-                v.iter().all(|&x| (-1e-6..=1.0 + 1e-6).contains(&x)),
-                "{z}: {v:?}"
-            );
-        }
+    fn theta_for_names() {
+        assert_eq!(theta_for("hamburger4").unwrap().m(), 4);
+        assert_eq!(theta_for("hamburger6").unwrap().m(), 6);
+        assert_eq!(theta_for("vsm").unwrap().m(), 2);
+        assert!(theta_for("tmsm").is_none());
     }
 
     #[test]

@@ -827,13 +827,15 @@ fn quartic_real<T: Real>(a: T, b: T, c: T, d: T, out: &mut [T; 4]) -> usize {
     n
 }
 
-/// TMSM as a [`Technique`]: biased moments b' = (1 − α)·b + α·b* with b* = 0 (the moments of
-/// the uniform distribution on the circle, the centre of the moment space), then
+/// TMSM as a [`Technique`]: biased moments b' = (1 − α)·b + α·b*, by default b* = 0 (the
+/// moments of the uniform distribution on the circle, the centre of the moment space), then
 /// [`sharp_bound`] in f32 or f64.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tmsm {
-    /// Bias weight α toward b* = (0, 0, 0, 0).
+    /// Bias weight α.
     pub alpha: f64,
+    /// Bias target b* (default 0).
+    pub b_star: [f64; 4],
     /// Evaluate in f32 (the GPU path) instead of f64.
     pub single: bool,
 }
@@ -842,13 +844,28 @@ impl Tmsm {
     /// Default bias for f64/f32 evaluation of 32-bit moments.
     pub const DEFAULT_ALPHA: f64 = 1e-6;
 
+    /// Default bias for moments stored with 16 bits: the smallest of 1e-5, 3e-5, 1e-4, 1e-3 with
+    /// no G above the sharp bound in `momentlab stability` (docs/stability.md).
+    pub const ALPHA_16BIT: f64 = 3e-5;
+
+    /// TMSM with bias α toward b* = 0, evaluated in f32 if `single`.
     pub fn new(alpha: f64, single: bool) -> Tmsm {
-        Tmsm { alpha, single }
+        Tmsm {
+            alpha,
+            b_star: [0.0; 4],
+            single,
+        }
     }
 
-    /// G in f64 with this technique's bias.
-    pub fn shadow_f64(&self, moments: &[f64], zf: f64) -> f64 {
-        shadow_f64(moments, zf, self.alpha)
+    fn biased(&self, m: &[f64]) -> [f64; 4] {
+        let (a, s) = (self.alpha, 1.0 - self.alpha);
+        let bs = &self.b_star;
+        [
+            s * m[0] + a * bs[0],
+            s * m[1] + a * bs[1],
+            s * m[2] + a * bs[2],
+            s * m[3] + a * bs[3],
+        ]
     }
 }
 
@@ -887,17 +904,19 @@ pub fn shadow_f32(moments: &[f32], zf: f32, alpha: f32) -> f32 {
 }
 
 impl ClosedForm for Tmsm {
+    /// G((1 − α)·b + α·b*, z_f); the bias is applied in f64, the solve in f32 if `single`.
     fn shadow(&self, moments: &[f64], zf: f64) -> f64 {
+        if moments.len() != 4 {
+            return f64::NAN;
+        }
+        let b = self.biased(moments);
         if self.single {
-            let m: [f32; 4] = [
-                moments[0] as f32,
-                moments[1] as f32,
-                moments[2] as f32,
-                moments[3] as f32,
-            ];
-            shadow_f32(&m, zf as f32, self.alpha as f32) as f64
+            sharp_bound(
+                [b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32],
+                zf as f32,
+            ) as f64
         } else {
-            shadow_f64(moments, zf, self.alpha)
+            sharp_bound(b, zf)
         }
     }
 }
