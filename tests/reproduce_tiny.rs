@@ -65,7 +65,10 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     let md = std::fs::read_to_string(run.join("report.md")).unwrap();
     for part in md.split("](").skip(1) {
         let target = &part[..part.find(')').unwrap()];
-        assert!(run.join(target).is_file(), "report.md references missing {target}");
+        assert!(
+            run.join(target).is_file(),
+            "report.md references missing {target}"
+        );
     }
 
     // Every artefact parses: JSON (numbers finite), PNG decodes, SVG is a complete document.
@@ -76,14 +79,15 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
         match f.extension().and_then(|e| e.to_str()) {
             Some("json") => {
                 let text = std::fs::read_to_string(f).unwrap();
-                let v: serde_json::Value = serde_json::from_str(&text)
-                    .unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+                let v: serde_json::Value =
+                    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{}: {e}", f.display()));
                 let mut nulls = Vec::new();
                 all_numbers_finite(&v, &f.display().to_string(), &mut nulls);
                 json += 1;
             }
             Some("png") => {
-                let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(f).unwrap()));
+                let dec =
+                    png::Decoder::new(std::io::BufReader::new(std::fs::File::open(f).unwrap()));
                 let mut reader = dec.read_info().unwrap();
                 let mut buf = vec![0; reader.output_buffer_size().unwrap()];
                 let info = reader.next_frame(&mut buf).unwrap();
@@ -92,13 +96,20 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
             }
             Some("svg") => {
                 let s = std::fs::read_to_string(f).unwrap();
-                assert!(s.trim_start().starts_with("<svg") && s.trim_end().ends_with("</svg>"), "{}", f.display());
+                assert!(
+                    s.trim_start().starts_with("<svg") && s.trim_end().ends_with("</svg>"),
+                    "{}",
+                    f.display()
+                );
                 svg += 1;
             }
             _ => {}
         }
     }
-    assert!(json >= 20 && png >= 1 && svg >= 3, "json {json}, png {png}, svg {svg}");
+    assert!(
+        json >= 20 && png >= 1 && svg >= 3,
+        "json {json}, png {png}, svg {svg}"
+    );
 
     // The evaluated errors are finite and the report's numbers equal `momentlab evaluate`.
     let h4: serde_json::Value = serde_json::from_str(
@@ -108,11 +119,21 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     let err = h4["error"].as_f64().unwrap();
     assert!(err.is_finite() && (0.0..1.0).contains(&err));
     let ev = Command::new(bin())
-        .args(["evaluate", "--technique", "hamburger4", "--json", "--stacks"])
+        .args([
+            "evaluate",
+            "--technique",
+            "hamburger4",
+            "--json",
+            "--stacks",
+        ])
         .arg(results.join("t/stacks"))
         .output()
         .unwrap();
-    assert!(ev.status.success(), "{}", String::from_utf8_lossy(&ev.stderr));
+    assert!(
+        ev.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ev.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&ev.stdout).unwrap();
     let e2 = v["error"].as_f64().unwrap();
     assert!((err - e2).abs() < 1e-12, "reproduce {err} vs evaluate {e2}");

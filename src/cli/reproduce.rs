@@ -318,7 +318,10 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--run '{}': expected a plain folder name", args.run);
     }
     if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
-        bail!("--tolerance must be a finite number ≥ 0, got {}", args.tolerance);
+        bail!(
+            "--tolerance must be a finite number ≥ 0, got {}",
+            args.tolerance
+        );
     }
     let plan = Plan::of(&args);
     if plan.resolution < 16 {
@@ -336,11 +339,7 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&out).with_context(|| format!("creating {}", out.display()))?;
     std::fs::create_dir_all(&data).with_context(|| format!("creating {}", data.display()))?;
     let t0 = Instant::now();
-    let mut step = Step {
-        k: 0,
-        total: 9,
-        t0,
-    };
+    let mut step = Step { k: 0, total: 9, t0 };
 
     // 1. Depth stacks.
     step.start(&format!(
@@ -375,7 +374,10 @@ pub fn run(args: Args) -> Result<()> {
     let mut all: Vec<Measured> = Vec::new();
     let mut jobs: Vec<Job> = Vec::new();
     for &name in CLOSED_FORMS {
-        for prec in [technique::linalg::Precision::F32, technique::linalg::Precision::F64] {
+        for prec in [
+            technique::linalg::Precision::F32,
+            technique::linalg::Precision::F64,
+        ] {
             let t = match technique::registry::build(
                 name,
                 &technique::registry::Params::with(prec, None),
@@ -419,7 +421,10 @@ pub fn run(args: Args) -> Result<()> {
     let pic_dir = out.join("pictures");
     let h4 = technique::by_name("hamburger4")?;
     let mut picture_files = Vec::new();
-    for st in stacks.iter().step_by((stacks.len() / plan.pictures.max(1)).max(1)) {
+    for st in stacks
+        .iter()
+        .step_by((stacks.len() / plan.pictures.max(1)).max(1))
+    {
         let name = format!("{}_{}_hamburger4.png", st.meta.scene, st.meta.view);
         let p = pic_dir.join(&name);
         if !p.exists() {
@@ -427,7 +432,10 @@ pub fn run(args: Args) -> Result<()> {
             let sh = metrics::front_shadows(st, Subject::Technique(h4.as_ref()), &Bias::default())?;
             pictures::write_png(&p, &pictures::view_picture(st, &sh)?)?;
         }
-        picture_files.push((format!("pictures/{name}"), format!("{} / {}", st.meta.scene, st.meta.view)));
+        picture_files.push((
+            format!("pictures/{name}"),
+            format!("{} / {}", st.meta.scene, st.meta.view),
+        ));
         if picture_files.len() >= plan.pictures {
             break;
         }
@@ -453,8 +461,10 @@ pub fn run(args: Args) -> Result<()> {
                     "fast",
                 )?;
                 let rep = evaluate(&stacks, &t, &format!("b_MSM, n = {n}"), plan.lp_stride * 2)?;
-                let sc: Vec<(String, f64)> =
-                    per_scene(&rep).into_iter().map(|(a, e, _)| (a, e)).collect();
+                let sc: Vec<(String, f64)> = per_scene(&rep)
+                    .into_iter()
+                    .map(|(a, e, _)| (a, e))
+                    .collect();
                 r.push((n, sc));
             }
             write_json(&grid_file, &r)?;
@@ -564,7 +574,12 @@ pub fn run(args: Args) -> Result<()> {
                 theta_dir.display().to_string(),
             ];
             if m >= 4 {
-                argv.extend(["--hops".into(), "10".into(), "--hop-sigma".into(), "0.3".into()]);
+                argv.extend([
+                    "--hops".into(),
+                    "10".into(),
+                    "--hop-sigma".into(),
+                    "0.3".into(),
+                ]);
             }
             super::theta::run(sub(&argv)?)?;
         }
@@ -767,7 +782,9 @@ fn include_folder(doc: &mut Document, dir: &Path, out: &Path) -> Result<()> {
             Some("md") => doc.code(std::fs::read_to_string(f)?.trim().to_string()),
             Some("svg") | Some("png") => doc.figure(
                 rel(f),
-                f.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_default(),
+                f.file_name()
+                    .map(|n| n.to_string_lossy().to_string())
+                    .unwrap_or_default(),
             ),
             _ => {}
         }
@@ -810,7 +827,11 @@ fn build_report(r: ReportInputs) -> Result<Document> {
             s("1.93 %"),
             err_of("lp:sin(2πz),cos(2πz),sin(4πz),cos(4πz)", "f64"),
         ],
-        vec![s("Hamburger 4MSM (closed form, f32)"), s("—"), err_of("hamburger4", "f32")],
+        vec![
+            s("Hamburger 4MSM (closed form, f32)"),
+            s("—"),
+            err_of("hamburger4", "f32"),
+        ],
         vec![s("TMSM (closed form, f32)"), s("—"), err_of("tmsm", "f32")],
         vec![
             s("candidates evaluated, time"),
@@ -845,7 +866,16 @@ fn build_report(r: ReportInputs) -> Result<Document> {
     let mut sorted: Vec<&Measured> = r.all.iter().collect();
     sorted.sort_by(|a, b| a.error.total_cmp(&b.error));
     d.table(
-        &["technique", "precision", "error", "ns / fragment", "bits / texel", "fragments", "trivial", "non-finite"],
+        &[
+            "technique",
+            "precision",
+            "error",
+            "ns / fragment",
+            "bits / texel",
+            "fragments",
+            "trivial",
+            "non-finite",
+        ],
         sorted
             .iter()
             .map(|m| {
@@ -886,7 +916,15 @@ fn build_report(r: ReportInputs) -> Result<Document> {
         pct(r.args.tolerance)
     ));
     d.table(
-        &["scene", "recommended", "error", "bits / texel", "ns / fragment", "best", "best error"],
+        &[
+            "scene",
+            "recommended",
+            "error",
+            "bits / texel",
+            "ns / fragment",
+            "best",
+            "best error",
+        ],
         r.recs
             .iter()
             .map(|x| {
@@ -920,7 +958,10 @@ fn build_report(r: ReportInputs) -> Result<Document> {
             .map(|(s, n)| vec![s.clone(), n.to_string()])
             .collect(),
     );
-    d.figure("grid_refinement.svg", "LP b_MSM error per scene against the grid size n.");
+    d.figure(
+        "grid_refinement.svg",
+        "LP b_MSM error per scene against the grid size n.",
+    );
 
     d.heading("Shadow pictures (Hamburger 4MSM)");
     d.paragraph(
