@@ -113,7 +113,7 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
 
     // The evaluated errors are finite and the report's numbers equal `momentlab evaluate`.
     let h4: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(run.join("evaluate/hamburger4_f32.json")).unwrap(),
+        &std::fs::read_to_string(run.join("evaluate/hamburger4_f64.json")).unwrap(),
     )
     .unwrap();
     let err = h4["error"].as_f64().unwrap();
@@ -150,8 +150,8 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
         .output()
         .unwrap();
     assert!(again.status.success());
-    let h4b = std::fs::read_to_string(run.join("evaluate/hamburger4_f32.json")).unwrap();
-    assert_eq!(h4b, serde_json::to_string_pretty(&h4).unwrap());
+    let h4b = std::fs::read_to_string(run.join("evaluate/hamburger4_f64.json")).unwrap();
+    assert_eq!(serde_json::from_str::<serde_json::Value>(&h4b).unwrap(), h4);
     std::fs::remove_dir_all(&root).ok();
 }
 
@@ -159,7 +159,7 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
 fn bad_arguments_are_one_line_errors() {
     for args in [
         vec!["reproduce", "--run", "../x"],
-        vec!["reproduce", "--tolerance", "-1"],
+        vec!["reproduce", "--tolerance=-1"],
         vec!["reproduce", "--tiny", "--resolution", "4"],
     ] {
         let out = Command::new(bin()).args(&args).output().unwrap();
