@@ -58,29 +58,24 @@ pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result
             continue;
         }
         let on_front = front.contains(&i);
-        let r = (2.0 + (e.bits_per_texel as f64).sqrt() * 0.9) as i32;
+        let r = (3.0 + e.bits_per_texel as f64 / 32.0).min(14.0) as i32;
         let color = if e.name.starts_with("lp:") {
-            BLUE.mix(0.6)
+            BLUE.mix(0.5)
         } else {
-            BLACK.mix(0.7)
+            BLACK.mix(0.5)
         };
-        let label = format!("{} ({}, {} bit)", e.name, e.precision, e.bits_per_texel);
+        let label = if on_front {
+            format!("{} ({}, {} bit)", e.name, e.precision, e.bits_per_texel)
+        } else {
+            String::new()
+        };
         chart
-            .draw_series(std::iter::once(Circle::new(
-                (e.ns_per_fragment, e.error),
-                r,
-                color.filled(),
-            )))
+            .draw_series(std::iter::once(
+                EmptyElement::at((e.ns_per_fragment, e.error))
+                    + Circle::new((0, 0), r, color.filled())
+                    + Text::new(label, (r + 3, -r - 10), ("sans-serif", 11)),
+            ))
             .map_err(err(path))?;
-        if on_front {
-            chart
-                .draw_series(std::iter::once(Text::new(
-                    label,
-                    (e.ns_per_fragment, e.error),
-                    ("sans-serif", 11),
-                )))
-                .map_err(err(path))?;
-        }
     }
     chart
         .configure_series_labels()

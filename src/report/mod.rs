@@ -4,3 +4,4 @@ pub mod chart;
 pub mod document;
 pub mod pareto;
 pub mod pictures;
+pub mod recommend;
