@@ -4,12 +4,9 @@
 //! z_f uniform in [0,1]; every result is accumulated and passed through `black_box`.
 
 use crate::technique::registry::{build, Params, Precision};
+use crate::technique::timing;
 use anyhow::{bail, Result};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use std::hint::black_box;
 use std::io::Write;
-use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -53,56 +50,21 @@ pub fn run(args: Args) -> Result<()> {
     }
     let n = args.inputs;
     // Depth distributions shared by all techniques: up to 4 Diracs each.
-    let mut rng = ChaCha8Rng::seed_from_u64(2015);
-    let mut dists: Vec<[(f64, f64); 4]> = Vec::with_capacity(n);
-    let mut zfs = Vec::with_capacity(n);
-    for _ in 0..n {
-        let k = rng.gen_range(1..=4);
-        let mut d = [(0.0, 0.0); 4];
-        let mut s = 0.0;
-        for x in d.iter_mut().take(k) {
-            *x = (rng.gen_range(0.0..1.0), rng.gen_range(0.05..1.0));
-            s += x.1;
-        }
-        d.iter_mut().for_each(|x| x.1 /= s);
-        dists.push(d);
-        zfs.push(rng.gen_range(0.0..1.0));
-    }
+    let (dists, zfs) = timing::random_inputs(n, 2015);
     let mut rows = Vec::new();
     for &name in TECHNIQUES {
         for precision in [Precision::F32, Precision::F64] {
             let t = build(name, &Params::with(precision, None))?;
             let m = t.moment_count();
-            let mut moments = vec![0.0; n * m];
-            let mut tmp = vec![0.0; m];
-            for (i, d) in dists.iter().enumerate() {
-                let row = &mut moments[i * m..(i + 1) * m];
-                for &(z, w) in d.iter().filter(|x| x.1 > 0.0) {
-                    t.basis(z, &mut tmp);
-                    row.iter_mut().zip(&tmp).for_each(|(a, b)| *a += w * b);
-                }
-            }
-            let mut ev = t.evaluator();
-            let mut times = Vec::with_capacity(args.reps);
-            let mut sum = 0.0;
-            for _ in 0..args.reps {
-                let start = Instant::now();
-                let mut acc = 0.0;
-                for (i, &zf) in zfs.iter().enumerate() {
-                    acc += ev.shadow(black_box(&moments[i * m..(i + 1) * m]), black_box(zf));
-                }
-                times.push(start.elapsed().as_secs_f64());
-                sum = black_box(acc);
-            }
-            times.sort_by(|a, b| a.partial_cmp(b).unwrap());
-            let ns = times[times.len() / 2] * 1e9 / n as f64;
+            let (moments, zfs) = timing::moments_of(t.as_ref(), &dists, &zfs);
+            let (ns, mean_g) = timing::ns_per_eval(t.as_ref(), &moments, &zfs, args.reps);
             rows.push(Row {
                 technique: t.name(),
                 precision: precision.name(),
                 moments: m,
                 inputs: n,
                 ns_per_eval: ns,
-                mean_g: sum / n as f64,
+                mean_g,
             });
         }
     }

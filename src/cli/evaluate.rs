@@ -56,11 +56,7 @@ pub struct Args {
 
 fn load_stacks(args: &Args) -> Result<Vec<DepthStack>> {
     match &args.stacks {
-        // PENDING: stack::load_dir (render/stack engineer) — switch when merged into main.
-        Some(dir) => bail!(
-            "--stacks {}: reading depth-stack files is not available yet (stack::load_dir)",
-            dir.display()
-        ),
+        Some(dir) => crate::stack::load_dir(dir),
         None => {
             if args.resolution == 0 || args.resolution > 8192 {
                 bail!("--resolution must be in 1..=8192, got {}", args.resolution);
@@ -69,8 +65,14 @@ fn load_stacks(args: &Args) -> Result<Vec<DepthStack>> {
                 "rendering the default dataset at {0}×{0} …",
                 args.resolution
             );
-            // PENDING: render::default_dataset (render engineer) — switch when merged.
-            bail!("the default dataset is not available yet (render::default_dataset)")
+            let t = std::time::Instant::now();
+            let stacks = crate::render::default_dataset(args.resolution)?;
+            eprintln!(
+                "rendered {} views in {:.1} s",
+                stacks.len(),
+                t.elapsed().as_secs_f64()
+            );
+            Ok(stacks)
         }
     }
 }

@@ -7,6 +7,9 @@
 //! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
 //! exactly as stated) and the fast solver (OWNER: lp helper).
 
+pub mod bench;
+pub mod fast;
+pub mod instances;
 pub mod reference;
 
 use crate::Grid;
@@ -102,7 +105,7 @@ pub trait MomentSolver: Send {
 pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
     match kind {
         "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),
-        "fast" => bail!("the fast LP solver is not built yet"),
+        "fast" => Ok(Box::new(fast::FastSolver::new(table))),
         other => bail!("unknown LP solver '{other}' (expected 'reference' or 'fast')"),
     }
 }

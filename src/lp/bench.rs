@@ -1,0 +1,198 @@
+//! Benchmark of the Algorithm 1 solvers on realistic problems (`momentlab bench lp`): median
+//! microseconds per LP of the reference and the fast solver (with and without warm start) on the
+//! same moment vectors, and their ratio, measured in the same run.
+
+use super::fast::FastSolver;
+use super::instances::{kernel_patches, mixture_moments, power_table};
+use super::reference::ReferenceSolver;
+use super::{MomentSolver, Status};
+use crate::Grid;
+use anyhow::{bail, Result};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use std::time::Instant;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct BenchConfig {
+    /// Grid sizes.
+    pub ns: Vec<usize>,
+    /// Number of LPs per grid size for the fast solver.
+    pub problems: usize,
+    /// Number of LPs per grid size for the reference solver (a prefix of the same problems).
+    pub reference_problems: usize,
+    /// Number of basis functions: the power basis z, …, z^m (m = 4 is MSM).
+    pub m: usize,
+    pub seed: u64,
+    /// Timed repeats of the fast solvers' sequence (per-problem minimum is kept).
+    pub repeats: usize,
+}
+
+/// Results for one grid size.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct BenchRow {
+    pub n: usize,
+    pub m: usize,
+    pub problems: usize,
+    pub reference_problems: usize,
+    /// Median µs per LP.
+    pub reference_us: f64,
+    pub fast_warm_us: f64,
+    pub fast_cold_us: f64,
+    /// Mean µs per LP (fast), to show the tail.
+    pub fast_warm_mean_us: f64,
+    pub fast_cold_mean_us: f64,
+    /// reference median / fast median.
+    pub speedup_warm: f64,
+    pub speedup_cold: f64,
+    /// Mean simplex pivots per LP.
+    pub pivots_warm: f64,
+    pub pivots_cold: f64,
+    /// max |G_fast − G_reference| over the reference problems (warm and cold).
+    pub max_abs_diff: f64,
+    /// Problems where the statuses differ (must be 0).
+    pub status_mismatches: usize,
+    /// Fallbacks of the fast solver to the reference (should be 0).
+    pub fallbacks: u64,
+    /// Fast solves that returned an error (fallback failed too; should be 0).
+    pub errors: usize,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let k = v.len() / 2;
+    if v.len() % 2 == 1 {
+        v[k]
+    } else {
+        0.5 * (v[k - 1] + v[k])
+    }
+}
+
+/// The benchmark problems for grid size n: moment vectors of 9×9 Gaussian kernels over depth
+/// maps with 1–3 clusters (depths snapped to the grid), each followed by its fragment depths.
+pub fn problems(grid: &Grid, m: usize, count: usize, seed: u64) -> Result<Vec<(Vec<f64>, f64)>> {
+    let table = power_table(grid, m)?;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        for patch in kernel_patches(&mut rng, grid, 16) {
+            let b = mixture_moments(&table, &patch.mixture);
+            for &zf in &patch.zf {
+                if out.len() < count {
+                    out.push((b.clone(), zf));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// µs per LP and (status, G) per LP.
+type Timed = (Vec<f64>, Vec<(Option<Status>, f64)>);
+
+/// Time each solve of `solver` over `probs`; returns (µs per LP, G per LP).
+fn time_solver(
+    solver: &mut dyn MomentSolver,
+    probs: &[(Vec<f64>, f64)],
+    mut progress: impl FnMut(),
+) -> Result<Timed> {
+    let mut times = Vec::with_capacity(probs.len());
+    let mut gs = Vec::with_capacity(probs.len());
+    for (b, zf) in probs {
+        let t0 = Instant::now();
+        let sol = solver.solve(b, *zf);
+        times.push(t0.elapsed().as_secs_f64() * 1e6);
+        // A solver error (the fast solver's last-resort reference fallback can fail on
+        // numerically singular problems) is recorded as status "error" (NaN), not fatal.
+        gs.push(match sol {
+            Ok(sol) => (Some(sol.status), sol.g),
+            Err(_) => (None, f64::NAN),
+        });
+        progress();
+    }
+    Ok((times, gs))
+}
+
+/// Run the benchmark for one grid size. `progress` is called after every reference LP.
+pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Result<BenchRow> {
+    if !(1..=8).contains(&cfg.m) {
+        bail!("bench lp: m must be in 1..=8, got {}", cfg.m);
+    }
+    if cfg.problems == 0 {
+        bail!("bench lp: need at least one problem");
+    }
+    let grid = Grid::uniform(n)?;
+    let probs = problems(&grid, cfg.m, cfg.problems, cfg.seed ^ n as u64)?;
+    let table = power_table(&grid, cfg.m)?;
+
+    // The fast solvers run the whole sequence `cfg.repeats` times from the same state (the
+    // solver is deterministic, so every repeat does the same pivots) and keep each problem's
+    // minimum time: this filters out preemption on a loaded machine.
+    let mut warm = FastSolver::new(table.clone());
+    let mut tw = vec![f64::INFINITY; probs.len()];
+    let mut gw = Vec::new();
+    let mut pivots_warm = 0.0;
+    for _ in 0..cfg.repeats.max(1) {
+        warm.reset();
+        let p0 = warm.stats().pivots;
+        let (t, g) = time_solver(&mut warm, &probs, || {})?;
+        pivots_warm = (warm.stats().pivots - p0) as f64 / probs.len() as f64;
+        tw.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
+        gw = g;
+    }
+    let mut cold = FastSolver::new(table.clone());
+    cold.set_warm_start(false);
+    let mut tc = vec![f64::INFINITY; probs.len()];
+    let mut gc = Vec::new();
+    let mut pivots_cold = 0.0;
+    for _ in 0..cfg.repeats.max(1) {
+        let p0 = cold.stats().pivots;
+        let (t, g) = time_solver(&mut cold, &probs, || {})?;
+        pivots_cold = (cold.stats().pivots - p0) as f64 / probs.len() as f64;
+        tc.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
+        gc = g;
+    }
+
+    let nref = cfg.reference_problems.min(probs.len());
+    let mut reference = ReferenceSolver::new(table);
+    let (mut tr, gr) = time_solver(&mut reference, &probs[..nref], &mut progress)?;
+
+    let mut max_abs_diff: f64 = 0.0;
+    let mut status_mismatches = 0;
+    for i in 0..nref {
+        for g in [gw[i], gc[i]] {
+            if g.0 != gr[i].0 {
+                status_mismatches += 1;
+            } else if g.0 == Some(Status::Optimal) {
+                max_abs_diff = max_abs_diff.max((g.1 - gr[i].1).abs());
+            }
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let (fast_warm_mean_us, fast_cold_mean_us) = (mean(&tw), mean(&tc));
+    let reference_us = median(&mut tr);
+    let fast_warm_us = median(&mut tw);
+    let fast_cold_us = median(&mut tc);
+    Ok(BenchRow {
+        n,
+        m: cfg.m,
+        problems: probs.len(),
+        reference_problems: nref,
+        reference_us,
+        fast_warm_us,
+        fast_cold_us,
+        fast_warm_mean_us,
+        fast_cold_mean_us,
+        speedup_warm: reference_us / fast_warm_us,
+        speedup_cold: reference_us / fast_cold_us,
+        pivots_warm,
+        pivots_cold,
+        max_abs_diff,
+        status_mismatches,
+        fallbacks: warm.stats().fallbacks + cold.stats().fallbacks,
+        errors: gw.iter().chain(&gc).filter(|g| g.0.is_none()).count(),
+    })
+}

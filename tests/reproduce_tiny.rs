@@ -1,0 +1,149 @@
+//! `momentlab reproduce --tiny` end to end: every artefact exists and parses, the report links
+//! only to files that exist, numbers are finite, and the report's numbers equal those of
+//! `momentlab evaluate` on the same stacks.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> &'static str {
+    env!("CARGO_BIN_EXE_momentlab")
+}
+
+fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_dir() {
+            walk(&p, out);
+        } else {
+            out.push(p);
+        }
+    }
+}
+
+fn all_numbers_finite(v: &serde_json::Value, path: &str, nulls: &mut Vec<String>) {
+    match v {
+        serde_json::Value::Number(n) => assert!(n.as_f64().unwrap().is_finite(), "{path}"),
+        serde_json::Value::Null => nulls.push(path.to_string()),
+        serde_json::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| all_numbers_finite(x, &format!("{path}[{i}]"), nulls)),
+        serde_json::Value::Object(o) => o
+            .iter()
+            .for_each(|(k, x)| all_numbers_finite(x, &format!("{path}.{k}"), nulls)),
+        _ => {}
+    }
+}
+
+#[test]
+fn tiny_reproduce_writes_a_complete_consistent_report() {
+    let root = std::env::temp_dir().join(format!("momentlab-reproduce-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let reports = root.join("reports");
+    let results = root.join("results");
+    let out = Command::new(bin())
+        .args(["reproduce", "--tiny", "--run", "t"])
+        .arg("--reports")
+        .arg(&reports)
+        .arg("--results")
+        .arg(&results)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "reproduce failed:\n{stderr}");
+    let run = reports.join("t");
+
+    // The HTML and Markdown reports reference only files that exist, and figures are there.
+    let html = std::fs::read_to_string(run.join("index.html")).unwrap();
+    let refs = momentlab::report::document::html_references(&html);
+    assert!(refs.iter().any(|r| r.ends_with("speed_accuracy.svg")));
+    assert!(refs.iter().any(|r| r.ends_with(".png")));
+    for r in &refs {
+        assert!(run.join(r).is_file(), "index.html references missing {r}");
+    }
+    let md = std::fs::read_to_string(run.join("report.md")).unwrap();
+    for part in md.split("](").skip(1) {
+        let target = &part[..part.find(')').unwrap()];
+        assert!(run.join(target).is_file(), "report.md references missing {target}");
+    }
+
+    // Every artefact parses: JSON (numbers finite), PNG decodes, SVG is a complete document.
+    let mut files = Vec::new();
+    walk(&run, &mut files);
+    let (mut json, mut png, mut svg) = (0, 0, 0);
+    for f in &files {
+        match f.extension().and_then(|e| e.to_str()) {
+            Some("json") => {
+                let text = std::fs::read_to_string(f).unwrap();
+                let v: serde_json::Value = serde_json::from_str(&text)
+                    .unwrap_or_else(|e| panic!("{}: {e}", f.display()));
+                let mut nulls = Vec::new();
+                all_numbers_finite(&v, &f.display().to_string(), &mut nulls);
+                json += 1;
+            }
+            Some("png") => {
+                let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(f).unwrap()));
+                let mut reader = dec.read_info().unwrap();
+                let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+                let info = reader.next_frame(&mut buf).unwrap();
+                assert!(info.width > 0 && info.height > 0);
+                png += 1;
+            }
+            Some("svg") => {
+                let s = std::fs::read_to_string(f).unwrap();
+                assert!(s.trim_start().starts_with("<svg") && s.trim_end().ends_with("</svg>"), "{}", f.display());
+                svg += 1;
+            }
+            _ => {}
+        }
+    }
+    assert!(json >= 20 && png >= 1 && svg >= 3, "json {json}, png {png}, svg {svg}");
+
+    // The evaluated errors are finite and the report's numbers equal `momentlab evaluate`.
+    let h4: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(run.join("evaluate/hamburger4_f32.json")).unwrap(),
+    )
+    .unwrap();
+    let err = h4["error"].as_f64().unwrap();
+    assert!(err.is_finite() && (0.0..1.0).contains(&err));
+    let ev = Command::new(bin())
+        .args(["evaluate", "--technique", "hamburger4", "--json", "--stacks"])
+        .arg(results.join("t/stacks"))
+        .output()
+        .unwrap();
+    assert!(ev.status.success(), "{}", String::from_utf8_lossy(&ev.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&ev.stdout).unwrap();
+    let e2 = v["error"].as_f64().unwrap();
+    assert!((err - e2).abs() < 1e-12, "reproduce {err} vs evaluate {e2}");
+    assert!(html.contains(&format!("{:.3} %", 100.0 * err)));
+
+    // Resumable: a second run reuses every artefact and gives the same numbers.
+    let again = Command::new(bin())
+        .args(["reproduce", "--tiny", "--run", "t"])
+        .arg("--reports")
+        .arg(&reports)
+        .arg("--results")
+        .arg(&results)
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    let h4b = std::fs::read_to_string(run.join("evaluate/hamburger4_f32.json")).unwrap();
+    assert_eq!(h4b, serde_json::to_string_pretty(&h4).unwrap());
+    std::fs::remove_dir_all(&root).ok();
+}
+
+#[test]
+fn bad_arguments_are_one_line_errors() {
+    for args in [
+        vec!["reproduce", "--run", "../x"],
+        vec!["reproduce", "--tolerance", "-1"],
+        vec!["reproduce", "--tiny", "--resolution", "4"],
+    ] {
+        let out = Command::new(bin()).args(&args).output().unwrap();
+        assert!(!out.status.success(), "{args:?}");
+        let e = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(e.trim().lines().count(), 1, "{args:?}: {e}");
+    }
+}
