@@ -163,7 +163,7 @@ fn degenerate_and_duplicate_candidates_are_flagged() {
     cfg.exhaustive = true;
     // {z,1-z} degenerate, {z^2, 2z^2+1} degenerate, {z, 2z^2+1} duplicate of {z, z^2},
     // {1-z, z^3} duplicate of {z, z^3}, {z, z^2}, {z, z^3} scored.
-    let idx = |a: usize, b: usize| momentlab::search::combo::combination_index(&[a, b], 8).unwrap();
+    let idx = |a: usize, b: usize| momentlab::basis::candidates::subset_to_index(&[a, b]).unwrap();
     cfg.candidates = Some(vec![
         idx(0, 6),
         idx(1, 7),

@@ -1,14 +1,16 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
-use crate::search::report::{self, Reference};
+use crate::metrics::Bias;
+use crate::search::run::{load_table, report_for};
 use crate::search::{
-    combo, read_rows, run_sweep, Dataset, FunctionTable, Hooks, Outcome, Progress, Scorer,
-    SweepConfig,
+    read_rows, report, sweep_dataset, Dataset, FunctionTable, Progress, SamplePlan, SweepOptions,
+    SweepResult,
 };
+use crate::stack::DepthStack;
 use crate::Grid;
 use anyhow::{bail, Context, Result};
 use indicatif::{ProgressBar, ProgressStyle};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// Boxed so the subcommand enum stays small.
 #[derive(clap::Args, Debug)]
@@ -28,9 +30,15 @@ pub struct Opts {
     /// Use the 9 paper bases (z..z^4, sin/cos 2πz, 4πz, exp(80(z-1))) as catalog (demos).
     #[arg(long, conflicts_with = "catalog")]
     pub builtin_catalog: bool,
-    /// Directory of depth stacks (default: the default dataset).
+    /// Directory of depth stacks (default: render the embedded default dataset).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
+    /// Shadow-map resolution when rendering the default dataset.
+    #[arg(long, default_value_t = 512)]
+    pub resolution: usize,
+    /// Keep at most this many non-trivial fragments (stratified by view and layer; 0 = all).
+    #[arg(long, default_value_t = crate::search::DEFAULT_MAX_FRAGMENTS)]
+    pub max_fragments: usize,
     /// Synthetic dataset with this many texels per view (tests and demos, no stacks needed).
     #[arg(long, conflicts_with = "stacks")]
     pub synthetic: Option<usize>,
@@ -74,6 +82,9 @@ pub struct Opts {
     pub max_keep: f64,
     #[arg(long, default_value_t = 2.5)]
     pub z: f64,
+    /// Candidates tried to pick the stage-0 reference.
+    #[arg(long, default_value_t = 32)]
+    pub pilot: usize,
     /// Fragments per solver (warm-start chain).
     #[arg(long, default_value_t = 4096)]
     pub chunk: usize,
@@ -95,6 +106,9 @@ pub struct Opts {
     /// Depths at which the Fig. 3 curves are solved.
     #[arg(long, default_value_t = 96)]
     pub fig3_points: usize,
+    /// Do not evaluate the closed forms (hamburger4, tmsm, vsm, esm) for the report.
+    #[arg(long)]
+    pub no_closed_forms: bool,
 }
 
 fn parse_shard(s: &str) -> Result<[usize; 2]> {
@@ -115,20 +129,19 @@ fn parse_shard(s: &str) -> Result<[usize; 2]> {
     Ok([i, n])
 }
 
-fn load_table(args: &Opts, grid: &Grid) -> Result<FunctionTable> {
+fn table_of(args: &Opts, grid: &Grid) -> Result<FunctionTable> {
     if args.builtin_catalog {
         return report::paper_bases(grid);
     }
-    let catalog = match &args.catalog {
-        Some(p) => {
-            crate::basis::Catalog::load(p).with_context(|| format!("catalog {}", p.display()))?
-        }
-        None => crate::basis::Catalog::embedded(),
-    };
-    FunctionTable::from_functions(grid, catalog.functions()).context("tabulating the catalog")
+    load_table(args.catalog.as_deref(), grid)
 }
 
-fn load_data(args: &Opts, grid: &Grid) -> Result<(Dataset, String)> {
+/// The dataset, its name for the config, and the stacks it came from (None: synthetic).
+fn load_data(
+    args: &Opts,
+    grid: &Grid,
+    bias: &Bias,
+) -> Result<(Dataset, String, Option<Vec<DepthStack>>)> {
     if let Some(t) = args.synthetic {
         if t == 0 {
             bail!("--synthetic: need at least one texel");
@@ -136,183 +149,159 @@ fn load_data(args: &Opts, grid: &Grid) -> Result<(Dataset, String)> {
         return Ok((
             Dataset::synthetic(args.seed, grid, 4, t, 4)?,
             format!("synthetic:{t}:{}", args.seed),
+            None,
         ));
     }
-    let what = match &args.stacks {
-        Some(d) => format!("stacks:{}", d.display()),
-        None => "default dataset".to_string(),
-    };
-    bail!("{what}: building the sweep dataset from depth stacks needs kernel/metrics (not merged yet); use --synthetic N")
-}
-
-fn candidates(args: &Opts, table: &FunctionTable) -> Result<Option<Vec<u64>>> {
-    if let Some(c) = &args.candidates {
-        let total = combo::binomial(table.len(), args.m);
-        if let Some(bad) = c.iter().find(|&&i| i >= total) {
-            bail!(
-                "--candidates: index {bad} out of range (C({},{}) = {total})",
-                table.len(),
-                args.m
+    let (stacks, name) = match &args.stacks {
+        Some(d) => (
+            crate::stack::load_dir(d)
+                .with_context(|| format!("loading depth stacks from {}", d.display()))?,
+            format!("stacks:{}", d.display()),
+        ),
+        None => {
+            eprintln!(
+                "search: rendering the default dataset at {0}×{0} …",
+                args.resolution
             );
+            (
+                crate::render::default_dataset(args.resolution)?,
+                format!("default dataset {}", args.resolution),
+            )
         }
-        return Ok(Some(c.clone()));
-    }
-    let Some(names) = &args.names else {
-        return Ok(None);
     };
-    let mut out = Vec::new();
-    for set in names.split(';').filter(|s| !s.trim().is_empty()) {
-        let mut cols = Vec::new();
-        for n in set.split(',') {
-            let n = n.trim();
-            let j = table
-                .names()
-                .iter()
-                .position(|x| x == n)
-                .with_context(|| format!("--names: unknown function '{n}'"))?;
-            cols.push(j);
-        }
-        cols.sort();
-        if cols.len() != args.m {
-            bail!(
-                "--names: '{set}' has {} functions, --m is {}",
-                cols.len(),
-                args.m
-            );
-        }
-        out.push(
-            combo::combination_index(&cols, table.len())
-                .with_context(|| format!("--names '{set}'"))?,
-        );
-    }
-    Ok(Some(out))
+    let plan = SamplePlan {
+        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
+        seed: args.seed,
+    };
+    let data = Dataset::from_stacks(&stacks, grid, bias, &plan)?;
+    Ok((data, name, Some(stacks)))
 }
 
 pub fn run(args: Args) -> Result<()> {
     let args = *args.opts;
     let grid = Grid::uniform(args.grid)?;
-    let table = load_table(&args, &grid)?;
-    let (data, data_name) = load_data(&args, &grid)?;
+    let bias = Bias::default();
+    let table = table_of(&args, &grid)?;
+    let t_data = std::time::Instant::now();
+    let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
     let results = args
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
-    let scorer = Scorer::new(&data, &table, &args.solver, args.chunk)?;
     let shard = match &args.shard {
         Some(s) => parse_shard(s)?,
         None => [0, 1],
     };
-    if !args.report_only {
-        let cfg = SweepConfig {
-            seed: args.seed,
-            top: args.top,
-            exhaustive: args.exhaustive,
-            candidates: candidates(&args, &table)?,
-            shard,
-            first_sample: args.first_sample,
-            growth: args.growth,
-            keep: args.keep,
-            max_keep: args.max_keep,
-            z: args.z,
-            batch: args.batch,
-            ..SweepConfig::new(args.m, &scorer, &data_name)
-        };
-        eprintln!(
-            "search: m = {}, {} functions, {} fragments ({} non-trivial), results in {}",
-            args.m,
-            table.len(),
-            data.total_count(),
-            data.fragments().len(),
-            results.display()
-        );
-        let bar = ProgressBar::new(0);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{msg} [{elapsed_precise}] {wide_bar} {percent}% (ETA {eta})",
-            )
-            .map_err(|e| anyhow::anyhow!("progress style: {e}"))?,
-        );
-        let progress = |p: Progress| match p {
-            Progress::Phase { name, units } => {
-                bar.set_message(name);
-                bar.set_length(units);
-                bar.set_position(0);
-                bar.reset_eta();
-            }
-            Progress::Advance(u) => bar.inc(u),
-        };
-        let t0 = std::time::Instant::now();
-        let hooks = Hooks {
-            stop_after_batches: None,
-            progress: Some(&progress),
-        };
-        let outcome = run_sweep(&cfg, &scorer, &results, &hooks)?;
-        bar.finish_and_clear();
-        let secs = t0.elapsed().as_secs_f64();
-        if let Outcome::Complete(s) = &outcome {
-            eprintln!(
-                "search: done in {secs:.1} s: {} candidates ({} degenerate, {} duplicates), stages {:?}, {} on all fragments, {} LP solves planned ({:.1} % of exhaustive)",
-                s.candidates, s.degenerate, s.duplicates, s.stages, s.full, s.lp_solves, s.sampled_share * 100.0
-            );
+    let opts = SweepOptions {
+        m: args.m,
+        catalog: args.catalog.clone(),
+        grid: args.grid,
+        solver: args.solver.clone(),
+        chunk: args.chunk,
+        bias,
+        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
+        seed: args.seed,
+        dataset: data_name,
+        top: args.top,
+        exhaustive: args.exhaustive,
+        candidates: args.candidates.clone(),
+        names: args.names.clone(),
+        shard,
+        first_sample: args.first_sample,
+        growth: args.growth,
+        keep: args.keep,
+        max_keep: args.max_keep,
+        z: args.z,
+        pilot: args.pilot,
+        batch: args.batch,
+        report_dir: (!args.no_report).then(|| args.report.clone()),
+        closed_forms: !args.no_closed_forms,
+        compare: args.compare.clone(),
+        fig3_points: args.fig3_points,
+    };
+    eprintln!(
+        "search: m = {}, {} functions, {} fragments ({} non-trivial, {} kept = {:.2} %; dataset built in {:.1} s), results in {}",
+        args.m,
+        table.len(),
+        data.total_count(),
+        data.nontrivial_population(),
+        data.fragments().len(),
+        data.sampled_fraction() * 100.0,
+        t_data.elapsed().as_secs_f64(),
+        results.display()
+    );
+    if args.report_only {
+        if args.no_report {
+            bail!("--report-only and --no-report contradict each other");
         }
-        if shard[1] > 1 {
-            eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", shard[0], shard[1]);
-            return Ok(());
-        }
-    }
-    if args.no_report {
+        let rows = read_rows(&results)?;
+        let (summary, _) = report_for(&data, stacks.as_deref(), &rows, &opts, &results)?;
+        print_ranking(&summary);
+        eprintln!("report: written to {}", args.report.display());
         return Ok(());
     }
-    write_report(&args, &data, &results)
-}
-
-fn write_report(args: &Opts, data: &Dataset, results: &Path) -> Result<()> {
-    let rows = read_rows(results)?;
-    if rows.is_empty() {
-        bail!("{}: no results to report", results.display());
-    }
-    std::fs::create_dir_all(&args.report)
-        .with_context(|| format!("creating {}", args.report.display()))?;
-    let m = args.m;
-    eprintln!("report: reference values (LP on every fragment) …");
-    let mut refs: Vec<Reference> = report::lp_references(data, &args.solver, args.chunk)?;
-    refs.extend(closed_form_references());
-    let errs = report::errors_of(&rows);
-    let dir = &args.report;
-    report::plot_histogram(
-        &dir.join(format!("fig4_m{m}.svg")),
-        &format!("Candidate errors, m = {m} ({} candidates)", errs.len()),
-        &errs,
-        &refs,
-    )?;
-    let mut sets = vec![(format!("m = {m}"), errs.clone())];
-    for d in &args.compare {
-        let r = read_rows(d)?;
-        let cfg: SweepConfig = crate::search::results::read_json(&d.join("config.json"))?;
-        sets.push((format!("m = {}", cfg.m), report::errors_of(&r)));
-    }
-    sets.sort_by(|a, b| a.0.cmp(&b.0));
-    report::plot_side_by_side(&dir.join("distributions.svg"), &sets)?;
-    eprintln!("report: Fig. 3 curves …");
-    let kernels = report::pick_kernels(data, 3);
-    let panels = report::fig3_panels(data, &kernels, args.fig3_points, &args.solver)?;
-    report::plot_fig3(&dir.join("fig3.svg"), &panels)?;
-    let mut md = format!(
-        "# Candidate sweep, m = {m}\n\nResults: `{}`; {} fragments ({} non-trivial).\n\n![Fig. 4 analogue](fig4_m{m}.svg)\n\n## Ranking\n\n{}\n## Top 20\n\n{}\n![error distributions](distributions.svg)\n\n![Fig. 3 analogue](fig3.svg)\n",
-        results.display(),
-        data.total_count(),
-        data.fragments().len(),
-        report::ranking_text(&rows, &refs),
-        report::top_table(&rows, 20)
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{elapsed_precise}] {wide_bar} {percent}% (ETA {eta})")
+            .map_err(|e| anyhow::anyhow!("progress style: {e}"))?,
     );
-    md.push_str("\nReference values: LP candidates scored on every fragment with the same grid and solver.\n");
-    std::fs::write(dir.join(format!("search_m{m}.md")), md)
-        .with_context(|| format!("writing {}", dir.display()))?;
-    eprintln!("report: written to {}", dir.display());
+    let progress = |p: Progress| match p {
+        Progress::Phase { name, units } => {
+            bar.set_message(name);
+            bar.set_length(units);
+            bar.set_position(0);
+            bar.reset_eta();
+        }
+        Progress::Advance(u) => bar.inc(u),
+    };
+    let r: SweepResult = sweep_dataset(
+        &data,
+        &table,
+        stacks.as_deref(),
+        &opts,
+        &results,
+        Some(&progress),
+    )?;
+    bar.finish_and_clear();
+    if let Some(s) = &r.summary {
+        eprintln!(
+            "search: sweep done in {:.1} s: {} candidates ({} degenerate, {} duplicates), stages {:?}, {} on all fragments, {} LP solves planned ({:.1} % of exhaustive on the kept fragments, {:.0} solves/s)",
+            r.sweep_seconds, s.candidates, s.degenerate, s.duplicates, s.stages, s.full, s.lp_solves,
+            s.sampled_share * 100.0, s.lp_solves as f64 / r.sweep_seconds.max(1e-9)
+        );
+    }
+    if shard[1] > 1 {
+        eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", shard[0], shard[1]);
+        return Ok(());
+    }
+    if let Some(summary) = &r.ranking {
+        print_ranking(summary);
+        if !args.no_report {
+            eprintln!("report: written to {}", args.report.display());
+        }
+    }
     Ok(())
 }
 
-/// Closed-form 4MSM / TMSM values (via technique::by_name + metrics) once those land.
-fn closed_form_references() -> Vec<Reference> {
-    Vec::new()
+fn print_ranking(s: &report::Summary) {
+    if let Some(b) = &s.best {
+        eprintln!(
+            "search: best of {} candidates: ({}) {:.4} % ± {:.4} %",
+            s.scored,
+            b.functions.join(", "),
+            b.error * 100.0,
+            b.stderr * 100.0
+        );
+    }
+    for r in &s.references {
+        if let Some(rank) = r.rank {
+            eprintln!(
+                "search: {} {:.4} % ± {:.4} %, rank {rank} of {}",
+                r.label,
+                r.error * 100.0,
+                r.stderr * 100.0,
+                s.scored
+            );
+        }
+    }
 }

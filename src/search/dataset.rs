@@ -9,10 +9,15 @@
 //! is feasible and G ≥ 0), so they are not stored: their error contribution Σ |0 − PCF| is kept in
 //! closed form ([`Dataset::trivial_error`]).
 
+use crate::kernel::{self, Gaussian};
+use crate::metrics::{self, Bias};
+use crate::stack::DepthStack;
 use crate::Grid;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
 
 /// One non-trivial fragment.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,7 +48,33 @@ pub struct Dataset {
     fragments: Vec<Fragment>,
     trivial_count: u64,
     trivial_error: f64,
+    /// Non-trivial fragments of the population the stored ones were sampled from (equal to
+    /// `fragments.len()` when nothing was sampled away).
+    nontrivial_population: u64,
     views: Vec<String>,
+}
+
+/// How [`Dataset::from_stacks`] samples the non-trivial fragments.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct SamplePlan {
+    /// Keep at most about this many non-trivial fragments (None: all of them).
+    pub max_fragments: Option<usize>,
+    /// Seed of the stratified sample.
+    pub seed: u64,
+}
+
+/// Default cap on the non-trivial fragments kept by [`Dataset::from_stacks`] (see
+/// docs/search.md: it bounds the cost of the final full-sample stage and of late racing stages,
+/// and sets the sampling standard error of every reported error).
+pub const DEFAULT_MAX_FRAGMENTS: usize = 131_072;
+
+impl Default for SamplePlan {
+    fn default() -> Self {
+        SamplePlan {
+            max_fragments: Some(DEFAULT_MAX_FRAGMENTS),
+            seed: 1,
+        }
+    }
 }
 
 /// Builds a [`Dataset`] from raw kernels and fragments (depths in [0,1], snapped here).
@@ -62,6 +93,7 @@ impl DatasetBuilder {
                 fragments: Vec::new(),
                 trivial_count: 0,
                 trivial_error: 0.0,
+                nontrivial_population: 0,
                 views: Vec::new(),
             },
         }
@@ -142,6 +174,7 @@ impl DatasetBuilder {
 
     pub fn finish(mut self) -> Dataset {
         self.data.fragments.sort_by_key(|f| (f.dist, f.zf, f.layer));
+        self.data.nontrivial_population = self.data.fragments.len() as u64;
         self.data
     }
 }
@@ -169,27 +202,51 @@ impl Dataset {
     pub fn trivial_error(&self) -> f64 {
         self.trivial_error
     }
-    /// All fragments, trivial ones included.
+    /// All fragments of the population, trivial ones included (sampled-away ones too).
     pub fn total_count(&self) -> u64 {
-        self.trivial_count + self.fragments.len() as u64
+        self.trivial_count + self.nontrivial_population
+    }
+    /// Non-trivial fragments of the population (≥ `fragments().len()`).
+    pub fn nontrivial_population(&self) -> u64 {
+        self.nontrivial_population
+    }
+    /// Share of the non-trivial population that is stored (1 when nothing was sampled away).
+    pub fn sampled_fraction(&self) -> f64 {
+        if self.nontrivial_population == 0 {
+            1.0
+        } else {
+            self.fragments.len() as f64 / self.nontrivial_population as f64
+        }
+    }
+    /// Error and standard error of a candidate from the sum and sum of squares of its errors
+    /// e = |G − PCF| on `n` stored fragments: (Σ_trivial PCF + N_nt · ē) / N_all, with standard
+    /// error (N_nt / N_all) · s / √n (trivial fragments are exact; N_nt = non-trivial population).
+    pub fn error_estimate(&self, n: u64, sum: f64, sumsq: f64) -> (f64, f64) {
+        let total = self.total_count() as f64;
+        if total == 0.0 {
+            return (0.0, 0.0);
+        }
+        let pop = self.nontrivial_population as f64;
+        if n == 0 {
+            let se = if pop > 0.0 { f64::INFINITY } else { 0.0 };
+            return (self.trivial_error / total, se);
+        }
+        let nf = n as f64;
+        let mean = sum / nf;
+        let se = if n < 2 {
+            f64::INFINITY
+        } else {
+            (((sumsq - sum * sum / nf) / (nf - 1.0)).max(0.0) / nf).sqrt()
+        };
+        ((self.trivial_error + pop * mean) / total, pop / total * se)
     }
     pub fn views(&self) -> &[String] {
         &self.views
     }
 
-    /// Index of the grid point nearest to z.
+    /// Index of the grid point nearest to z ([`metrics::snap_index`]: ties to the lower point).
     pub fn snap(&self, z: f64) -> usize {
-        let p = self.grid.points();
-        let k = p.partition_point(|&v| v < z);
-        if k == 0 {
-            0
-        } else if k == p.len() {
-            p.len() - 1
-        } else if z - p[k - 1] <= p[k] - z {
-            k - 1
-        } else {
-            k
-        }
+        metrics::snap_index(&self.grid, z)
     }
 
     /// F_Z(z_f) = Σ_{idx < zf} w for distribution `d`.
@@ -265,7 +322,124 @@ impl Dataset {
         }
         h.u64(self.trivial_count);
         h.u64(self.trivial_error.to_bits());
+        h.u64(self.nontrivial_population);
         h.finish()
+    }
+
+    /// The sweep dataset of depth stacks, built with kernel/metrics exactly as
+    /// [`metrics::evaluate`] treats a grid technique ([`Technique::depth_grid`]):
+    ///
+    /// * fragments, their PCF and biased depth z_f − ε′ from [`metrics::fragments`] (same bias);
+    /// * the front map ([`kernel::front_map`]) snapped to the grid, the depth distribution of a
+    ///   texel from [`kernel::depth_distribution`] with [`Gaussian::paper`] (9×9, σ = 2.4,
+    ///   clamped edges) over the snapped depths, z_f snapped with [`metrics::snap_index`];
+    /// * trivial ⇔ F_Z(z_f) = 0 on the grid ⇔ the 9×9 min of the snapped front map ≥ snapped
+    ///   z_f (the rule of `metrics`); all trivial fragments are counted exactly (G = 0).
+    ///
+    /// Non-trivial fragments are sampled, stratified by (view, layer): with p = cap / N_nt,
+    /// stratum h keeps ⌊p·N_h + u_h⌋ fragments (u_h ~ U[0,1) seeded, so the expected share is p
+    /// in every stratum: self-weighting), chosen by a seeded shuffle. Errors are then estimated
+    /// as (Σ_trivial PCF + N_nt · mean over the sample) / N_all ([`Dataset::error_estimate`]).
+    ///
+    /// [`Technique::depth_grid`]: crate::technique::Technique::depth_grid
+    pub fn from_stacks(
+        stacks: &[DepthStack],
+        grid: &Grid,
+        bias: &Bias,
+        plan: &SamplePlan,
+    ) -> Result<Dataset> {
+        bias.validate()?;
+        if plan.max_fragments == Some(0) {
+            bail!("sample plan: max_fragments must be positive");
+        }
+        if stacks.is_empty() {
+            bail!("no depth stacks");
+        }
+        let kern = Gaussian::paper();
+        let z = grid.points();
+        let mut b = DatasetBuilder::new(grid);
+        // (view, layer) -> (texel, zf index, pcf) of the non-trivial fragments.
+        type Stratum = Vec<(u32, u32, f64)>;
+        let mut strata: BTreeMap<(u32, u32), Stratum> = BTreeMap::new();
+        let mut fronts = Vec::with_capacity(stacks.len());
+        for (v, s) in stacks.iter().enumerate() {
+            let name = format!("{}/{}", s.meta.scene, s.meta.view);
+            metrics::check_stack(s).with_context(|| format!("view {v} ({name})"))?;
+            let view = b.add_view(&name);
+            let (w, h) = (s.meta.width, s.meta.height);
+            let snapped: Vec<f64> = kernel::front_map(s)
+                .iter()
+                .map(|&d| metrics::snap(grid, d))
+                .collect();
+            let min_map = kernel::min_filter(&snapped, w, h, kern.radius());
+            for f in metrics::fragments(s, v, bias) {
+                let zi = metrics::snap_index(grid, f.zf);
+                if min_map[f.texel] >= z[zi] {
+                    b.data.trivial_count += 1;
+                    b.data.trivial_error += f.pcf;
+                } else {
+                    strata.entry((view, f.layer as u32)).or_default().push((
+                        f.texel as u32,
+                        zi as u32,
+                        f.pcf,
+                    ));
+                }
+            }
+            fronts.push(snapped);
+        }
+        let population: usize = strata.values().map(|v| v.len()).sum();
+        let p = match plan.max_fragments {
+            Some(cap) if cap < population => cap as f64 / population as f64,
+            _ => 1.0,
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
+        // (view, texel, layer, zf index, pcf) of the kept fragments.
+        let mut kept: Vec<(u32, u32, u32, u32, f64)> = Vec::new();
+        for (&(view, layer), members) in strata.iter_mut() {
+            let u: f64 = rng.gen();
+            let k = if p >= 1.0 {
+                members.len()
+            } else {
+                ((p * members.len() as f64 + u).floor() as usize).min(members.len())
+            };
+            // Partial Fisher–Yates: the first k of a seeded shuffle.
+            for i in 0..k {
+                let j = rng.gen_range(i..members.len());
+                members.swap(i, j);
+            }
+            kept.extend(
+                members[..k]
+                    .iter()
+                    .map(|&(t, zi, pcf)| (view, t, layer, zi, pcf)),
+            );
+        }
+        // Distributions in (view, texel) order: neighbouring ids are neighbouring texels.
+        kept.sort_by_key(|f| (f.0, f.1, f.2));
+        let mut dist_of: HashMap<(u32, u32), u32> = HashMap::new();
+        for &(view, t, layer, zi, pcf) in &kept {
+            let d = match dist_of.get(&(view, t)) {
+                Some(&d) => d,
+                None => {
+                    let s = &stacks[view as usize];
+                    let (w, h) = (s.meta.width, s.meta.height);
+                    let (x, y) = (t as usize % w, t as usize / w);
+                    let dist =
+                        kernel::depth_distribution(&fronts[view as usize], w, h, x, y, &kern);
+                    let d = b.add_distribution(&dist)?;
+                    dist_of.insert((view, t), d);
+                    d
+                }
+            };
+            if !b.add_fragment(view, layer, t, d, z[zi as usize], pcf)? {
+                bail!(
+                    "view {view} texel {t} layer {layer}: trivial on the distribution but not \
+                     by the min filter (internal inconsistency)"
+                );
+            }
+        }
+        let mut data = b.finish();
+        data.nontrivial_population = population as u64;
+        Ok(data)
     }
 
     /// A random synthetic dataset for tests and demos: per texel a distribution of 1–3 clusters

@@ -4,23 +4,25 @@
 //! Pieces:
 //! * [`FunctionTable`]: every catalog function tabulated on the LP grid once (n × N).
 //! * [`span`]: numerical rank (degenerate candidates) and span keys (duplicate candidates).
-//! * [`combo`]: candidates ↔ indices (lexicographic rank of the sorted m-subset).
+//! * candidates ↔ indices: [`crate::basis::candidates`] (colex numbering, as `momentlab candidates`).
 //! * [`dataset`]: the sampled fragments with their depth distributions on the grid.
 //! * [`score`]: Algorithm 1 errors |G − PCF| of one candidate over a list of fragments.
 //! * [`sweep`]: racing / successive halving, resumable results files, shards.
 //! * [`results`]: the results rows, reading/writing them, `merge`.
-//! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown).
+//! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown), references.
+//! * [`run`]: the whole sweep on depth stacks ([`sweep_stacks`]) for the CLI and `reproduce`.
 
-pub mod combo;
 pub mod dataset;
 pub mod report;
 pub mod results;
+pub mod run;
 pub mod score;
 pub mod span;
 pub mod sweep;
 
-pub use dataset::{Dataset, DatasetBuilder, Fragment};
+pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
 pub use results::{merge_dirs, read_rows, Row};
+pub use run::{sweep_dataset, sweep_stacks, SweepOptions, SweepResult};
 pub use score::Scorer;
 pub use sweep::{run_sweep, Hooks, Outcome, Progress, SweepConfig, SweepSummary};
 

@@ -3,14 +3,17 @@
 //! lower bounds of Algorithm 1 for m = 2, 3, 4 with polynomial and trigonometric bases), error
 //! distributions for several m side by side, and where b_MSM / b_TMSM rank.
 
-use super::results::{ranking, Row};
+use super::results::{ranking, read_json, read_rows, Row};
 use super::score::bound_curve;
-use super::{Dataset, FunctionTable, Scorer};
-use anyhow::{Context, Result};
+use super::{Dataset, FunctionTable, Scorer, SweepConfig};
+use crate::metrics::{self, Bias, EvalOptions};
+use crate::stack::DepthStack;
+use anyhow::{bail, Context, Result};
 use plotters::prelude::*;
+use serde::Serialize;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A labelled error value marked in the histogram (e.g. "b_MSM (LP)").
 #[derive(Clone, Debug, PartialEq)]
@@ -20,6 +23,9 @@ pub struct Reference {
     pub m: usize,
     pub error: f64,
     pub stderr: f64,
+    /// A closed-form technique evaluated by [`metrics::evaluate`] on every fragment of the
+    /// stacks (not an LP candidate on the sweep's fragments).
+    pub closed_form: bool,
 }
 
 /// The paper's reference bases (Eq. 1 and VSM/ESM) tabulated on a grid, for reference values
@@ -72,30 +78,215 @@ pub fn lp_references(data: &Dataset, solver: &str, chunk: usize) -> Result<Vec<R
     ];
     let subsets: Vec<Vec<usize>> = sets.iter().map(|s| s.1.clone()).collect();
     let errs = s.errors_many(&subsets, &ids, &|_| {})?;
-    let total = data.total_count() as f64;
-    let nt = ids.len() as f64;
     let mut out = vec![Reference {
         label: "PCF".into(),
         m: 0,
         error: 0.0,
         stderr: 0.0,
+        closed_form: false,
     }];
-    for ((label, _), e) in sets.iter().zip(errs) {
+    for ((label, cols), e) in sets.iter().zip(errs) {
         let sum: f64 = e.errors.iter().sum();
-        let mean = if nt > 0.0 { sum / nt } else { 0.0 };
-        let var = if nt > 1.0 {
-            e.errors.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (nt - 1.0)
-        } else {
-            0.0
-        };
+        let sumsq: f64 = e.errors.iter().map(|x| x * x).sum();
+        let (error, stderr) = data.error_estimate(e.errors.len() as u64, sum, sumsq);
         out.push(Reference {
             label: label.to_string(),
-            m: subsets[out.len() - 1].len(),
-            error: (data.trivial_error() + sum) / total,
-            stderr: nt / total * (var / nt.max(1.0)).sqrt(),
+            m: cols.len(),
+            error,
+            stderr: if stderr.is_finite() { stderr } else { 0.0 },
+            closed_form: false,
         });
     }
     Ok(out)
+}
+
+/// Closed-form techniques marked in the Fig. 4 analogue: (registry name, label, m).
+pub const CLOSED_FORMS: [(&str, &str, usize); 4] = [
+    ("hamburger4", "4MSM Hamburger (closed form)", 4),
+    ("tmsm", "TMSM (closed form)", 4),
+    ("vsm", "VSM (closed form)", 2),
+    ("esm", "ESM (closed form)", 1),
+];
+
+/// The closed forms of [`CLOSED_FORMS`] (`technique::by_name`, default parameters) evaluated
+/// with [`metrics::evaluate`] on every fragment of `stacks` with `bias`: the population value
+/// the sweep's sampled candidate errors estimate (standard error 0: nothing is sampled).
+pub fn closed_form_references(stacks: &[DepthStack], bias: &Bias) -> Result<Vec<Reference>> {
+    let opts = EvalOptions {
+        bias: *bias,
+        ..EvalOptions::default()
+    };
+    let mut out = Vec::new();
+    for (name, label, m) in CLOSED_FORMS {
+        let t = crate::technique::by_name(name)?;
+        let r = metrics::evaluate(stacks, t.as_ref(), &opts)
+            .with_context(|| format!("evaluating {name}"))?;
+        out.push(Reference {
+            label: label.to_string(),
+            m,
+            error: r.error,
+            stderr: 0.0,
+            closed_form: true,
+        });
+    }
+    Ok(out)
+}
+
+/// A reference value with its rank among the scored candidates of the same m.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RankedReference {
+    pub label: String,
+    pub m: usize,
+    pub error: f64,
+    pub stderr: f64,
+    pub closed_form: bool,
+    /// 1 + number of candidates with a smaller error (None: different m or PCF).
+    pub rank: Option<usize>,
+}
+
+/// The best candidate of a results set.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Best {
+    pub index: u64,
+    pub functions: Vec<String>,
+    pub error: f64,
+    pub stderr: f64,
+    /// Scored on every fragment of the dataset (not only a racing sample).
+    pub full: bool,
+}
+
+/// What a report says, as numbers (for `momentlab reproduce`).
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// Candidates with an error (scored, or duplicates of a scored one).
+    pub scored: usize,
+    pub best: Option<Best>,
+    pub references: Vec<RankedReference>,
+}
+
+impl Summary {
+    /// The reference with this label, if present.
+    pub fn reference(&self, label: &str) -> Option<&RankedReference> {
+        self.references.iter().find(|r| r.label == label)
+    }
+}
+
+/// Best candidate and the ranks of `refs` among `rows` (same m only).
+pub fn summarize(rows: &[Row], refs: &[Reference]) -> Summary {
+    let errs = errors_of(rows);
+    let ranked = ranking(rows);
+    let best = ranked.first().map(|r| Best {
+        index: r.index,
+        functions: r.functions.clone(),
+        error: r.error.unwrap_or(f64::NAN),
+        stderr: r.stderr.unwrap_or(0.0),
+        full: r.full,
+    });
+    let m = best.as_ref().map(|b| b.functions.len());
+    Summary {
+        scored: errs.len(),
+        references: refs
+            .iter()
+            .map(|r| RankedReference {
+                label: r.label.clone(),
+                m: r.m,
+                error: r.error,
+                stderr: r.stderr,
+                closed_form: r.closed_form,
+                rank: (Some(r.m) == m && r.label != "PCF").then(|| rank_of(&errs, r.error)),
+            })
+            .collect(),
+        best,
+    }
+}
+
+/// Options of [`write`].
+#[derive(Clone, Debug)]
+pub struct ReportOptions {
+    /// Solver and chunk size for the Fig. 3 curves.
+    pub solver: String,
+    pub chunk: usize,
+    /// Results directories of other sweeps (e.g. m = 2 and 3) for the side-by-side plot.
+    pub compare: Vec<PathBuf>,
+    /// Depths at which the Fig. 3 curves are solved.
+    pub fig3_points: usize,
+    /// How the results are named in the text (e.g. their directory).
+    pub results_label: String,
+}
+
+impl Default for ReportOptions {
+    fn default() -> Self {
+        ReportOptions {
+            solver: "fast".into(),
+            chunk: 4096,
+            compare: Vec::new(),
+            fig3_points: 96,
+            results_label: String::new(),
+        }
+    }
+}
+
+/// Write the report of a sweep into `dir`: `fig4_m<m>.svg` (histogram with `refs` marked),
+/// `distributions.svg` (this sweep and `opts.compare` side by side), `fig3.svg` and
+/// `search_m<m>.md` (ranking text, top-20 table). Returns the numbers the text states.
+pub fn write(
+    dir: &Path,
+    rows: &[Row],
+    data: &Dataset,
+    refs: &[Reference],
+    opts: &ReportOptions,
+) -> Result<Summary> {
+    let summary = summarize(rows, refs);
+    let Some(best) = &summary.best else {
+        bail!("no scored candidates to report");
+    };
+    let m = best.functions.len();
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let errs = errors_of(rows);
+    plot_histogram(
+        &dir.join(format!("fig4_m{m}.svg")),
+        &format!("Candidate errors, m = {m} ({} candidates)", errs.len()),
+        &errs,
+        refs,
+    )?;
+    let mut sets = vec![(format!("m = {m}"), errs.clone())];
+    for d in &opts.compare {
+        let r = read_rows(d)?;
+        let cfg: SweepConfig = read_json(&d.join(super::results::CONFIG_FILE))?;
+        if cfg.m != m {
+            sets.push((format!("m = {}", cfg.m), errors_of(&r)));
+        }
+    }
+    sets.sort_by(|a, b| a.0.cmp(&b.0));
+    plot_side_by_side(&dir.join("distributions.svg"), &sets)?;
+    let kernels = pick_kernels(data, 3);
+    let panels = fig3_panels(data, &kernels, opts.fig3_points, &opts.solver)?;
+    plot_fig3(&dir.join("fig3.svg"), &panels)?;
+    let sampled = data.sampled_fraction();
+    let mut md = format!(
+        "# Candidate sweep, m = {m}\n\nResults: `{}`. {} fragments, {} non-trivial; the sweep's dataset \
+         holds {} of the non-trivial ones ({:.2} %, stratified by view and layer), trivial fragments \
+         (G = 0 for every candidate) are counted exactly.\n\n![Fig. 4 analogue](fig4_m{m}.svg)\n\n\
+         ## Ranking\n\n{}\n## Top 20\n\n{}\n![error distributions](distributions.svg)\n\n\
+         ![Fig. 3 analogue](fig3.svg)\n",
+        opts.results_label,
+        data.total_count(),
+        data.nontrivial_population(),
+        data.fragments().len(),
+        sampled * 100.0,
+        ranking_text(rows, refs),
+        top_table(rows, 20)
+    );
+    md.push_str(
+        "\nReference values: LP candidates (label \"(LP)\") are scored on every fragment of the \
+         sweep's dataset with the same grid and solver as the candidates; closed forms (label \
+         \"(closed form)\") are `momentlab evaluate` values (metrics::evaluate, same bias) on every \
+         fragment of the stacks. Errors and standard errors estimate the mean |G − PCF| over all \
+         fragments of the stacks.\n",
+    );
+    std::fs::write(dir.join(format!("search_m{m}.md")), md)
+        .with_context(|| format!("writing {}", dir.display()))?;
+    Ok(summary)
 }
 
 /// Scored errors of a results set (duplicates resolved), ascending.
@@ -216,6 +407,7 @@ pub fn plot_side_by_side(path: &Path, sets: &[(String, Vec<f64>)]) -> Result<()>
             m: 0,
             error: v.first().copied().unwrap_or(f64::NAN),
             stderr: 0.0,
+            closed_form: false,
         }];
         let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
         draw_histogram_range(area, label, &finite, &refs, lo, hi)?;
@@ -498,6 +690,7 @@ mod tests {
             m: 1,
             error: 0.025,
             stderr: 0.0,
+            closed_form: false,
         }];
         let text = ranking_text(&rows, &refs);
         assert!(text.contains("rank 3 of 3"), "{text}");
@@ -514,6 +707,7 @@ mod tests {
             m: 4,
             error: 0.025,
             stderr: 0.0,
+            closed_form: false,
         }];
         plot_histogram(&dir.join("h.svg"), "test", &errs, &refs).unwrap();
         plot_side_by_side(

@@ -36,12 +36,12 @@
 //! racing, the global top K (each of which is in its shard's top K when racing does not drop
 //! it) is scored identically, while eliminated candidates may leave at different stages.
 
-use super::combo;
 use super::results::{
     append_jsonl, read_json, read_jsonl, write_json, Row, COMPLETE_FILE, CONFIG_FILE, RESULTS_FILE,
 };
 use super::span::{Flag, SpanAnalyzer};
 use super::Scorer;
+use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -142,9 +142,13 @@ pub struct SweepSummary {
     pub stages: Vec<(u64, u64)>,
     /// Candidates scored on every fragment.
     pub full: u64,
-    /// Non-trivial / all fragments.
+    /// Non-trivial fragments stored in the dataset (the sample) / all fragments of the
+    /// population.
     pub nontrivial_fragments: u64,
     pub all_fragments: u64,
+    /// Non-trivial fragments of the population the dataset was sampled from.
+    #[serde(default)]
+    pub nontrivial_population: u64,
     /// LP solves of the plan (pilots and stage references included).
     pub lp_solves: u64,
     /// lp_solves / (scored candidates × non-trivial fragments).
@@ -163,6 +167,7 @@ impl SweepSummary {
             full: 0,
             nontrivial_fragments: 0,
             all_fragments: 0,
+            nontrivial_population: 0,
             lp_solves: 0,
             sampled_share: 0.0,
             merged_shards: Some(shards),
@@ -273,12 +278,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         bail!("search config field '{f}' does not match the data/catalog/scorer given");
     }
     let nf = cfg.functions.len();
-    if cfg.m == 0 || cfg.m > nf {
-        bail!(
-            "m = {} is out of range for a catalog of {nf} functions",
-            cfg.m
-        );
-    }
+    bc::check_m(nf, cfg.m)?;
     let [shard_i, shard_n] = cfg.shard;
     if shard_n == 0 || shard_i >= shard_n {
         bail!("invalid shard {shard_i}/{shard_n}");
@@ -310,11 +310,11 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
 
     // --- candidates and flags -----------------------------------------------------------------
     let all: Vec<(u64, Vec<usize>)> = match &cfg.candidates {
-        None => combo::all_combinations(nf, cfg.m),
+        None => all_subsets(nf, cfg.m),
         Some(list) => {
             let set: BTreeSet<u64> = list.iter().copied().collect();
             set.into_iter()
-                .map(|i| Ok((i, combo::combination(i, nf, cfg.m)?)))
+                .map(|i| Ok((i, bc::index_to_subset(nf, cfg.m, i)?)))
                 .collect::<Result<_>>()?
         }
     };
@@ -357,7 +357,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
             Flag::Ok => (false, None),
             Flag::Degenerate => (true, None),
             Flag::DuplicateOf(rep) => {
-                let r = combo::combination_index(rep, nf)?;
+                let r = bc::subset_to_index(rep)?;
                 if in_run.contains(&r) {
                     (false, Some(r))
                 } else {
@@ -393,16 +393,8 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     }
 
     // --- racing ---------------------------------------------------------------------------------
-    let total = data.total_count() as f64;
     let nontrivial = data.fragments().len() as u64;
-    let to_error = |n: u64, sum: f64, sumsq: f64| -> (f64, f64) {
-        let (mean, se) = mean_se(n, sum, sumsq);
-        let scale = nontrivial as f64 / total;
-        (
-            (data.trivial_error() + nontrivial as f64 * mean) / total,
-            scale * se,
-        )
-    };
+    let to_error = |n: u64, sum: f64, sumsq: f64| data.error_estimate(n, sum, sumsq);
     let mut lp_solves = 0u64;
     let mut stages = Vec::new();
     let mut pooled: BTreeMap<u64, StageRow> = BTreeMap::new();
@@ -613,6 +605,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         full: cur.len() as u64,
         nontrivial_fragments: nontrivial,
         all_fragments: data.total_count(),
+        nontrivial_population: data.nontrivial_population(),
         lp_solves,
         sampled_share: if scored * nontrivial == 0 {
             0.0
@@ -623,6 +616,24 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     };
     write_json(&dir.join(COMPLETE_FILE), &summary)?;
     Ok(Outcome::Complete(summary))
+}
+
+/// All `(index, subset)` pairs of m-subsets of 0..n in the catalog's colex order
+/// ([`bc::next_subset`]: the index is the position in this enumeration).
+pub fn all_subsets(n: usize, m: usize) -> Vec<(u64, Vec<usize>)> {
+    let mut out = Vec::with_capacity(bc::count(n, m).min(1 << 24) as usize);
+    if m == 0 || m > n {
+        return out;
+    }
+    let mut c: Vec<usize> = (0..m).collect();
+    let mut idx = 0u64;
+    loop {
+        out.push((idx, c.clone()));
+        idx += 1;
+        if !bc::next_subset(&mut c, n) {
+            return out;
+        }
+    }
 }
 
 #[allow(clippy::too_many_arguments)]

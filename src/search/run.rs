@@ -1,0 +1,288 @@
+//! The library entry points of the whole sweep, shared by `momentlab search` and
+//! `momentlab reproduce`: build the dataset from depth stacks, run (or resume) the sweep, score
+//! the references and write the report.
+
+use super::report::{self, Reference, ReportOptions, Summary};
+use super::results::{read_rows, Row};
+use super::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Progress, SamplePlan, Scorer};
+use super::{SweepConfig, SweepSummary};
+use crate::basis::candidates as bc;
+use crate::metrics::Bias;
+use crate::stack::DepthStack;
+use crate::Grid;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Everything a sweep on depth stacks needs (defaults: the m = 4 study as documented in
+/// docs/search.md).
+#[derive(Clone, Debug)]
+pub struct SweepOptions {
+    /// Functions per candidate.
+    pub m: usize,
+    /// Catalog file (None: the embedded catalog).
+    pub catalog: Option<PathBuf>,
+    /// LP grid size n (uniform on [0,1]).
+    pub grid: usize,
+    /// "fast" or "reference".
+    pub solver: String,
+    /// Fragments per solver instance (warm-start chain).
+    pub chunk: usize,
+    /// Depth biases of PCF and of the techniques (as in `momentlab evaluate`).
+    pub bias: Bias,
+    /// Cap on the non-trivial fragments kept (None: all).
+    pub max_fragments: Option<usize>,
+    /// Seed of the fragment sample and of the racing order.
+    pub seed: u64,
+    /// Name of the data in the config (e.g. "default dataset 512").
+    pub dataset: String,
+    /// Racing parameters (see [`SweepConfig`]).
+    pub top: usize,
+    pub exhaustive: bool,
+    /// Only these candidate indices, or these candidates by names "f1,f2;g1,g2".
+    pub candidates: Option<Vec<u64>>,
+    pub names: Option<String>,
+    pub shard: [usize; 2],
+    pub first_sample: usize,
+    pub growth: usize,
+    pub keep: f64,
+    pub max_keep: f64,
+    pub z: f64,
+    pub pilot: usize,
+    pub batch: usize,
+    /// Write the report here after a complete unsharded run (None: no report files; the
+    /// returned [`Summary`] is computed anyway).
+    pub report_dir: Option<PathBuf>,
+    /// Mark the closed forms (metrics::evaluate on every fragment of the stacks).
+    pub closed_forms: bool,
+    /// Other results directories for the side-by-side distribution plot.
+    pub compare: Vec<PathBuf>,
+    pub fig3_points: usize,
+}
+
+impl Default for SweepOptions {
+    fn default() -> Self {
+        SweepOptions {
+            m: 4,
+            catalog: None,
+            grid: 1024,
+            solver: "fast".into(),
+            chunk: 4096,
+            bias: Bias::default(),
+            max_fragments: Some(super::DEFAULT_MAX_FRAGMENTS),
+            seed: 1,
+            dataset: "stacks".into(),
+            top: 50,
+            exhaustive: false,
+            candidates: None,
+            names: None,
+            shard: [0, 1],
+            first_sample: 1024,
+            growth: 4,
+            keep: 0.25,
+            max_keep: 0.5,
+            z: 2.5,
+            pilot: 32,
+            batch: 64,
+            report_dir: None,
+            closed_forms: true,
+            compare: Vec::new(),
+            fig3_points: 96,
+        }
+    }
+}
+
+/// What a finished sweep reports (the figures `momentlab reproduce` shows).
+#[derive(Clone, Debug)]
+pub struct SweepResult {
+    /// None when the run was stopped by a hook (rows are then partial).
+    pub summary: Option<SweepSummary>,
+    /// All rows of the results directory.
+    pub rows: Vec<Row>,
+    /// Wall time of this call (dataset, sweep, references, report), seconds.
+    pub seconds: f64,
+    /// Wall time of the sweep itself, seconds.
+    pub sweep_seconds: f64,
+    /// Best candidate and ranks of the references (b_MSM, b_TMSM, …); None for a shard or an
+    /// unfinished run.
+    pub ranking: Option<Summary>,
+    /// The reference values.
+    pub references: Vec<Reference>,
+}
+
+/// The catalog (file or embedded) tabulated on `grid`.
+pub fn load_table(catalog: Option<&Path>, grid: &Grid) -> Result<FunctionTable> {
+    let catalog = match catalog {
+        Some(p) => {
+            crate::basis::Catalog::load(p).with_context(|| format!("catalog {}", p.display()))?
+        }
+        None => crate::basis::Catalog::embedded(),
+    };
+    FunctionTable::from_functions(grid, catalog.functions()).context("tabulating the catalog")
+}
+
+/// Candidate indices from explicit indices or from names "f1,f2,…;g1,g2,…" (None: all).
+pub fn resolve_candidates(
+    table: &FunctionTable,
+    m: usize,
+    indices: Option<&[u64]>,
+    names: Option<&str>,
+) -> Result<Option<Vec<u64>>> {
+    if indices.is_some() && names.is_some() {
+        bail!("give candidates either by index or by names, not both");
+    }
+    if let Some(c) = indices {
+        let total = bc::count(table.len(), m);
+        if let Some(bad) = c.iter().find(|&&i| i >= total) {
+            bail!(
+                "candidate index {bad} out of range (C({},{m}) = {total})",
+                table.len()
+            );
+        }
+        return Ok(Some(c.to_vec()));
+    }
+    let Some(names) = names else {
+        return Ok(None);
+    };
+    let mut out = Vec::new();
+    for set in names.split(';').filter(|s| !s.trim().is_empty()) {
+        let mut cols = Vec::new();
+        for n in set.split(',') {
+            let n = n.trim();
+            let j = table
+                .names()
+                .iter()
+                .position(|x| x == n)
+                .with_context(|| format!("candidate names: unknown function '{n}'"))?;
+            cols.push(j);
+        }
+        if cols.len() != m {
+            bail!("candidate '{set}' has {} functions, m is {m}", cols.len());
+        }
+        out.push(bc::subset_to_index(&cols).with_context(|| format!("candidate '{set}'"))?);
+    }
+    Ok(Some(out))
+}
+
+/// The whole sweep on depth stacks: [`Dataset::from_stacks`] (grid, bias, capped stratified
+/// sample), the catalog on the grid, [`run_sweep`] into `results` (resumable), then for a
+/// complete unsharded run the references (LP on the same fragments, closed forms via
+/// `metrics::evaluate` on the stacks), the ranking and, if `opts.report_dir` is set, the report.
+pub fn sweep_stacks(
+    stacks: &[DepthStack],
+    opts: &SweepOptions,
+    results: &Path,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<SweepResult> {
+    let t0 = Instant::now();
+    let grid = Grid::uniform(opts.grid)?;
+    let plan = SamplePlan {
+        max_fragments: opts.max_fragments,
+        seed: opts.seed,
+    };
+    let data = Dataset::from_stacks(stacks, &grid, &opts.bias, &plan)?;
+    let table = load_table(opts.catalog.as_deref(), &grid)?;
+    let mut r = sweep_dataset(&data, &table, Some(stacks), opts, results, progress)?;
+    r.seconds = t0.elapsed().as_secs_f64();
+    Ok(r)
+}
+
+/// [`sweep_stacks`] on a prepared dataset and table (synthetic data, custom catalogs);
+/// closed-form references need the `stacks`.
+pub fn sweep_dataset(
+    data: &Dataset,
+    table: &FunctionTable,
+    stacks: Option<&[DepthStack]>,
+    opts: &SweepOptions,
+    results: &Path,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
+) -> Result<SweepResult> {
+    let t0 = Instant::now();
+    let scorer = Scorer::new(data, table, &opts.solver, opts.chunk)?;
+    let cfg = SweepConfig {
+        seed: opts.seed,
+        top: opts.top,
+        exhaustive: opts.exhaustive,
+        candidates: resolve_candidates(
+            table,
+            opts.m,
+            opts.candidates.as_deref(),
+            opts.names.as_deref(),
+        )?,
+        shard: opts.shard,
+        first_sample: opts.first_sample,
+        growth: opts.growth,
+        keep: opts.keep,
+        max_keep: opts.max_keep,
+        z: opts.z,
+        pilot: opts.pilot,
+        batch: opts.batch,
+        ..SweepConfig::new(opts.m, &scorer, &opts.dataset)
+    };
+    let hooks = Hooks {
+        stop_after_batches: None,
+        progress,
+    };
+    let outcome = run_sweep(&cfg, &scorer, results, &hooks)?;
+    let sweep_seconds = t0.elapsed().as_secs_f64();
+    let rows = read_rows(results)?;
+    let summary = match outcome {
+        Outcome::Complete(s) => Some(s),
+        Outcome::Stopped => None,
+    };
+    let mut out = SweepResult {
+        summary,
+        rows,
+        seconds: 0.0,
+        sweep_seconds,
+        ranking: None,
+        references: Vec::new(),
+    };
+    if out.summary.is_some() && opts.shard[1] == 1 {
+        let (ranking, refs) = report_for(data, stacks, &out.rows, opts, results)?;
+        out.ranking = Some(ranking);
+        out.references = refs;
+    }
+    out.seconds = t0.elapsed().as_secs_f64();
+    Ok(out)
+}
+
+/// References, ranking and (if `opts.report_dir`) the report files for existing `rows`.
+pub fn report_for(
+    data: &Dataset,
+    stacks: Option<&[DepthStack]>,
+    rows: &[Row],
+    opts: &SweepOptions,
+    results: &Path,
+) -> Result<(Summary, Vec<Reference>)> {
+    if scored_rows(rows) == 0 {
+        bail!("{}: no scored candidates to report", results.display());
+    }
+    let mut refs = report::lp_references(data, &opts.solver, opts.chunk)?;
+    if opts.closed_forms {
+        if let Some(s) = stacks {
+            refs.extend(report::closed_form_references(s, &opts.bias)?);
+        }
+    }
+    let summary = match &opts.report_dir {
+        Some(dir) => report::write(
+            dir,
+            rows,
+            data,
+            &refs,
+            &ReportOptions {
+                solver: opts.solver.clone(),
+                chunk: opts.chunk,
+                compare: opts.compare.clone(),
+                fig3_points: opts.fig3_points,
+                results_label: results.display().to_string(),
+            },
+        )?,
+        None => report::summarize(rows, &refs),
+    };
+    Ok((summary, refs))
+}
+
+fn scored_rows(rows: &[Row]) -> usize {
+    rows.iter().filter(|r| r.error.is_some()).count()
+}
