@@ -69,6 +69,10 @@ struct Plan {
     search_ms: Vec<usize>,
     search_first_sample: usize,
     search_top: usize,
+    /// Candidates per m ≥ 3 sweep (a seeded random subset plus the paper's bases); None = all.
+    search_subset: Option<usize>,
+    /// Cap on the sweep's non-trivial fragments.
+    search_max_fragments: usize,
     pictures: usize,
 }
 
@@ -88,6 +92,8 @@ impl Plan {
                 search_ms: vec![2],
                 search_first_sample: 128,
                 search_top: 5,
+                search_subset: Some(20),
+                search_max_fragments: 4096,
                 pictures: 1,
             }
         } else if args.full {
@@ -104,6 +110,8 @@ impl Plan {
                 search_ms: vec![2, 3, 4],
                 search_first_sample: 2048,
                 search_top: 50,
+                search_subset: None,
+                search_max_fragments: 131_072,
                 pictures: 12,
             }
         } else {
@@ -119,7 +127,9 @@ impl Plan {
                 stability_samples: 1200,
                 search_ms: vec![2, 3, 4],
                 search_first_sample: 1024,
-                search_top: 50,
+                search_top: 20,
+                search_subset: Some(150),
+                search_max_fragments: 32_768,
                 pictures: 4,
             }
         };
@@ -500,7 +510,21 @@ pub fn run(args: Args) -> Result<()> {
                 plan.search_first_sample.to_string(),
                 "--top".into(),
                 plan.search_top.to_string(),
+                "--max-fragments".into(),
+                plan.search_max_fragments.to_string(),
+                "--resolution".into(),
+                plan.resolution.to_string(),
             ];
+            if let (Some(k), true) = (plan.search_subset, m >= 3) {
+                argv.push("--candidates".into());
+                argv.push(
+                    search_subset(m, k)?
+                        .iter()
+                        .map(|i| i.to_string())
+                        .collect::<Vec<_>>()
+                        .join(","),
+                );
+            }
             if !compare.is_empty() {
                 argv.push("--compare".into());
                 argv.push(compare.join(","));
@@ -509,8 +533,17 @@ pub fn run(args: Args) -> Result<()> {
             let a: super::search::Args = sub(&argv)?;
             match super::search::run(a) {
                 Ok(()) => {
+                    let scope = match (plan.search_subset, m >= 3) {
+                        (Some(k), true) => format!(
+                            "a seeded subset of {k} candidates including the paper's bases \
+                             (`--full` sweeps all C(37,{m}))"
+                        ),
+                        _ => format!("all C(37,{m}) candidates"),
+                    };
                     search_notes.push(format!(
-                        "m = {m}: done in {:.0} s (results in {})",
+                        "m = {m}: {scope}, racing over at most {} non-trivial fragments, done in \
+                         {:.0} s (results in {})",
+                        plan.search_max_fragments,
                         st.elapsed().as_secs_f64(),
                         results.display()
                     ));
@@ -677,7 +710,17 @@ fn include_folder(doc: &mut Document, dir: &Path, out: &Path) -> Result<()> {
     };
     for f in &files {
         match f.extension().and_then(|e| e.to_str()) {
-            Some("md") => doc.code(std::fs::read_to_string(f)?.trim().to_string()),
+            // Sub-reports' own image links are relative to their folder: the figures are
+            // added below as figures of this report, so drop those lines from the text.
+            Some("md") => doc.code(
+                std::fs::read_to_string(f)?
+                    .lines()
+                    .filter(|l| !l.trim_start().starts_with("!["))
+                    .collect::<Vec<_>>()
+                    .join("\n")
+                    .trim()
+                    .to_string(),
+            ),
             Some("svg") | Some("png") => doc.figure(
                 rel(f),
                 f.file_name()
@@ -883,4 +926,51 @@ fn build_report(r: ReportInputs) -> Result<Document> {
     d.heading("Stability: where each method fails");
     include_folder(&mut d, &r.out.join("stability"), r.out)?;
     Ok(d)
+}
+
+/// A seeded random subset of `k` candidate indices of the embedded catalog for m functions,
+/// always including the paper's polynomial basis (z, …, z^m) and, for m = 4, b_TMSM.
+fn search_subset(m: usize, k: usize) -> Result<Vec<u64>> {
+    use crate::basis::candidates;
+    use rand::{Rng, SeedableRng};
+    let cat = crate::basis::Catalog::embedded();
+    let total = candidates::count(cat.len(), m);
+    let mut pick: Vec<u64> = Vec::new();
+    let mut named = vec![(1..=m)
+        .map(|k| {
+            if k == 1 {
+                "z".to_string()
+            } else {
+                format!("z^{k}")
+            }
+        })
+        .collect::<Vec<_>>()];
+    if m == 4 {
+        named.push(
+            ["sin(2πz)", "cos(2πz)", "sin(4πz)", "cos(4πz)"]
+                .iter()
+                .map(|s| s.to_string())
+                .collect(),
+        );
+    }
+    for names in named {
+        let mut idx: Vec<usize> = names
+            .iter()
+            .map(|n| {
+                cat.position(n)
+                    .with_context(|| format!("catalog has no '{n}'"))
+            })
+            .collect::<Result<_>>()?;
+        idx.sort();
+        pick.push(candidates::subset_to_index(&idx)?);
+    }
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2015 + m as u64);
+    while pick.len() < k.min(total as usize) {
+        let i = rng.gen_range(0..total);
+        if !pick.contains(&i) {
+            pick.push(i);
+        }
+    }
+    pick.sort();
+    Ok(pick)
 }
