@@ -123,6 +123,8 @@ pub struct FastSolver {
     warm: bool,
     stats: FastStats,
     fallback: Option<ReferenceSolver>,
+    /// Hand unsolved problems to the reference solver (default) or report an error.
+    use_fallback: bool,
     // Workspace (no allocation per solve).
     c: Vec<f64>,
     u: Vec<f64>,
@@ -253,6 +255,7 @@ impl FastSolver {
             warm: true,
             stats: FastStats::default(),
             fallback: None,
+            use_fallback: true,
             c: vec![0.0; r],
             u: vec![0.0; r],
             basis: vec![0; r],
@@ -293,6 +296,13 @@ impl FastSolver {
     }
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
+    /// Whether problems the simplex cannot settle (numerically singular clustered bases) go
+    /// to the reference solver (default, slow but usually right) or return an error at once
+    /// (for sweeps that count failures, see `lp::make_solver("fast-strict", …)`).
+    pub fn set_reference_fallback(&mut self, on: bool) {
+        self.use_fallback = on;
+    }
+
     pub fn set_warm_start(&mut self, on: bool) {
         self.warm = on;
         if !on {
@@ -1134,6 +1144,9 @@ impl MomentSolver for FastSolver {
         }
         // Last resort: the general-purpose solver.
         self.stats.fallbacks += 1;
+        if !self.use_fallback {
+            anyhow::bail!("fast LP: no convergence (reference fallback disabled)");
+        }
         let table = &self.table;
         let fb = self
             .fallback

@@ -101,11 +101,19 @@ pub trait MomentSolver: Send {
     fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution>;
 }
 
-/// The solver of the given name ("reference" or "fast") on `table`.
+/// The solver of the given name on `table`: "reference", "fast", or "fast-strict" (the fast
+/// solver without the reference fallback: unsettled problems are errors).
 pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
     match kind {
         "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),
         "fast" => Ok(Box::new(fast::FastSolver::new(table))),
-        other => bail!("unknown LP solver '{other}' (expected 'reference' or 'fast')"),
+        "fast-strict" => {
+            let mut s = fast::FastSolver::new(table);
+            s.set_reference_fallback(false);
+            Ok(Box::new(s))
+        }
+        other => {
+            bail!("unknown LP solver '{other}' (expected 'reference', 'fast' or 'fast-strict')")
+        }
     }
 }

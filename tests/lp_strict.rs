@@ -1,0 +1,66 @@
+//! "fast-strict" is the fast solver without the reference fallback: whenever it answers, it
+//! answers exactly what "fast" answers; otherwise it reports an error instead of stalling.
+
+use momentlab::lp::{make_solver, GridTable, Status};
+use momentlab::Grid;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+#[test]
+fn strict_agrees_with_fast_whenever_it_answers() {
+    let grid = Grid::uniform(257).unwrap();
+    let table = GridTable::from_fn(&grid, 4, |z, o| {
+        o[0] = z;
+        o[1] = z * z;
+        o[2] = z * z * z;
+        o[3] = z * z * z * z;
+    })
+    .unwrap();
+    let mut fast = make_solver("fast", table.clone()).unwrap();
+    let mut strict = make_solver("fast-strict", table.clone()).unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let (mut answered, mut errors) = (0, 0);
+    for _ in 0..2000 {
+        let k = rng.gen_range(1..=5);
+        let mut b = [0.0; 4];
+        let mut wsum = 0.0;
+        let atoms: Vec<(f64, f64)> = (0..k)
+            .map(|_| {
+                (
+                    grid.points()[rng.gen_range(0..257)],
+                    rng.gen_range(0.05..1.0),
+                )
+            })
+            .collect();
+        atoms.iter().for_each(|a| wsum += a.1);
+        for &(z, w) in &atoms {
+            for (j, bj) in b.iter_mut().enumerate() {
+                *bj += w / wsum * z.powi(j as i32 + 1);
+            }
+        }
+        let zf = rng.gen_range(0.0..1.0);
+        let f = fast.solve(&b, zf).unwrap();
+        match strict.solve(&b, zf) {
+            Ok(s) => {
+                answered += 1;
+                assert_eq!(s.status, f.status);
+                if f.status == Status::Optimal {
+                    assert!((s.g - f.g).abs() < 1e-9, "strict {} vs fast {}", s.g, f.g);
+                }
+            }
+            Err(e) => {
+                errors += 1;
+                assert!(e.to_string().contains("no convergence"), "{e}");
+            }
+        }
+    }
+    assert!(answered > 1900, "answered {answered}, errors {errors}");
+}
+
+#[test]
+fn unknown_solver_names_the_choices() {
+    let grid = Grid::uniform(8).unwrap();
+    let table = GridTable::from_fn(&grid, 1, |z, o| o[0] = z).unwrap();
+    let e = make_solver("simplex", table).err().unwrap().to_string();
+    assert!(e.contains("fast-strict") && e.contains("simplex"), "{e}");
+}
