@@ -81,6 +81,12 @@ pub struct FastStats {
     pub restarts: u64,
     /// Problems handed to the reference solver after the restarts also failed.
     pub fallbacks: u64,
+    /// Solves given a start distribution ([`MomentSolver::solve_from`]).
+    pub hinted: u64,
+    /// Of which the start could not be turned into a basis (the usual start was used).
+    pub hint_rejected: u64,
+    /// Crossover pivots (start distribution → basic feasible solution).
+    pub crossover_pivots: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -159,6 +165,13 @@ pub struct FastSolver {
     lo_r: Vec<f64>,
     lo_w: Vec<f64>,
     lo_rhs: Vec<f64>,
+    /// Crossover workspace: the start distribution, residuals, orthonormal directions and
+    /// basis positions of its support points.
+    hint: Vec<(usize, f64)>,
+    hint_res: Vec<f64>,
+    hint_u: Vec<f64>,
+    hint_pos: Vec<usize>,
+    dist_moments: Vec<f64>,
 }
 
 impl FastSolver {
@@ -292,6 +305,11 @@ impl FastSolver {
             lo_rhs: vec![0.0; mm],
             fscale,
             table,
+            hint: Vec::new(),
+            hint_res: Vec::new(),
+            hint_u: Vec::new(),
+            hint_pos: Vec::new(),
+            dist_moments: Vec::new(),
         }
     }
 
@@ -417,6 +435,15 @@ impl FastSolver {
     /// Recompute the basis inverse from scratch (Gauss–Jordan, partial pivoting) and
     /// x = B⁻¹ c. False if the basis is numerically singular.
     fn refactor(&mut self) -> bool {
+        let ok = self.factor();
+        if ok {
+            self.basic_solution();
+        }
+        ok
+    }
+
+    /// Basis inverse only (see [`Self::refactor`]); false if numerically singular.
+    fn factor(&mut self) -> bool {
         let r = self.r;
         // bmat[k][t] = a_{B_t}[k]
         for t in 0..r {
@@ -429,8 +456,13 @@ impl FastSolver {
         let bnorm = norm(&self.bmat);
         // Numerically singular for our purposes: weights from such a basis carry errors of
         // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
-        let ok = invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND;
-        if ok {
+        invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND
+    }
+
+    /// x = B⁻¹ c with two steps of iterative refinement.
+    fn basic_solution(&mut self) {
+        let r = self.r;
+        {
             mat_vec(&self.binv, &self.c, &mut self.x, r);
             // Two steps of iterative refinement: x += B⁻¹ (c − B x). The explicit inverse of an
             // ill-conditioned basis (neighbouring grid points) is accurate to cond·ε only.
@@ -457,7 +489,6 @@ impl FastSolver {
                 }
             }
         }
-        ok
     }
 
     /// y = c_Bᵀ B⁻¹ for costs cost(B_t).
@@ -946,11 +977,16 @@ impl FastSolver {
 
     /// Exchange basis position l for column q with step theta (alpha already loaded).
     fn pivot(&mut self, l: usize, q: usize, theta: f64) {
-        let r = self.r;
-        for t in 0..r {
+        for t in 0..self.r {
             self.x[t] -= theta * self.alpha[t];
         }
         self.x[l] = theta;
+        self.exchange(l, q);
+    }
+
+    /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
+    fn exchange(&mut self, l: usize, q: usize) {
+        let r = self.r;
         let al = self.alpha[l];
         for k in 0..r {
             self.binv[l * r + k] /= al;
@@ -1040,6 +1076,198 @@ impl FastSolver {
         }
     }
 
+    /// Crossover from a known distribution `start` = [(grid index, weight)] with these moments
+    /// (e.g. the filtered depth distribution of a kernel) to a basis whose basic solution is
+    /// feasible and costs no more. The basis is the support columns of greatest volume (greedy
+    /// Gram–Schmidt), completed from the cold-start basis; every other support point is then
+    /// pushed out, to weight 0 or into the basis, in the direction that does not increase
+    /// Σ_{z_i<z_f} w_i (one ratio test and exchange each). This replaces phase 1. False when
+    /// the start is unusable (then the caller starts as usual); `run` re-verifies feasibility
+    /// from the true moments in any case, so a wrong start cannot change the answer.
+    fn crossover(&mut self, start: &[(u32, f64)], kf: usize) -> bool {
+        let (n, r) = (self.n, self.r);
+        self.stats.hinted += 1;
+        self.hint.clear();
+        for &(i, w) in start {
+            let i = i as usize;
+            if i >= n || !w.is_finite() || w < 0.0 {
+                return false;
+            }
+            if w > 0.0 {
+                self.hint.push((i, w));
+            }
+        }
+        let s = self.hint.len();
+        if s == 0 {
+            return false;
+        }
+        // Greedy maximal volume among the support columns: residuals after projecting out the
+        // chosen ones (modified Gram–Schmidt on copies).
+        self.hint_res.clear();
+        for &(i, _) in &self.hint {
+            self.hint_res
+                .extend_from_slice(&self.rows[i * r..(i + 1) * r]);
+        }
+        self.hint_u.clear();
+        self.mark_basic(false);
+        let mut chosen = 0usize;
+        // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
+        self.hint_pos.clear();
+        self.hint_pos.resize(s, usize::MAX);
+        while chosen < r {
+            let mut best = usize::MAX;
+            let mut best_v = 0.0;
+            for k in 0..s {
+                if self.hint_pos[k] != usize::MAX {
+                    continue;
+                }
+                let v = dot(
+                    &self.hint_res[k * r..(k + 1) * r],
+                    &self.hint_res[k * r..(k + 1) * r],
+                );
+                if v > best_v {
+                    best_v = v;
+                    best = k;
+                }
+            }
+            // Relative to the column norm (RMS 1 over the grid, first coordinate 1).
+            if best == usize::MAX || best_v.sqrt() < 1e-5 {
+                break;
+            }
+            let inv = 1.0 / best_v.sqrt();
+            let u: Vec<f64> = self.hint_res[best * r..(best + 1) * r]
+                .iter()
+                .map(|v| v * inv)
+                .collect();
+            for k in 0..s {
+                if self.hint_pos[k] == usize::MAX && k != best {
+                    let row = &mut self.hint_res[k * r..(k + 1) * r];
+                    let h = dot(row, &u);
+                    for (a, b) in row.iter_mut().zip(&u) {
+                        *a -= h * b;
+                    }
+                }
+            }
+            self.hint_u.extend_from_slice(&u);
+            self.hint_pos[best] = chosen;
+            self.basis[chosen] = self.hint[best].0;
+            self.x[chosen] = self.hint[best].1;
+            chosen += 1;
+        }
+        // Complete from the cold-start basis (which spans R^r).
+        let mut t0 = 0;
+        while chosen < r && t0 < r {
+            let i = self.b0[t0];
+            t0 += 1;
+            if self.basis[..chosen].contains(&i) {
+                continue;
+            }
+            let mut v = self.rows[i * r..(i + 1) * r].to_vec();
+            let n0 = norm(&v);
+            for _pass in 0..2 {
+                for u in self.hint_u.chunks(r) {
+                    let h = dot(&v, u);
+                    for (a, b) in v.iter_mut().zip(u) {
+                        *a -= h * b;
+                    }
+                }
+            }
+            let nv = norm(&v);
+            if nv <= 1e-5 * n0 {
+                continue;
+            }
+            v.iter_mut().for_each(|a| *a /= nv);
+            self.hint_u.extend_from_slice(&v);
+            self.basis[chosen] = i;
+            self.x[chosen] = 0.0;
+            chosen += 1;
+        }
+        if chosen < r {
+            return false;
+        }
+        self.mark_basic(true);
+        if !self.factor() {
+            return false;
+        }
+        // Push every superbasic support point out of the interior.
+        let mut since = 0usize;
+        for k in 0..s {
+            if self.hint_pos[k] != usize::MAX {
+                continue;
+            }
+            let (j, w) = self.hint[k];
+            if self.is_basic[j] {
+                // A completion column of the cold basis is also in the support: give it the
+                // weight (same column, same point of the feasible set).
+                let Some(t) = self.basis.iter().position(|&b| b == j) else {
+                    return false;
+                };
+                self.x[t] += w;
+                continue;
+            }
+            self.load_alpha(j);
+            let mut dj = (j < kf) as u8 as f64;
+            for t in 0..r {
+                if self.basis[t] < kf {
+                    dj -= self.alpha[t];
+                }
+            }
+            const PIV: f64 = 1e-8;
+            // Decreasing w_j moves the basic weights by +t·α; increasing by −t·α.
+            let mut decrease = dj >= 0.0;
+            if !decrease && !self.alpha[..r].iter().any(|&a| a > PIV) {
+                decrease = true;
+            }
+            let (step, l) = if decrease {
+                let mut step = w;
+                let mut l = usize::MAX;
+                for t in 0..r {
+                    let a = self.alpha[t];
+                    if a < -PIV {
+                        let v = self.x[t].max(0.0) / -a;
+                        if v < step {
+                            step = v;
+                            l = t;
+                        }
+                    }
+                }
+                (step, l)
+            } else {
+                let mut step = f64::INFINITY;
+                let mut l = usize::MAX;
+                for t in 0..r {
+                    let a = self.alpha[t];
+                    if a > PIV {
+                        let v = self.x[t].max(0.0) / a;
+                        if v < step {
+                            step = v;
+                            l = t;
+                        }
+                    }
+                }
+                (step, l)
+            };
+            let sign = if decrease { 1.0 } else { -1.0 };
+            for t in 0..r {
+                self.x[t] += sign * step * self.alpha[t];
+            }
+            if l != usize::MAX {
+                let wl = if decrease { w - step } else { w + step };
+                self.exchange(l, j);
+                self.x[l] = wl;
+                self.stats.crossover_pivots += 1;
+                since += 1;
+                if since >= REFACTOR_EVERY {
+                    if !self.factor() {
+                        return false;
+                    }
+                    since = 0;
+                }
+            }
+        }
+        true
+    }
+
     fn solution(&self, kf: usize) -> Solution {
         let z = self.table.grid().points();
         let mut g = 0.0;
@@ -1065,6 +1293,57 @@ impl FastSolver {
 
 impl MomentSolver for FastSolver {
     fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution> {
+        self.solve_inner(moments, zf, None, false)
+    }
+
+    fn table(&self) -> &GridTable {
+        &self.table
+    }
+
+    /// Moments in the orthonormalised coordinates straight from the distribution,
+    /// c = Σ w_i a_i / Σ w_i (no cancellation however badly scaled the functions are), and the
+    /// distribution itself as the phase-1-free start (see [`FastSolver::crossover`]).
+    fn solve_distribution(&mut self, dist: &[(u32, f64)], zf: f64) -> Result<Solution> {
+        let (n, r, m) = (self.n, self.r, self.m);
+        let mut total = 0.0;
+        self.c.iter_mut().for_each(|v| *v = 0.0);
+        let mut moments = std::mem::take(&mut self.dist_moments);
+        moments.clear();
+        moments.resize(m, 0.0);
+        for (k, &(i, w)) in dist.iter().enumerate() {
+            let i = i as usize;
+            if i >= n || !w.is_finite() || w < 0.0 {
+                self.dist_moments = moments;
+                bail!("distribution entry {k}: grid index {i} (of {n}) or weight {w} invalid");
+            }
+            total += w;
+            for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
+                *ck += w * ak;
+            }
+            for (bj, fj) in moments.iter_mut().zip(self.table.row(i)) {
+                *bj += w * fj;
+            }
+        }
+        if !(total > 0.0) {
+            self.dist_moments = moments;
+            bail!("distribution with zero total weight");
+        }
+        self.c.iter_mut().for_each(|v| *v /= total);
+        moments.iter_mut().for_each(|v| *v /= total);
+        let out = self.solve_inner(&moments, zf, Some(dist), true);
+        self.dist_moments = moments;
+        out
+    }
+}
+
+impl FastSolver {
+    fn solve_inner(
+        &mut self,
+        moments: &[f64],
+        zf: f64,
+        hint: Option<&[(u32, f64)]>,
+        c_given: bool,
+    ) -> Result<Solution> {
         if moments.len() != self.m {
             bail!("expected {} moments, got {}", self.m, moments.len());
         }
@@ -1075,7 +1354,7 @@ impl MomentSolver for FastSolver {
             bail!("z_f is NaN");
         }
         self.stats.solves += 1;
-        if !self.transform(moments) {
+        if !c_given && !self.transform(moments) {
             self.stats.infeasible += 1;
             return Ok(Solution::infeasible());
         }
@@ -1083,18 +1362,43 @@ impl MomentSolver for FastSolver {
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
         #[derive(Clone, Copy)]
         enum Start {
+            Hint,
             Warm,
             Cold,
             Current,
         }
-        let mut start = if self.warm && self.warm_basis.is_some() {
+        let warm_or_cold = if self.warm && self.warm_basis.is_some() {
             Start::Warm
         } else {
             Start::Cold
         };
+        let mut start = if hint.is_some() {
+            Start::Hint
+        } else {
+            warm_or_cold
+        };
         let mut cold_runs = 0;
         for _attempt in 0..6 {
             match start {
+                Start::Hint => {
+                    self.c.copy_from_slice(&self.c0);
+                    if !self.crossover(hint.unwrap_or(&[]), kf) {
+                        // Unusable start (numerically dependent support): the usual way.
+                        self.stats.hint_rejected += 1;
+                        start = warm_or_cold;
+                        if let Start::Cold = start {
+                            self.mark_basic(false);
+                            self.basis.copy_from_slice(&self.b0);
+                            self.mark_basic(true);
+                            cold_runs += 1;
+                        } else {
+                            self.mark_basic(false);
+                            let wb = self.warm_basis.as_ref().expect("warm basis");
+                            self.basis.copy_from_slice(wb);
+                            self.mark_basic(true);
+                        }
+                    }
+                }
                 Start::Warm => {
                     self.mark_basic(false);
                     let wb = self.warm_basis.as_ref().expect("warm basis");
@@ -1122,7 +1426,9 @@ impl MomentSolver for FastSolver {
                             None => self.warm_basis = Some(self.basis.clone()),
                         }
                     }
-                    self.polish_original(moments);
+                    if !c_given {
+                        self.polish_original(moments);
+                    }
                     return Ok(self.solution(kf));
                 }
                 Outcome::Infeasible => {
@@ -1138,7 +1444,11 @@ impl MomentSolver for FastSolver {
                     if cold_runs >= 2 {
                         break;
                     }
-                    start = Start::Cold;
+                    start = if matches!(start, Start::Hint) {
+                        warm_or_cold
+                    } else {
+                        Start::Cold
+                    };
                 }
             }
         }

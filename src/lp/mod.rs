@@ -99,6 +99,20 @@ impl Solution {
 pub trait MomentSolver: Send {
     /// Solve for moments `b` (length m) and fragment depth `zf`.
     fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution>;
+
+    /// G for the moments of a distribution on the grid, `dist` = [(grid index, weight)]
+    /// (weights ≥ 0, normalised by their sum): b = Σ w_i b(z_i), the filtered moments of a
+    /// shadow-map kernel (Section 3.2). The default forms b and calls [`MomentSolver::solve`];
+    /// a solver may instead use the distribution as a feasible start (no phase 1) and form the
+    /// moments in its own, better-conditioned coordinates (Problem 1 is invariant under
+    /// invertible affine maps of b).
+    fn solve_distribution(&mut self, dist: &[(u32, f64)], zf: f64) -> Result<Solution> {
+        let b = distribution_moments(self.table(), dist)?;
+        self.solve(&b, zf)
+    }
+
+    /// The table the solver works on.
+    fn table(&self) -> &GridTable;
 }
 
 /// The solver of the given name on `table`: "reference", "fast", or "fast-strict" (the fast
@@ -116,4 +130,26 @@ pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>
             bail!("unknown LP solver '{other}' (expected 'reference', 'fast' or 'fast-strict')")
         }
     }
+}
+
+/// b = Σ w_i b(z_i) / Σ w_i for a distribution [(grid index, weight)] on the table's grid.
+pub fn distribution_moments(table: &GridTable, dist: &[(u32, f64)]) -> Result<Vec<f64>> {
+    let (n, m) = (table.n(), table.m());
+    let mut b = vec![0.0; m];
+    let mut total = 0.0;
+    for (k, &(i, w)) in dist.iter().enumerate() {
+        let i = i as usize;
+        if i >= n || !w.is_finite() || w < 0.0 {
+            bail!("distribution entry {k}: grid index {i} (of {n}) or weight {w} invalid");
+        }
+        total += w;
+        for (bj, fj) in b.iter_mut().zip(table.row(i)) {
+            *bj += w * fj;
+        }
+    }
+    if !(total > 0.0) {
+        bail!("distribution with zero total weight");
+    }
+    b.iter_mut().for_each(|v| *v /= total);
+    Ok(b)
 }

@@ -29,6 +29,10 @@ impl ReferenceSolver {
 }
 
 impl MomentSolver for ReferenceSolver {
+    fn table(&self) -> &GridTable {
+        &self.table
+    }
+
     fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution> {
         let t = &self.table;
         let (n, m) = (t.n(), t.m());

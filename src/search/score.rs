@@ -28,8 +28,6 @@ pub struct Errors {
 pub struct Scorer<'a> {
     data: &'a Dataset,
     table: &'a FunctionTable,
-    /// distributions × N filtered values.
-    filtered: Vec<f64>,
     solver: String,
     chunk: usize,
 }
@@ -51,7 +49,6 @@ impl<'a> Scorer<'a> {
         Ok(Scorer {
             data,
             table,
-            filtered: data.filtered(table),
             solver: solver.to_string(),
             chunk,
         })
@@ -67,11 +64,6 @@ impl<'a> Scorer<'a> {
         &self.solver
     }
 
-    /// The filtered moments of function `j` for distribution `d`.
-    pub fn moment(&self, d: u32, j: usize) -> f64 {
-        self.filtered[d as usize * self.table.len() + j]
-    }
-
     /// Errors of candidate `cols` on fragments `ids`, sequentially with one solver.
     pub fn errors_seq(&self, cols: &[usize], ids: &[u32]) -> Result<Errors> {
         let table = self.table.grid_table(cols)?;
@@ -79,7 +71,6 @@ impl<'a> Scorer<'a> {
             .with_context(|| format!("LP solver for {:?}", self.table.names_of(cols)))?;
         let z = self.data.grid().points();
         let frags = self.data.fragments();
-        let mut b = vec![0.0; cols.len()];
         let mut out = Errors {
             errors: Vec::with_capacity(ids.len()),
             ..Errors::default()
@@ -87,16 +78,15 @@ impl<'a> Scorer<'a> {
         let t0 = Instant::now();
         for &k in ids {
             let f = &frags[k as usize];
-            for (bj, &c) in b.iter_mut().zip(cols) {
-                *bj = self.moment(f.dist, c);
-            }
-            let g = match solver.solve(&b, z[f.zf as usize]) {
-                Ok(s) if s.status == Status::Optimal && s.g.is_finite() => s.g.clamp(0.0, 1.0),
-                _ => {
-                    out.failures += 1;
-                    0.0
-                }
-            };
+            // b = Σ w b(z_i) of the fragment's filtered depth distribution (Section 3.2).
+            let g =
+                match solver.solve_distribution(self.data.distribution(f.dist), z[f.zf as usize]) {
+                    Ok(s) if s.status == Status::Optimal && s.g.is_finite() => s.g.clamp(0.0, 1.0),
+                    _ => {
+                        out.failures += 1;
+                        0.0
+                    }
+                };
             out.errors.push((g - f.pcf).abs());
         }
         out.seconds = t0.elapsed().as_secs_f64();
@@ -155,18 +145,10 @@ pub fn bound_curve(
     solver: &str,
 ) -> Result<Vec<f64>> {
     let mut s = lp::make_solver(solver, table.grid_table(cols)?)?;
-    let b: Vec<f64> = cols
-        .iter()
-        .map(|&c| {
-            dist.iter()
-                .map(|&(i, w)| w * table.value(i as usize, c))
-                .sum()
-        })
-        .collect();
     let z = table.grid().points();
     Ok(zf
         .iter()
-        .map(|&k| match s.solve(&b, z[k]) {
+        .map(|&k| match s.solve_distribution(dist, z[k]) {
             Ok(sol) if sol.status == Status::Optimal => sol.g,
             _ => f64::NAN,
         })
