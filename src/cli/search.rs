@@ -66,8 +66,9 @@ pub struct Opts {
     /// LP grid size n (uniform on [0,1]).
     #[arg(long, default_value_t = 1024)]
     pub grid: usize,
-    /// LP solver: fast or reference.
-    #[arg(long, default_value = "fast")]
+    /// LP solver: fast-strict (default: unsettled LPs count as failures, G = 0, reported per
+    /// candidate), fast (unsettled LPs go to the reference solver, slow) or reference.
+    #[arg(long, default_value = "fast-strict")]
     pub solver: String,
     /// Fragments in racing stage 0 (each next stage: × growth).
     #[arg(long, default_value_t = 1024)]

@@ -217,7 +217,7 @@ pub struct ReportOptions {
 impl Default for ReportOptions {
     fn default() -> Self {
         ReportOptions {
-            solver: "fast".into(),
+            solver: "fast-strict".into(),
             chunk: 4096,
             compare: Vec::new(),
             fig3_points: 96,

@@ -24,7 +24,7 @@ pub struct SweepOptions {
     pub catalog: Option<PathBuf>,
     /// LP grid size n (uniform on [0,1]).
     pub grid: usize,
-    /// "fast" or "reference".
+    /// "fast-strict" (default), "fast" or "reference" ([`crate::lp::make_solver`]).
     pub solver: String,
     /// Fragments per solver instance (warm-start chain).
     pub chunk: usize,
@@ -66,7 +66,7 @@ impl Default for SweepOptions {
             m: 4,
             catalog: None,
             grid: 1024,
-            solver: "fast".into(),
+            solver: "fast-strict".into(),
             chunk: 4096,
             bias: Bias::default(),
             max_fragments: Some(super::DEFAULT_MAX_FRAGMENTS),
