@@ -48,7 +48,14 @@ pub struct BenchRow {
     /// Mean simplex pivots per LP.
     pub pivots_warm: f64,
     pub pivots_cold: f64,
-    /// max |G_fast − G_reference| over the reference problems (warm and cold).
+    /// Median / mean µs per LP given the kernel's distribution (`solve_distribution`:
+    /// crossover start, no phase 1), and reference median / its median.
+    pub fast_dist_us: f64,
+    pub fast_dist_mean_us: f64,
+    pub speedup_dist: f64,
+    /// Mean phase-2 pivots per LP after the crossover.
+    pub pivots_dist: f64,
+    /// max |G_fast − G_reference| over the reference problems (warm, cold and distribution).
     pub max_abs_diff: f64,
     /// Problems where the statuses differ (must be 0).
     pub status_mismatches: usize,
@@ -73,21 +80,35 @@ fn median(v: &mut [f64]) -> f64 {
 
 /// The benchmark problems for grid size n: moment vectors of 9×9 Gaussian kernels over depth
 /// maps with 1–3 clusters (depths snapped to the grid), each followed by its fragment depths.
-pub fn problems(grid: &Grid, m: usize, count: usize, seed: u64) -> Result<Vec<(Vec<f64>, f64)>> {
+pub fn problems(grid: &Grid, m: usize, count: usize, seed: u64) -> Result<Vec<Problem>> {
     let table = power_table(grid, m)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::with_capacity(count);
     while out.len() < count {
         for patch in kernel_patches(&mut rng, grid, 16) {
             let b = mixture_moments(&table, &patch.mixture);
+            let dist: Vec<(u32, f64)> = patch.mixture.iter().map(|&(i, w)| (i as u32, w)).collect();
             for &zf in &patch.zf {
                 if out.len() < count {
-                    out.push((b.clone(), zf));
+                    out.push(Problem {
+                        moments: b.clone(),
+                        zf,
+                        dist: dist.clone(),
+                    });
                 }
             }
         }
     }
     Ok(out)
+}
+
+/// One benchmark LP: the kernel's moments, the fragment depth, and the kernel's depth
+/// distribution (for [`MomentSolver::solve_distribution`]).
+#[derive(Clone, Debug)]
+pub struct Problem {
+    pub moments: Vec<f64>,
+    pub zf: f64,
+    pub dist: Vec<(u32, f64)>,
 }
 
 /// µs per LP and (status, G) per LP.
@@ -96,14 +117,19 @@ type Timed = (Vec<f64>, Vec<(Option<Status>, f64)>);
 /// Time each solve of `solver` over `probs`; returns (µs per LP, G per LP).
 fn time_solver(
     solver: &mut dyn MomentSolver,
-    probs: &[(Vec<f64>, f64)],
+    probs: &[Problem],
+    from_distribution: bool,
     mut progress: impl FnMut(),
 ) -> Result<Timed> {
     let mut times = Vec::with_capacity(probs.len());
     let mut gs = Vec::with_capacity(probs.len());
-    for (b, zf) in probs {
+    for p in probs {
         let t0 = Instant::now();
-        let sol = solver.solve(b, *zf);
+        let sol = if from_distribution {
+            solver.solve_distribution(&p.dist, p.zf)
+        } else {
+            solver.solve(&p.moments, p.zf)
+        };
         times.push(t0.elapsed().as_secs_f64() * 1e6);
         // A solver error (the fast solver's last-resort reference fallback can fail on
         // numerically singular problems) is recorded as status "error" (NaN), not fatal.
@@ -138,7 +164,7 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     for _ in 0..cfg.repeats.max(1) {
         warm.reset();
         let p0 = warm.stats().pivots;
-        let (t, g) = time_solver(&mut warm, &probs, || {})?;
+        let (t, g) = time_solver(&mut warm, &probs, false, || {})?;
         pivots_warm = (warm.stats().pivots - p0) as f64 / probs.len() as f64;
         tw.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
         gw = g;
@@ -150,20 +176,32 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let mut pivots_cold = 0.0;
     for _ in 0..cfg.repeats.max(1) {
         let p0 = cold.stats().pivots;
-        let (t, g) = time_solver(&mut cold, &probs, || {})?;
+        let (t, g) = time_solver(&mut cold, &probs, false, || {})?;
         pivots_cold = (cold.stats().pivots - p0) as f64 / probs.len() as f64;
         tc.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
         gc = g;
     }
+    // The pipeline's case: the kernel's distribution is known (crossover start, no phase 1).
+    let mut dist = FastSolver::new(table.clone());
+    let mut td = vec![f64::INFINITY; probs.len()];
+    let mut gd = Vec::new();
+    let mut pivots_dist = 0.0;
+    for _ in 0..cfg.repeats.max(1) {
+        let p0 = dist.stats().pivots;
+        let (t, g) = time_solver(&mut dist, &probs, true, || {})?;
+        pivots_dist = (dist.stats().pivots - p0) as f64 / probs.len() as f64;
+        td.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
+        gd = g;
+    }
 
     let nref = cfg.reference_problems.min(probs.len());
     let mut reference = ReferenceSolver::new(table);
-    let (mut tr, gr) = time_solver(&mut reference, &probs[..nref], &mut progress)?;
+    let (mut tr, gr) = time_solver(&mut reference, &probs[..nref], false, &mut progress)?;
 
     let mut max_abs_diff: f64 = 0.0;
     let mut status_mismatches = 0;
     for i in 0..nref {
-        for g in [gw[i], gc[i]] {
+        for g in [gw[i], gc[i], gd[i]] {
             if g.0 != gr[i].0 {
                 status_mismatches += 1;
             } else if g.0 == Some(Status::Optimal) {
@@ -176,6 +214,8 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let reference_us = median(&mut tr);
     let fast_warm_us = median(&mut tw);
     let fast_cold_us = median(&mut tc);
+    let fast_dist_mean_us = mean(&td);
+    let fast_dist_us = median(&mut td);
     Ok(BenchRow {
         n,
         m: cfg.m,
@@ -188,11 +228,20 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
         fast_cold_mean_us,
         speedup_warm: reference_us / fast_warm_us,
         speedup_cold: reference_us / fast_cold_us,
+        fast_dist_us,
+        fast_dist_mean_us,
+        speedup_dist: reference_us / fast_dist_us,
+        pivots_dist,
         pivots_warm,
         pivots_cold,
         max_abs_diff,
         status_mismatches,
-        fallbacks: warm.stats().fallbacks + cold.stats().fallbacks,
-        errors: gw.iter().chain(&gc).filter(|g| g.0.is_none()).count(),
+        fallbacks: warm.stats().fallbacks + cold.stats().fallbacks + dist.stats().fallbacks,
+        errors: gw
+            .iter()
+            .chain(&gc)
+            .chain(&gd)
+            .filter(|g| g.0.is_none())
+            .count(),
     })
 }

@@ -21,6 +21,12 @@
 //! * **Warm start.** The optimal basis of the previous problem is the start basis of the next one:
 //!   when the moments are unchanged (only z_f moves) it is primal feasible and phase 2 starts
 //!   at once; otherwise phase 1 starts from a nearby basis.
+//! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
+//!   case: the moments are those of a kernel's depth distribution). The moments are formed in
+//!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible
+//!   point: a crossover turns it into a basic feasible solution of no greater cost (support
+//!   columns of greatest volume as the basis, every other support point pushed to weight 0 or
+//!   into the basis by one ratio test), so phase 1 is skipped.
 //! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), and as the
 //!   last resort the reference solver (counted in [`FastStats::fallbacks`]); never an endless loop.
 
@@ -253,7 +259,7 @@ impl FastSolver {
                 f64::INFINITY
             }
         };
-        FastSolver {
+        let mut solver = FastSolver {
             n,
             m,
             r,
@@ -310,7 +316,9 @@ impl FastSolver {
             hint_u: Vec::new(),
             hint_pos: Vec::new(),
             dist_moments: Vec::new(),
-        }
+        };
+        solver.set_partial_pricing(true);
+        solver
     }
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
@@ -351,8 +359,9 @@ impl FastSolver {
 
     /// Enable or disable partial pricing (coarse subgrid first; on by default for n ≥ 64).
     pub fn set_partial_pricing(&mut self, on: bool) {
-        self.stride = if on && self.n >= 64 {
-            ((self.n as f64 / 2.0).sqrt() as usize).max(2)
+        let n = self.n;
+        self.stride = if on && n >= 64 {
+            ((n as f64 / 2.0).sqrt() as usize).max(2)
         } else {
             1
         };
@@ -920,25 +929,31 @@ impl FastSolver {
     /// entering column at a fraction of a full pass. Returns (usize::MAX, −TOL_D) when the
     /// coarse pass finds no negative reduced cost (then a full pass decides).
     fn price_partial(&self, kf: usize) -> (usize, f64) {
+        // Specialised for the row count (the inner product is unrolled, no bounds checks).
+        match self.r {
+            1 => self.price_partial_r::<1>(kf),
+            2 => self.price_partial_r::<2>(kf),
+            3 => self.price_partial_r::<3>(kf),
+            4 => self.price_partial_r::<4>(kf),
+            5 => self.price_partial_r::<5>(kf),
+            6 => self.price_partial_r::<6>(kf),
+            7 => self.price_partial_r::<7>(kf),
+            8 => self.price_partial_r::<8>(kf),
+            9 => self.price_partial_r::<9>(kf),
+            _ => self.price_partial_r::<0>(kf),
+        }
+    }
+
+    /// [`Self::price_partial`] for r = R rows (R = 0: any r).
+    #[inline(always)]
+    fn price_partial_r<const R: usize>(&self, kf: usize) -> (usize, f64) {
         let (n, r, st) = (self.n, self.r, self.stride);
         let y = &self.y[..r];
         let rows = &self.rows;
         let basic = &self.is_basic;
         let mut best = (usize::MAX, -TOL_D);
-        let visit = |i: usize, best: &mut (usize, f64)| {
-            if basic[i] {
-                return;
-            }
-            let row = &rows[i * r..(i + 1) * r];
-            let mut s = 0.0;
-            for k in 0..r {
-                s += row[k] * y[k];
-            }
-            let d = if i < kf { 1.0 - s } else { -s };
-            if d < best.1 {
-                *best = (i, d);
-            }
-        };
+        let visit =
+            |i: usize, best: &mut (usize, f64)| visit_column::<R>(rows, r, y, basic, kf, i, best);
         let mut i = 0;
         while i < n {
             visit(i, &mut best);
@@ -1324,9 +1339,9 @@ impl MomentSolver for FastSolver {
                 *bj += w * fj;
             }
         }
-        if !(total > 0.0) {
+        if total <= 0.0 || !total.is_finite() {
             self.dist_moments = moments;
-            bail!("distribution with zero total weight");
+            bail!("distribution with zero (or infinite) total weight");
         }
         self.c.iter_mut().for_each(|v| *v /= total);
         moments.iter_mut().for_each(|v| *v /= total);
@@ -1466,6 +1481,39 @@ impl FastSolver {
             self.stats.infeasible += 1;
         }
         Ok(sol)
+    }
+}
+
+/// Partial pricing of column i: keep it in `best` if its reduced cost [i < kf] − y·a_i is lower
+/// (basic columns skipped). R = row count for an unrolled inner product (0: any r).
+#[inline(always)]
+fn visit_column<const R: usize>(
+    rows: &[f64],
+    r: usize,
+    y: &[f64],
+    basic: &[bool],
+    kf: usize,
+    i: usize,
+    best: &mut (usize, f64),
+) {
+    if basic[i] {
+        return;
+    }
+    let row = &rows[i * r..(i + 1) * r];
+    let s = if R > 0 {
+        let a: &[f64; R] = row[..R].try_into().expect("row length");
+        let b: &[f64; R] = y[..R].try_into().expect("row length");
+        let mut s = 0.0;
+        for k in 0..R {
+            s += a[k] * b[k];
+        }
+        s
+    } else {
+        dot(row, y)
+    };
+    let d = if i < kf { 1.0 - s } else { -s };
+    if d < best.1 {
+        *best = (i, d);
     }
 }
 

@@ -147,8 +147,8 @@ pub fn distribution_moments(table: &GridTable, dist: &[(u32, f64)]) -> Result<Ve
             *bj += w * fj;
         }
     }
-    if !(total > 0.0) {
-        bail!("distribution with zero total weight");
+    if total <= 0.0 || !total.is_finite() {
+        bail!("distribution with zero (or infinite) total weight");
     }
     b.iter_mut().for_each(|v| *v /= total);
     Ok(b)
