@@ -1535,6 +1535,26 @@ fn mat_vec(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
 
 /// Invert the r × r row-major matrix `a` (destroyed) into `inv`; false if singular.
 fn invert(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
+    // Specialised for the row count (loops unrolled at compile time).
+    match r {
+        1 => invert_r::<1>(a, inv, r),
+        2 => invert_r::<2>(a, inv, r),
+        3 => invert_r::<3>(a, inv, r),
+        4 => invert_r::<4>(a, inv, r),
+        5 => invert_r::<5>(a, inv, r),
+        6 => invert_r::<6>(a, inv, r),
+        7 => invert_r::<7>(a, inv, r),
+        8 => invert_r::<8>(a, inv, r),
+        9 => invert_r::<9>(a, inv, r),
+        _ => invert_r::<0>(a, inv, r),
+    }
+}
+
+/// Gauss–Jordan with partial pivoting for r = R (R = 0: any r).
+#[inline(always)]
+fn invert_r<const R: usize>(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
+    let r = if R > 0 { R } else { r };
+    let (a, inv) = (&mut a[..r * r], &mut inv[..r * r]);
     inv.iter_mut().for_each(|v| *v = 0.0);
     for t in 0..r {
         inv[t * r + t] = 1.0;
