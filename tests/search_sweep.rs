@@ -60,6 +60,8 @@ fn config(s: &Scorer, m: usize) -> SweepConfig {
     c.growth = 2;
     c.pilot = 4;
     c.batch = 3;
+    // Exercise the z-test extension of the promotion rule (off by default: max_keep = keep).
+    c.max_keep = 0.5;
     c
 }
 
@@ -94,6 +96,17 @@ fn run(cfg: &SweepConfig, s: &Scorer, dir: &Path) -> Outcome {
 
 #[test]
 fn racing_top_k_equals_exhaustive_ranking() {
+    racing_matches_exhaustive(Some(0.5), 2);
+}
+
+/// The default rule (max_keep = keep: plain quartering, no z-test extension).
+#[test]
+fn default_racing_top_k_equals_exhaustive_ranking() {
+    racing_matches_exhaustive(None, 1);
+}
+
+/// `max_keep`: None = the default of `SweepConfig::new`.
+fn racing_matches_exhaustive(max_keep: Option<f64>, min_stages: usize) {
     let f = fixture();
     let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
     assert!(
@@ -101,16 +114,24 @@ fn racing_top_k_equals_exhaustive_ranking() {
         "{}",
         f.data.fragments().len()
     );
-    let cfg = config(&s, 2);
-    let race = tmp("race");
+    let mut cfg = config(&s, 2);
+    match max_keep {
+        Some(v) => cfg.max_keep = v,
+        None => {
+            cfg.max_keep = SweepConfig::new(2, &s, "synthetic").max_keep;
+            assert_eq!(cfg.max_keep, cfg.keep, "default: plain quartering");
+        }
+    }
+    let max_keep = cfg.max_keep;
+    let race = tmp(&format!("race{max_keep}"));
     let Outcome::Complete(sum) = run(&cfg, &s, &race) else {
         panic!()
     };
-    assert!(sum.stages.len() >= 2, "{sum:?}");
+    assert!(sum.stages.len() >= min_stages, "{sum:?}");
     assert!(sum.sampled_share < 1.0, "{sum:?}");
     let mut ex_cfg = cfg.clone();
     ex_cfg.exhaustive = true;
-    let ex = tmp("exhaustive");
+    let ex = tmp(&format!("exhaustive{max_keep}"));
     run(&ex_cfg, &s, &ex);
 
     let ex_rows = rows(&ex);

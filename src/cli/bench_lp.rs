@@ -104,6 +104,10 @@ pub fn run(args: Args) -> Result<()> {
             r.pivots_dist,
             r.max_abs_diff
         );
+        println!(
+            "  n = {}: max |dG| against the reference: warm {:.1e}, cold {:.1e}, dist {:.1e}",
+            r.n, r.max_abs_diff_modes[0], r.max_abs_diff_modes[1], r.max_abs_diff_modes[2]
+        );
         if r.status_mismatches > 0 || r.fallbacks > 0 || r.errors > 0 {
             println!(
                 "  warning: n = {}: {} status mismatches, {} fallbacks to the reference, {} errors",

@@ -108,7 +108,8 @@ impl Plan {
                 quantize_stride: 1,
                 stability_samples: 5000,
                 search_ms: vec![2, 3, 4],
-                search_first_sample: 2048,
+                // The `momentlab search` defaults: the full sweeps measured in README.
+                search_first_sample: 1024,
                 search_top: 50,
                 search_subset: None,
                 search_max_fragments: 131_072,

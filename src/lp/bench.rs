@@ -57,6 +57,8 @@ pub struct BenchRow {
     pub pivots_dist: f64,
     /// max |G_fast − G_reference| over the reference problems (warm, cold and distribution).
     pub max_abs_diff: f64,
+    /// The same per mode: warm, cold, distribution start.
+    pub max_abs_diff_modes: [f64; 3],
     /// Problems where the statuses differ (must be 0).
     pub status_mismatches: usize,
     /// Fallbacks of the fast solver to the reference (should be 0).
@@ -199,13 +201,16 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let (mut tr, gr) = time_solver(&mut reference, &probs[..nref], false, &mut progress)?;
 
     let mut max_abs_diff: f64 = 0.0;
+    let mut max_abs_diff_modes = [0.0f64; 3];
     let mut status_mismatches = 0;
     for i in 0..nref {
-        for g in [gw[i], gc[i], gd[i]] {
+        for (mode, g) in [gw[i], gc[i], gd[i]].into_iter().enumerate() {
             if g.0 != gr[i].0 {
                 status_mismatches += 1;
             } else if g.0 == Some(Status::Optimal) {
-                max_abs_diff = max_abs_diff.max((g.1 - gr[i].1).abs());
+                let d = (g.1 - gr[i].1).abs();
+                max_abs_diff = max_abs_diff.max(d);
+                max_abs_diff_modes[mode] = max_abs_diff_modes[mode].max(d);
             }
         }
     }
@@ -235,6 +240,7 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
         pivots_warm,
         pivots_cold,
         max_abs_diff,
+        max_abs_diff_modes,
         status_mismatches,
         fallbacks: warm.stats().fallbacks + cold.stats().fallbacks + dist.stats().fallbacks,
         errors: gw

@@ -113,7 +113,7 @@ impl SweepConfig {
             first_sample: 1024,
             growth: 4,
             keep: 0.25,
-            max_keep: 0.5,
+            max_keep: 0.25,
             z: 2.5,
             pilot: 32,
             tol: 1e-9,
