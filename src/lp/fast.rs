@@ -177,7 +177,6 @@ pub struct FastSolver {
     hint_res: Vec<f64>,
     hint_u: Vec<f64>,
     hint_pos: Vec<usize>,
-    dist_moments: Vec<f64>,
 }
 
 impl FastSolver {
@@ -315,7 +314,6 @@ impl FastSolver {
             hint_res: Vec::new(),
             hint_u: Vec::new(),
             hint_pos: Vec::new(),
-            dist_moments: Vec::new(),
         };
         solver.set_partial_pricing(true);
         solver
@@ -1319,35 +1317,21 @@ impl MomentSolver for FastSolver {
     /// c = Σ w_i a_i / Σ w_i (no cancellation however badly scaled the functions are), and the
     /// distribution itself as the phase-1-free start (see [`FastSolver::crossover`]).
     fn solve_distribution(&mut self, dist: &[(u32, f64)], zf: f64) -> Result<Solution> {
-        let (n, r, m) = (self.n, self.r, self.m);
+        // Validates the distribution; the moments in the original coordinates serve the
+        // reference fallback.
+        let moments = super::distribution_moments(&self.table, dist)?;
+        let r = self.r;
         let mut total = 0.0;
         self.c.iter_mut().for_each(|v| *v = 0.0);
-        let mut moments = std::mem::take(&mut self.dist_moments);
-        moments.clear();
-        moments.resize(m, 0.0);
-        for (k, &(i, w)) in dist.iter().enumerate() {
+        for &(i, w) in dist {
             let i = i as usize;
-            if i >= n || !w.is_finite() || w < 0.0 {
-                self.dist_moments = moments;
-                bail!("distribution entry {k}: grid index {i} (of {n}) or weight {w} invalid");
-            }
             total += w;
             for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
                 *ck += w * ak;
             }
-            for (bj, fj) in moments.iter_mut().zip(self.table.row(i)) {
-                *bj += w * fj;
-            }
-        }
-        if total <= 0.0 || !total.is_finite() {
-            self.dist_moments = moments;
-            bail!("distribution with zero (or infinite) total weight");
         }
         self.c.iter_mut().for_each(|v| *v /= total);
-        moments.iter_mut().for_each(|v| *v /= total);
-        let out = self.solve_inner(&moments, zf, Some(dist), true);
-        self.dist_moments = moments;
-        out
+        self.solve_inner(&moments, zf, Some(dist), true)
     }
 }
 
