@@ -974,8 +974,17 @@ impl FastSolver {
         if best.0 == usize::MAX {
             return best;
         }
+        // Refine around the best point in two levels (stride ≈ √stride, then 1): the reduced
+        // cost is smooth between the coarse points.
+        let s2 = ((st as f64).sqrt().ceil() as usize).max(1);
         let c = best.0;
-        for i in c.saturating_sub(st - 1)..(c + st).min(n) {
+        let mut i = c.saturating_sub(st - 1);
+        while i < (c + st).min(n) {
+            visit(i, &mut best);
+            i += s2;
+        }
+        let c = best.0;
+        for i in c.saturating_sub(s2 - 1)..(c + s2).min(n) {
             visit(i, &mut best);
         }
         best
