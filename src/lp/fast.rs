@@ -1387,26 +1387,16 @@ impl FastSolver {
         };
         let mut cold_runs = 0;
         for _attempt in 0..6 {
-            match start {
-                Start::Hint => {
-                    self.c.copy_from_slice(&self.c0);
-                    if !self.crossover(hint.unwrap_or(&[]), kf) {
-                        // Unusable start (numerically dependent support): the usual way.
-                        self.stats.hint_rejected += 1;
-                        start = warm_or_cold;
-                        if let Start::Cold = start {
-                            self.mark_basic(false);
-                            self.basis.copy_from_slice(&self.b0);
-                            self.mark_basic(true);
-                            cold_runs += 1;
-                        } else {
-                            self.mark_basic(false);
-                            let wb = self.warm_basis.as_ref().expect("warm basis");
-                            self.basis.copy_from_slice(wb);
-                            self.mark_basic(true);
-                        }
-                    }
+            if let Start::Hint = start {
+                self.c.copy_from_slice(&self.c0);
+                if !self.crossover(hint.unwrap_or(&[]), kf) {
+                    // Unusable start (numerically dependent support): the usual way.
+                    self.stats.hint_rejected += 1;
+                    start = warm_or_cold;
                 }
+            }
+            match start {
+                Start::Hint | Start::Current => {}
                 Start::Warm => {
                     self.mark_basic(false);
                     let wb = self.warm_basis.as_ref().expect("warm basis");
@@ -1419,7 +1409,6 @@ impl FastSolver {
                     self.mark_basic(true);
                     cold_runs += 1;
                 }
-                Start::Current => {}
             }
             // The second cold run uses Bland's rule throughout.
             self.c.copy_from_slice(&self.c0);
