@@ -144,6 +144,29 @@ fn time_solver(
     Ok((times, gs))
 }
 
+/// A fast solver over the whole sequence `repeats` times from the same state (the solver is
+/// deterministic, so every repeat does the same pivots), keeping each problem's minimum time:
+/// this filters out preemption on a loaded machine. Returns (µs per LP, G per LP, mean pivots).
+fn time_fast(
+    solver: &mut FastSolver,
+    probs: &[Problem],
+    repeats: usize,
+    from_distribution: bool,
+) -> Result<(Vec<f64>, Vec<(Option<Status>, f64)>, f64)> {
+    let mut best = vec![f64::INFINITY; probs.len()];
+    let mut gs = Vec::new();
+    let mut pivots = 0.0;
+    for _ in 0..repeats.max(1) {
+        solver.reset();
+        let p0 = solver.stats().pivots;
+        let (t, g) = time_solver(solver, probs, from_distribution, || {})?;
+        pivots = (solver.stats().pivots - p0) as f64 / probs.len() as f64;
+        best.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
+        gs = g;
+    }
+    Ok((best, gs, pivots))
+}
+
 /// Run the benchmark for one grid size. `progress` is called after every reference LP.
 pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Result<BenchRow> {
     if !(1..=8).contains(&cfg.m) {
@@ -156,45 +179,15 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let probs = problems(&grid, cfg.m, cfg.problems, cfg.seed ^ n as u64)?;
     let table = power_table(&grid, cfg.m)?;
 
-    // The fast solvers run the whole sequence `cfg.repeats` times from the same state (the
-    // solver is deterministic, so every repeat does the same pivots) and keep each problem's
-    // minimum time: this filters out preemption on a loaded machine.
+    // Per-problem minimum over `cfg.repeats` identical passes (see `time_fast`).
     let mut warm = FastSolver::new(table.clone());
-    let mut tw = vec![f64::INFINITY; probs.len()];
-    let mut gw = Vec::new();
-    let mut pivots_warm = 0.0;
-    for _ in 0..cfg.repeats.max(1) {
-        warm.reset();
-        let p0 = warm.stats().pivots;
-        let (t, g) = time_solver(&mut warm, &probs, false, || {})?;
-        pivots_warm = (warm.stats().pivots - p0) as f64 / probs.len() as f64;
-        tw.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
-        gw = g;
-    }
+    let (mut tw, gw, pivots_warm) = time_fast(&mut warm, &probs, cfg.repeats, false)?;
     let mut cold = FastSolver::new(table.clone());
     cold.set_warm_start(false);
-    let mut tc = vec![f64::INFINITY; probs.len()];
-    let mut gc = Vec::new();
-    let mut pivots_cold = 0.0;
-    for _ in 0..cfg.repeats.max(1) {
-        let p0 = cold.stats().pivots;
-        let (t, g) = time_solver(&mut cold, &probs, false, || {})?;
-        pivots_cold = (cold.stats().pivots - p0) as f64 / probs.len() as f64;
-        tc.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
-        gc = g;
-    }
+    let (mut tc, gc, pivots_cold) = time_fast(&mut cold, &probs, cfg.repeats, false)?;
     // The pipeline's case: the kernel's distribution is known (crossover start, no phase 1).
     let mut dist = FastSolver::new(table.clone());
-    let mut td = vec![f64::INFINITY; probs.len()];
-    let mut gd = Vec::new();
-    let mut pivots_dist = 0.0;
-    for _ in 0..cfg.repeats.max(1) {
-        let p0 = dist.stats().pivots;
-        let (t, g) = time_solver(&mut dist, &probs, true, || {})?;
-        pivots_dist = (dist.stats().pivots - p0) as f64 / probs.len() as f64;
-        td.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
-        gd = g;
-    }
+    let (mut td, gd, pivots_dist) = time_fast(&mut dist, &probs, cfg.repeats, true)?;
 
     let nref = cfg.reference_problems.min(probs.len());
     let mut reference = ReferenceSolver::new(table);
