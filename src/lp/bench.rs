@@ -152,7 +152,7 @@ fn time_fast(
     probs: &[Problem],
     repeats: usize,
     from_distribution: bool,
-) -> Result<(Vec<f64>, Vec<(Option<Status>, f64)>, f64)> {
+) -> Result<(Timed, f64)> {
     let mut best = vec![f64::INFINITY; probs.len()];
     let mut gs = Vec::new();
     let mut pivots = 0.0;
@@ -164,7 +164,7 @@ fn time_fast(
         best.iter_mut().zip(&t).for_each(|(a, b)| *a = a.min(*b));
         gs = g;
     }
-    Ok((best, gs, pivots))
+    Ok(((best, gs), pivots))
 }
 
 /// Run the benchmark for one grid size. `progress` is called after every reference LP.
@@ -181,13 +181,13 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
 
     // Per-problem minimum over `cfg.repeats` identical passes (see `time_fast`).
     let mut warm = FastSolver::new(table.clone());
-    let (mut tw, gw, pivots_warm) = time_fast(&mut warm, &probs, cfg.repeats, false)?;
+    let ((mut tw, gw), pivots_warm) = time_fast(&mut warm, &probs, cfg.repeats, false)?;
     let mut cold = FastSolver::new(table.clone());
     cold.set_warm_start(false);
-    let (mut tc, gc, pivots_cold) = time_fast(&mut cold, &probs, cfg.repeats, false)?;
+    let ((mut tc, gc), pivots_cold) = time_fast(&mut cold, &probs, cfg.repeats, false)?;
     // The pipeline's case: the kernel's distribution is known (crossover start, no phase 1).
     let mut dist = FastSolver::new(table.clone());
-    let (mut td, gd, pivots_dist) = time_fast(&mut dist, &probs, cfg.repeats, true)?;
+    let ((mut td, gd), pivots_dist) = time_fast(&mut dist, &probs, cfg.repeats, true)?;
 
     let nref = cfg.reference_problems.min(probs.len());
     let mut reference = ReferenceSolver::new(table);
