@@ -32,6 +32,7 @@
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
+use super::pricing::ColumnTable;
 use super::reference::ReferenceSolver;
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
@@ -159,6 +160,11 @@ pub struct FastSolver {
     is_basic: Vec<bool>,
     /// Coarse stride of partial pricing (1 = always full pricing).
     stride: usize,
+    /// The columns in pricing blocks (all of them, and the coarse subgrid of partial pricing:
+    /// every `stride`-th point and the last one, at grid indices `coarse_idx`).
+    fine: ColumnTable,
+    coarse: ColumnTable,
+    coarse_idx: Vec<usize>,
     ls_sup: Vec<usize>,
     ls_a: Vec<f64>,
     ls_q: Vec<f64>,
@@ -258,6 +264,7 @@ impl FastSolver {
                 f64::INFINITY
             }
         };
+        let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
         let mut solver = FastSolver {
             n,
             m,
@@ -289,11 +296,10 @@ impl FastSolver {
             xold: vec![0.0; r],
             amax,
             is_basic: vec![false; n],
-            stride: if n >= 64 {
-                ((n as f64 / 2.0).sqrt() as usize).max(2)
-            } else {
-                1
-            },
+            stride: 1,
+            fine,
+            coarse: ColumnTable::default(),
+            coarse_idx: Vec::new(),
             ls_sup: vec![0; r],
             ls_a: vec![0.0; r * r],
             ls_q: vec![0.0; r * r],
@@ -363,6 +369,17 @@ impl FastSolver {
         } else {
             1
         };
+        self.coarse_idx = (0..n).step_by(self.stride).collect();
+        if self.coarse_idx.last() != Some(&(n - 1)) {
+            self.coarse_idx.push(n - 1);
+        }
+        let (fine, idx) = (&self.fine, &self.coarse_idx);
+        self.coarse = ColumnTable::new(self.r, idx.len(), |k, j| fine.entry(k, idx[j]));
+        for i in 0..n {
+            if self.is_basic[i] {
+                self.set_basic(i, true);
+            }
+        }
     }
 
     /// Forget the warm-start basis.
@@ -550,7 +567,7 @@ impl FastSolver {
                     }
                 }
                 art_norm = norm(&self.art);
-                self.is_basic[self.basis[ts]] = false;
+                self.set_basic(self.basis[ts], false);
                 self.basis[ts] = ART;
                 art_pos = ts;
                 phase1 = true;
@@ -617,7 +634,7 @@ impl FastSolver {
             } else if bland {
                 price_bland(&self.cols, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
             } else {
-                price(&self.cols, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
+                self.price_full(kf_eff)
             };
             if partial.0 == usize::MAX && dq < -TOL_D {
                 self.stats.partial_misses += 1;
@@ -676,8 +693,9 @@ impl FastSolver {
                         }
                         return Outcome::Infeasible;
                     }
-                    // Feasible: drive the (zero) artificial out of the basis. s holds row
-                    // art_pos of B⁻¹A; pick the largest pivot element.
+                    // Feasible: drive the (zero) artificial out of the basis. With the phase-1
+                    // duals, s = row art_pos of B⁻¹A; pick the largest pivot element.
+                    price(&self.cols, n, r, &self.y, 0, &self.basis, &mut self.s);
                     let mut best = None;
                     let mut best_v = TOL_PIV;
                     for i in 0..n {
@@ -914,80 +932,104 @@ impl FastSolver {
 
     /// Set the basic flags of the current basis' real columns.
     fn mark_basic(&mut self, on: bool) {
-        for &bt in &self.basis {
+        for t in 0..self.r {
+            let bt = self.basis[t];
             if bt != ART {
-                self.is_basic[bt] = on;
+                self.set_basic(bt, on);
             }
         }
     }
 
-    /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point, both ends
-    /// and the two points around z_f), then on the fine grid around the best coarse point.
-    /// Reduced costs are smooth in z on either side of z_f, so this usually finds a good
-    /// entering column at a fraction of a full pass. Returns (usize::MAX, −TOL_D) when the
-    /// coarse pass finds no negative reduced cost (then a full pass decides).
+    /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point and the last
+    /// one), next to z_f and next to the current support points, then on the whole fine window
+    /// between the coarse neighbours of the best of these. Reduced costs are smooth in z on
+    /// either side of z_f, so this usually finds a good entering column at a fraction of a full
+    /// pass. Returns (usize::MAX, −TOL_D) when it finds no negative reduced cost (then a full
+    /// pass decides).
     fn price_partial(&self, kf: usize) -> (usize, f64) {
-        // Specialised for the row count (the inner product is unrolled, no bounds checks).
-        match self.r {
-            1 => self.price_partial_r::<1>(kf),
-            2 => self.price_partial_r::<2>(kf),
-            3 => self.price_partial_r::<3>(kf),
-            4 => self.price_partial_r::<4>(kf),
-            5 => self.price_partial_r::<5>(kf),
-            6 => self.price_partial_r::<6>(kf),
-            7 => self.price_partial_r::<7>(kf),
-            8 => self.price_partial_r::<8>(kf),
-            9 => self.price_partial_r::<9>(kf),
-            _ => self.price_partial_r::<0>(kf),
-        }
-    }
-
-    /// [`Self::price_partial`] for r = R rows (R = 0: any r).
-    #[inline(always)]
-    fn price_partial_r<const R: usize>(&self, kf: usize) -> (usize, f64) {
         let (n, r, st) = (self.n, self.r, self.stride);
         let y = &self.y[..r];
-        let rows = &self.rows;
-        let basic = &self.is_basic;
-        let mut best = (usize::MAX, -TOL_D);
-        let visit =
-            |i: usize, best: &mut (usize, f64)| visit_column::<R>(rows, r, y, basic, kf, i, best);
-        let mut i = 0;
-        while i < n {
-            visit(i, &mut best);
-            i += st;
-        }
-        visit(n - 1, &mut best);
+        let none = (usize::MAX, -TOL_D);
+        // Coarse subgrid.
+        let coarse = &self.coarse;
+        // Coarse points below kf: j·st < kf for the regular ones, and the extra last point
+        // n − 1 only when kf = n.
+        let nc = self.coarse_idx.len();
+        let regular = if (nc - 1) * st == n - 1 { nc } else { nc - 1 };
+        let csplit = kf.div_ceil(st).min(regular) + (regular < nc && kf == n) as usize;
+        debug_assert_eq!(csplit, self.coarse_idx.partition_point(|&i| i < kf));
+        let cb = coarse.scan(y, csplit, 0, coarse.blocks(), none);
+        let mut best = if cb.0 == usize::MAX {
+            none
+        } else {
+            (self.coarse_idx[cb.0], cb.1)
+        };
         // Narrow dips of the reduced cost appear next to the current support points and at
-        // the step at z_f: scan a few neighbours of each.
+        // the step at z_f: scan a few neighbours of each (whole blocks, overlaps merged).
         const W: usize = 3;
-        for i in kf.saturating_sub(W)..(kf + W).min(n) {
-            visit(i, &mut best);
-        }
+        let mut ranges = [(0usize, 0usize); 10];
+        let mut nr = 0;
+        ranges[nr] = self.fine.block_range(kf.saturating_sub(W), kf + W);
+        nr += 1;
         for &bt in &self.basis {
-            if bt != ART {
-                for i in bt.saturating_sub(W)..(bt + W + 1).min(n) {
-                    visit(i, &mut best);
-                }
+            if bt != ART && nr < ranges.len() {
+                ranges[nr] = self.fine.block_range(bt.saturating_sub(W), bt + W + 1);
+                nr += 1;
+            }
+        }
+        // Support points come in neighbouring pairs: scan each distinct block range once.
+        for a in 0..nr {
+            if !ranges[..a].contains(&ranges[a]) {
+                best = self.scan_fine(y, kf, ranges[a], best);
             }
         }
         if best.0 == usize::MAX {
             return best;
         }
-        // Refine around the best point in two levels (stride ≈ √stride, then 1): the reduced
-        // cost is smooth between the coarse points.
-        let s2 = ((st as f64).sqrt().ceil() as usize).max(1);
+        // The reduced cost is smooth between coarse points: the minimum of the whole fine
+        // window around the best point is the entering column.
         let c = best.0;
-        let mut i = c.saturating_sub(st - 1);
-        while i < (c + st).min(n) {
-            visit(i, &mut best);
-            i += s2;
+        let window = self
+            .fine
+            .block_range(c.saturating_sub(st - 1), (c + st).min(n));
+        self.scan_fine(y, kf, window, best)
+    }
+
+    /// Full pricing: the non-basic column with the lowest reduced cost, or (usize::MAX, 0) when
+    /// none is below −TOL_D / 4 (basic columns, whose reduced cost is 0 up to rounding, then
+    /// never come out lowest).
+    fn price_full(&self, kf: usize) -> (usize, f64) {
+        let y = &self.y[..self.r];
+        let got = self.scan_fine(y, kf, (0, self.fine.blocks()), (usize::MAX, -0.25 * TOL_D));
+        if got.0 == usize::MAX {
+            (usize::MAX, 0.0)
+        } else {
+            got
         }
-        let c = best.0;
-        for i in c.saturating_sub(s2 - 1)..(c + s2).min(n) {
-            visit(i, &mut best);
+    }
+
+    /// [`ColumnTable::scan`] of the fine table over a block range (basic columns excluded).
+    fn scan_fine(
+        &self,
+        y: &[f64],
+        kf: usize,
+        (blo, bhi): (usize, usize),
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        self.fine.scan(y, kf, blo, bhi, best)
+    }
+
+    /// Mark grid column i basic (excluded from pricing) or not.
+    fn set_basic(&mut self, i: usize, on: bool) {
+        self.is_basic[i] = on;
+        self.fine.set_excluded(i, on);
+        let st = self.stride;
+        let nc = self.coarse_idx.len();
+        if i.is_multiple_of(st) {
+            self.coarse.set_excluded(i / st, on);
+        } else if i == self.n - 1 {
+            self.coarse.set_excluded(nc - 1, on);
         }
-        best
     }
 
     /// alpha = B⁻¹ a_j.
@@ -1024,9 +1066,9 @@ impl FastSolver {
             }
         }
         if self.basis[l] != ART {
-            self.is_basic[self.basis[l]] = false;
+            self.set_basic(self.basis[l], false);
         }
-        self.is_basic[q] = true;
+        self.set_basic(q, true);
         self.basis[l] = q;
     }
 
@@ -1463,39 +1505,6 @@ impl FastSolver {
             self.stats.infeasible += 1;
         }
         Ok(sol)
-    }
-}
-
-/// Partial pricing of column i: keep it in `best` if its reduced cost [i < kf] − y·a_i is lower
-/// (basic columns skipped). R = row count for an unrolled inner product (0: any r).
-#[inline(always)]
-fn visit_column<const R: usize>(
-    rows: &[f64],
-    r: usize,
-    y: &[f64],
-    basic: &[bool],
-    kf: usize,
-    i: usize,
-    best: &mut (usize, f64),
-) {
-    if basic[i] {
-        return;
-    }
-    let row = &rows[i * r..(i + 1) * r];
-    let s = if R > 0 {
-        let a: &[f64; R] = row[..R].try_into().expect("row length");
-        let b: &[f64; R] = y[..R].try_into().expect("row length");
-        let mut s = 0.0;
-        for k in 0..R {
-            s += a[k] * b[k];
-        }
-        s
-    } else {
-        dot(row, y)
-    };
-    let d = if i < kf { 1.0 - s } else { -s };
-    if d < best.1 {
-        *best = (i, d);
     }
 }
 

@@ -10,6 +10,7 @@
 pub mod bench;
 pub mod fast;
 pub mod instances;
+mod pricing;
 pub mod reference;
 
 use crate::Grid;
