@@ -88,8 +88,13 @@ pub struct FastStats {
     pub restarts: u64,
     /// Problems handed to the reference solver after the restarts also failed.
     pub fallbacks: u64,
-    /// Solves given a start distribution ([`MomentSolver::solve_from`]).
+    /// Solves started from a given distribution ([`MomentSolver::solve_distribution`]) by the
+    /// crossover.
     pub hinted: u64,
+    /// Solves given a distribution whose moments equal the last solved problem's (another
+    /// fragment depth for the same texel): started from that problem's optimal basis, which
+    /// is primal feasible, instead of the crossover.
+    pub same_moments: u64,
     /// Of which the start could not be turned into a basis (the usual start was used).
     pub hint_rejected: u64,
     /// Crossover pivots (start distribution → basic feasible solution).
@@ -131,8 +136,9 @@ pub struct FastSolver {
     condition: f64,
     /// Rounding-error bound on the weights of the last solve.
     last_bound: f64,
-    /// Last optimal basis (warm start), if any.
+    /// Last optimal basis (warm start), if any, and the transformed moments it was optimal for.
     warm_basis: Option<Vec<usize>>,
+    last_c: Vec<f64>,
     warm: bool,
     stats: FastStats,
     fallback: Option<ReferenceSolver>,
@@ -277,6 +283,7 @@ impl FastSolver {
             condition,
             last_bound: 0.0,
             warm_basis: None,
+            last_c: vec![f64::NAN; r],
             warm: true,
             stats: FastStats::default(),
             fallback: None,
@@ -358,6 +365,7 @@ impl FastSolver {
         }
         self.warm = true;
         self.warm_basis = Some(basis.to_vec());
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
         Ok(())
     }
 
@@ -382,9 +390,39 @@ impl FastSolver {
         }
     }
 
+    #[doc(hidden)]
+    pub fn profile_pricing(&mut self, zf: f64, reps: usize) -> (f64, f64, f64, f64) {
+        let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        self.duals(false, kf);
+        let t0 = std::time::Instant::now();
+        let mut acc = 0usize;
+        for _ in 0..reps {
+            acc = acc.wrapping_add(std::hint::black_box(self.price_partial(kf)).0);
+        }
+        let tp = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
+        let t0 = std::time::Instant::now();
+        for _ in 0..reps {
+            acc = acc.wrapping_add(std::hint::black_box(self.price_full(kf)).0);
+        }
+        let tf = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
+        let t0 = std::time::Instant::now();
+        for _ in 0..reps {
+            self.duals(false, std::hint::black_box(kf));
+        }
+        let td = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
+        let t0 = std::time::Instant::now();
+        for _ in 0..reps {
+            self.factor();
+        }
+        let ti = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
+        std::hint::black_box(acc);
+        (tp, tf, td, ti)
+    }
+
     /// Forget the warm-start basis.
     pub fn reset(&mut self) {
         self.warm_basis = None;
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
     }
 
     /// Numerical rank of [1, b_1, …, b_m] on the grid (m+1 unless functions are dependent).
@@ -978,11 +1016,14 @@ impl FastSolver {
             }
         }
         // Support points come in neighbouring pairs: scan each distinct block range once.
+        let mut distinct = 0;
         for a in 0..nr {
-            if !ranges[..a].contains(&ranges[a]) {
-                best = self.scan_fine(y, kf, ranges[a], best);
+            if !ranges[..distinct].contains(&ranges[a]) {
+                ranges[distinct] = ranges[a];
+                distinct += 1;
             }
         }
+        best = self.fine.scan_ranges(y, kf, &ranges[..distinct], best);
         if best.0 == usize::MAX {
             return best;
         }
@@ -1422,7 +1463,13 @@ impl FastSolver {
         } else {
             Start::Cold
         };
-        let mut start = if hint.is_some() {
+        // The same moments as the last solved problem (another fragment depth for the same
+        // texel): its optimal basis is primal feasible here, a better start than the crossover.
+        let same_moments = matches!(warm_or_cold, Start::Warm) && self.last_c == self.c0;
+        if hint.is_some() && same_moments {
+            self.stats.same_moments += 1;
+        }
+        let mut start = if hint.is_some() && !same_moments {
             Start::Hint
         } else {
             warm_or_cold
@@ -1464,6 +1511,7 @@ impl FastSolver {
                             Some(wb) => wb.copy_from_slice(&self.basis),
                             None => self.warm_basis = Some(self.basis.clone()),
                         }
+                        self.last_c.copy_from_slice(&self.c0);
                     }
                     if !c_given {
                         self.polish_original(moments);

@@ -12,6 +12,57 @@
 /// Columns per block (two AVX2 registers of f64).
 pub(crate) const LANES: usize = 8;
 
+/// The pricing kernels: scalar, and on x86-64 AVX2+FMA and AVX-512F.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(crate) enum Kernel {
+    #[default]
+    Scalar,
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl Kernel {
+    /// Every kernel (supported or not).
+    #[allow(dead_code)] // used by the tests
+    pub(crate) fn all() -> Vec<Kernel> {
+        #[cfg(target_arch = "x86_64")]
+        return vec![Kernel::Scalar, Kernel::Avx2, Kernel::Avx512];
+        #[cfg(not(target_arch = "x86_64"))]
+        return vec![Kernel::Scalar];
+    }
+
+    /// Whether this CPU can run the kernel.
+    pub(crate) fn supported(self) -> bool {
+        match self {
+            Kernel::Scalar => true,
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => {
+                std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 => std::arch::is_x86_feature_detected!("avx512f"),
+        }
+    }
+
+    /// The fastest supported kernel.
+    #[inline]
+    pub(crate) fn detect() -> Kernel {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if Kernel::Avx512.supported() {
+                return Kernel::Avx512;
+            }
+            if Kernel::Avx2.supported() {
+                return Kernel::Avx2;
+            }
+        }
+        Kernel::Scalar
+    }
+}
+
 /// A column table in blocks: row k of column j at `data[k * ld + j]`, `ld` a multiple of
 /// [`LANES`], columns `len..ld` zero. Columns can be excluded from pricing (basic columns:
 /// their reduced cost is zero in exact arithmetic but can come out at −1e-8 on the
@@ -24,6 +75,8 @@ pub(crate) struct ColumnTable {
     ld: usize,
     r: usize,
     len: usize,
+    /// The fastest kernel this CPU supports (detected once).
+    kernel: Kernel,
 }
 
 impl ColumnTable {
@@ -44,6 +97,7 @@ impl ColumnTable {
             ld,
             r,
             len,
+            kernel: Kernel::detect(),
         }
     }
 
@@ -83,46 +137,91 @@ impl ColumnTable {
         bhi: usize,
         best: (usize, f64),
     ) -> (usize, f64) {
-        assert!(y.len() >= self.r && blo <= bhi && bhi <= self.blocks());
-        #[cfg(target_arch = "x86_64")]
-        {
-            if std::arch::is_x86_feature_detected!("avx2")
-                && std::arch::is_x86_feature_detected!("fma")
-            {
-                // SAFETY: the CPU supports AVX2 and FMA, and the block range was checked to lie
-                // inside the table.
-                return unsafe {
-                    match self.r {
-                        1 => self.scan_avx2::<1>(y, split, blo, bhi, best),
-                        2 => self.scan_avx2::<2>(y, split, blo, bhi, best),
-                        3 => self.scan_avx2::<3>(y, split, blo, bhi, best),
-                        4 => self.scan_avx2::<4>(y, split, blo, bhi, best),
-                        5 => self.scan_avx2::<5>(y, split, blo, bhi, best),
-                        6 => self.scan_avx2::<6>(y, split, blo, bhi, best),
-                        7 => self.scan_avx2::<7>(y, split, blo, bhi, best),
-                        8 => self.scan_avx2::<8>(y, split, blo, bhi, best),
-                        9 => self.scan_avx2::<9>(y, split, blo, bhi, best),
-                        _ => self.scan_scalar(y, split, blo, bhi, best),
-                    }
-                };
-            }
+        self.scan_ranges(y, split, &[(blo, bhi)], best)
+    }
+
+    /// [`Self::scan`] over several block ranges in one pass (ranges may overlap), with the
+    /// fastest kernel this CPU supports.
+    pub(crate) fn scan_ranges(
+        &self,
+        y: &[f64],
+        split: usize,
+        ranges: &[(usize, usize)],
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        self.scan_ranges_with(self.kernel, y, split, ranges, best)
+    }
+
+    /// [`Self::scan_ranges`] with a given kernel (which must be supported: see
+    /// [`Kernel::supported`]).
+    pub(crate) fn scan_ranges_with(
+        &self,
+        kernel: Kernel,
+        y: &[f64],
+        split: usize,
+        ranges: &[(usize, usize)],
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        assert!(y.len() >= self.r);
+        assert!(ranges
+            .iter()
+            .all(|&(blo, bhi)| blo <= bhi && bhi <= self.blocks()));
+        assert!(
+            kernel.supported(),
+            "pricing kernel {kernel:?} not supported by this CPU"
+        );
+        macro_rules! by_rows {
+            ($f:ident) => {
+                match self.r {
+                    1 => self.$f::<1>(y, split, ranges, best),
+                    2 => self.$f::<2>(y, split, ranges, best),
+                    3 => self.$f::<3>(y, split, ranges, best),
+                    4 => self.$f::<4>(y, split, ranges, best),
+                    5 => self.$f::<5>(y, split, ranges, best),
+                    6 => self.$f::<6>(y, split, ranges, best),
+                    7 => self.$f::<7>(y, split, ranges, best),
+                    8 => self.$f::<8>(y, split, ranges, best),
+                    9 => self.$f::<9>(y, split, ranges, best),
+                    _ => self.scan_ranges_scalar(y, split, ranges, best),
+                }
+            };
         }
-        self.scan_scalar(y, split, blo, bhi, best)
+        match kernel {
+            Kernel::Scalar => self.scan_ranges_scalar(y, split, ranges, best),
+            // SAFETY: the CPU supports the kernel's features (asserted), and the block ranges
+            // lie inside the table (asserted).
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => unsafe { by_rows!(scan_avx2) },
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 => unsafe { by_rows!(scan_avx512) },
+        }
+    }
+
+    fn scan_ranges_scalar(
+        &self,
+        y: &[f64],
+        split: usize,
+        ranges: &[(usize, usize)],
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        ranges.iter().fold(best, |b, &(blo, bhi)| {
+            self.scan_scalar(y, split, blo, bhi, b)
+        })
     }
 
     /// [`Self::scan`] for R rows with AVX2: two registers of four columns per block, the
     /// running minimum and its column index kept per lane.
     ///
     /// # Safety
-    /// The CPU must support AVX2 and FMA; `bhi ≤ self.blocks()`, `y.len() ≥ R = self.r`.
+    /// The CPU must support AVX2 and FMA; every range within `self.blocks()`,
+    /// `y.len() ≥ R = self.r`.
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx2,fma")]
     unsafe fn scan_avx2<const R: usize>(
         &self,
         y: &[f64],
         split: usize,
-        blo: usize,
-        bhi: usize,
+        ranges: &[(usize, usize)],
         best: (usize, f64),
     ) -> (usize, f64) {
         use std::arch::x86_64::*;
@@ -136,37 +235,39 @@ impl ColumnTable {
         let one = _mm256_set1_pd(1.0);
         let splitv = _mm256_set1_pd(split as f64);
         let step = _mm256_set1_pd(LANES as f64);
-        let b0 = (blo * LANES) as f64;
-        let mut idx0 = _mm256_setr_pd(b0, b0 + 1.0, b0 + 2.0, b0 + 3.0);
-        let mut idx1 = _mm256_add_pd(idx0, _mm256_set1_pd(4.0));
         let mut bv0 = _mm256_set1_pd(best.1);
         let mut bv1 = bv0;
         let mut bi0 = _mm256_set1_pd(-1.0);
         let mut bi1 = bi0;
-        for b in blo..bhi {
-            let base = b * LANES;
-            // SAFETY (all loads): k < R = self.r rows of ld ≥ base + LANES columns, and pen
-            // has ld entries.
-            let mut s0 = _mm256_mul_pd(yv[0], _mm256_loadu_pd(data.add(base)));
-            let mut s1 = _mm256_mul_pd(yv[0], _mm256_loadu_pd(data.add(base + 4)));
-            for k in 1..R {
-                let row = data.add(k * ld + base);
-                s0 = _mm256_fmadd_pd(yv[k], _mm256_loadu_pd(row), s0);
-                s1 = _mm256_fmadd_pd(yv[k], _mm256_loadu_pd(row.add(4)), s1);
+        for &(blo, bhi) in ranges {
+            let b0 = (blo * LANES) as f64;
+            let mut idx0 = _mm256_setr_pd(b0, b0 + 1.0, b0 + 2.0, b0 + 3.0);
+            let mut idx1 = _mm256_add_pd(idx0, _mm256_set1_pd(4.0));
+            for b in blo..bhi {
+                let base = b * LANES;
+                // SAFETY (all loads): k < R = self.r rows of ld ≥ base + LANES columns, and pen
+                // has ld entries.
+                let mut s0 = _mm256_mul_pd(yv[0], _mm256_loadu_pd(data.add(base)));
+                let mut s1 = _mm256_mul_pd(yv[0], _mm256_loadu_pd(data.add(base + 4)));
+                for k in 1..R {
+                    let row = data.add(k * ld + base);
+                    s0 = _mm256_fmadd_pd(yv[k], _mm256_loadu_pd(row), s0);
+                    s1 = _mm256_fmadd_pd(yv[k], _mm256_loadu_pd(row.add(4)), s1);
+                }
+                // d = [j < split] − s + pen
+                let c0 = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(idx0, splitv), one);
+                let c1 = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(idx1, splitv), one);
+                let d0 = _mm256_add_pd(_mm256_sub_pd(c0, s0), _mm256_loadu_pd(pen.add(base)));
+                let d1 = _mm256_add_pd(_mm256_sub_pd(c1, s1), _mm256_loadu_pd(pen.add(base + 4)));
+                let m0 = _mm256_cmp_pd::<_CMP_LT_OQ>(d0, bv0);
+                let m1 = _mm256_cmp_pd::<_CMP_LT_OQ>(d1, bv1);
+                bv0 = _mm256_min_pd(d0, bv0);
+                bv1 = _mm256_min_pd(d1, bv1);
+                bi0 = _mm256_blendv_pd(bi0, idx0, m0);
+                bi1 = _mm256_blendv_pd(bi1, idx1, m1);
+                idx0 = _mm256_add_pd(idx0, step);
+                idx1 = _mm256_add_pd(idx1, step);
             }
-            // d = [j < split] − s + pen
-            let c0 = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(idx0, splitv), one);
-            let c1 = _mm256_and_pd(_mm256_cmp_pd::<_CMP_LT_OQ>(idx1, splitv), one);
-            let d0 = _mm256_add_pd(_mm256_sub_pd(c0, s0), _mm256_loadu_pd(pen.add(base)));
-            let d1 = _mm256_add_pd(_mm256_sub_pd(c1, s1), _mm256_loadu_pd(pen.add(base + 4)));
-            let m0 = _mm256_cmp_pd::<_CMP_LT_OQ>(d0, bv0);
-            let m1 = _mm256_cmp_pd::<_CMP_LT_OQ>(d1, bv1);
-            bv0 = _mm256_blendv_pd(bv0, d0, m0);
-            bv1 = _mm256_blendv_pd(bv1, d1, m1);
-            bi0 = _mm256_blendv_pd(bi0, idx0, m0);
-            bi1 = _mm256_blendv_pd(bi1, idx1, m1);
-            idx0 = _mm256_add_pd(idx0, step);
-            idx1 = _mm256_add_pd(idx1, step);
         }
         let mut v = [0.0f64; LANES];
         let mut ix = [0.0f64; LANES];
@@ -174,6 +275,68 @@ impl ColumnTable {
         _mm256_storeu_pd(v.as_mut_ptr().add(4), bv1);
         _mm256_storeu_pd(ix.as_mut_ptr(), bi0);
         _mm256_storeu_pd(ix.as_mut_ptr().add(4), bi1);
+        let mut out = best;
+        for l in 0..LANES {
+            if ix[l] >= 0.0 {
+                let j = ix[l] as usize;
+                if v[l] < out.1 || (v[l] == out.1 && j < out.0) {
+                    out = (j, v[l]);
+                }
+            }
+        }
+        out
+    }
+
+    /// [`Self::scan`] for R rows with AVX-512: one register of eight columns per block, the
+    /// running minimum and its column index kept per lane.
+    ///
+    /// # Safety
+    /// The CPU must support AVX-512F; every range within `self.blocks()`, `y.len() ≥ R = self.r`.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    unsafe fn scan_avx512<const R: usize>(
+        &self,
+        y: &[f64],
+        split: usize,
+        ranges: &[(usize, usize)],
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        use std::arch::x86_64::*;
+        let ld = self.ld;
+        let data = self.data.as_ptr();
+        let pen = self.pen.as_ptr();
+        let mut yv = [_mm512_setzero_pd(); R];
+        for k in 0..R {
+            yv[k] = _mm512_set1_pd(y[k]);
+        }
+        let one = _mm512_set1_pd(1.0);
+        let splitv = _mm512_set1_pd(split as f64);
+        let iota = _mm512_setr_pd(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
+        let mut bv = _mm512_set1_pd(best.1);
+        let mut bi = _mm512_set1_pd(-1.0);
+        for &(blo, bhi) in ranges {
+            for b in blo..bhi {
+                let base = b * LANES;
+                // SAFETY (all loads): k < R = self.r rows of ld ≥ base + LANES columns, and pen
+                // has ld entries.
+                let mut s = _mm512_mul_pd(yv[0], _mm512_loadu_pd(data.add(base)));
+                for k in 1..R {
+                    s = _mm512_fmadd_pd(yv[k], _mm512_loadu_pd(data.add(k * ld + base)), s);
+                }
+                // d = [j < split] − s + pen, as (pen − s) + [j < split] (the same rounding).
+                let idx = _mm512_add_pd(_mm512_set1_pd(base as f64), iota);
+                let below = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(idx, splitv);
+                let d = _mm512_sub_pd(_mm512_loadu_pd(pen.add(base)), s);
+                let d = _mm512_mask_add_pd(d, below, d, one);
+                let m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, bv);
+                bv = _mm512_min_pd(d, bv);
+                bi = _mm512_mask_blend_pd(m, bi, idx);
+            }
+        }
+        let mut v = [0.0f64; LANES];
+        let mut ix = [0.0f64; LANES];
+        _mm512_storeu_pd(v.as_mut_ptr(), bv);
+        _mm512_storeu_pd(ix.as_mut_ptr(), bi);
         let mut out = best;
         for l in 0..LANES {
             if ix[l] >= 0.0 {
@@ -234,7 +397,12 @@ mod tests {
     }
 
     #[test]
-    fn scan_matches_brute_force_for_every_row_count() {
+    fn scan_matches_brute_force_for_every_row_count_and_kernel() {
+        let kernels: Vec<Kernel> = Kernel::all()
+            .into_iter()
+            .filter(|k| k.supported())
+            .collect();
+        eprintln!("pricing kernels tested: {kernels:?}");
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for trial in 0..3000 {
             let r = 1 + trial % 11;
@@ -255,13 +423,25 @@ mod tests {
             } else {
                 (usize::MAX, -0.1)
             };
-            let got = t.scan(&y, split, blo, bhi, start);
             let want = brute(&cols, &y, split, blo * LANES, bhi * LANES, start);
-            assert_eq!(got.0, want.0, "trial {trial}: r = {r}, len = {len}");
-            if got.0 != usize::MAX {
-                assert!((got.1 - want.1).abs() <= 1e-12, "trial {trial}");
-            } else {
-                assert_eq!(got.1, start.1);
+            for &kernel in &kernels {
+                let got = t.scan_ranges_with(kernel, &y, split, &[(blo, bhi)], start);
+                assert_eq!(
+                    got.0, want.0,
+                    "trial {trial}: r = {r}, len = {len}, {kernel:?}"
+                );
+                if got.0 != usize::MAX {
+                    assert!((got.1 - want.1).abs() <= 1e-12, "trial {trial}, {kernel:?}");
+                } else {
+                    assert_eq!(got.1, start.1);
+                }
+            }
+            // Several ranges in one pass = the best of the single-range passes.
+            let (b2lo, b2hi) = (blo / 2, blo / 2 + (bhi - blo).min(2));
+            let want2 = t.scan_ranges_with(Kernel::Scalar, &y, split, &[(b2lo, b2hi)], want);
+            for &kernel in &kernels {
+                let got = t.scan_ranges_with(kernel, &y, split, &[(blo, bhi), (b2lo, b2hi)], start);
+                assert_eq!(got.0, want2.0, "trial {trial}: two ranges, {kernel:?}");
             }
             let scalar = t.scan_scalar(&y, split, blo, bhi, start);
             assert_eq!(scalar.0, want.0, "trial {trial} (scalar)");
@@ -270,14 +450,16 @@ mod tests {
             for j in (0..len).step_by(3) {
                 t.set_excluded(j, true);
             }
-            let got = t.scan(&y, split, blo, bhi, start);
             let mut want = start;
             for j in blo * LANES..(bhi * LANES).min(len) {
                 if j % 3 != 0 {
                     want = brute(&cols, &y, split, j, j + 1, want);
                 }
             }
-            assert_eq!(got.0, want.0, "trial {trial} (excluded)");
+            for &kernel in &kernels {
+                let got = t.scan_ranges_with(kernel, &y, split, &[(blo, bhi)], start);
+                assert_eq!(got.0, want.0, "trial {trial} (excluded), {kernel:?}");
+            }
         }
     }
 
