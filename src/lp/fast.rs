@@ -136,6 +136,10 @@ pub struct FastSolver {
     condition: f64,
     /// Rounding-error bound on the weights of the last solve.
     last_bound: f64,
+    /// The basis of the last successful factorisation, and whether `binv` is still exactly
+    /// that factorisation (no pivot since, no artificial column).
+    factored: Vec<usize>,
+    factored_ok: bool,
     /// Last optimal basis (warm start), if any, and the transformed moments it was optimal for.
     warm_basis: Option<Vec<usize>>,
     last_c: Vec<f64>,
@@ -282,6 +286,8 @@ impl FastSolver {
             b0,
             condition,
             last_bound: 0.0,
+            factored: vec![usize::MAX; r],
+            factored_ok: false,
             warm_basis: None,
             last_c: vec![f64::NAN; r],
             warm: true,
@@ -518,7 +524,10 @@ impl FastSolver {
         let bnorm = norm(&self.bmat);
         // Numerically singular for our purposes: weights from such a basis carry errors of
         // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
-        invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND
+        let ok = invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND;
+        self.factored.copy_from_slice(&self.basis);
+        self.factored_ok = ok && !self.basis.contains(&ART);
+        ok
     }
 
     /// x = B⁻¹ c with two steps of iterative refinement.
@@ -577,7 +586,11 @@ impl FastSolver {
     fn run(&mut self, kf: usize, bland_always: bool) -> Outcome {
         let r = self.r;
         let n = self.n;
-        if !self.refactor() {
+        if self.factored_ok && self.basis == self.factored {
+            // B⁻¹ is still the fresh factorisation of this basis (the warm start after a
+            // problem that ended on it): only the weights are new.
+            self.basic_solution();
+        } else if !self.refactor() {
             return Outcome::Failed;
         }
         let mut phase1 = false;
@@ -774,7 +787,11 @@ impl FastSolver {
                 // optimal too (complementary slackness); prefer the well-conditioned one on the
                 // clearly positive weights, else the basic solution if it is feasible.
                 if self.x.iter().all(|&v| v >= -TOL_P) {
-                    self.polish();
+                    // With every weight clearly positive the least squares of the polish is
+                    // the square system the refined basic solution already solved.
+                    if self.x.iter().any(|&v| v <= 1e-8) {
+                        self.polish();
+                    }
                     return Outcome::Optimal;
                 }
                 if self.polish() {
@@ -1092,9 +1109,9 @@ impl FastSolver {
     /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
     fn exchange(&mut self, l: usize, q: usize) {
         let r = self.r;
-        let al = self.alpha[l];
+        let al = 1.0 / self.alpha[l];
         for k in 0..r {
-            self.binv[l * r + k] /= al;
+            self.binv[l * r + k] *= al;
         }
         for t in 0..r {
             if t != l {
@@ -1106,6 +1123,7 @@ impl FastSolver {
                 }
             }
         }
+        self.factored_ok = false;
         if self.basis[l] != ART {
             self.set_basic(self.basis[l], false);
         }
@@ -1670,7 +1688,8 @@ fn least_squares(
             return false;
         }
         rm[j * k + j] = nv;
-        v.iter_mut().for_each(|x| *x /= nv);
+        let inv = 1.0 / nv;
+        v.iter_mut().for_each(|x| *x *= inv);
     }
     for j in 0..k {
         w[j] = dot(&q[j * r..(j + 1) * r], &c[..r]);
