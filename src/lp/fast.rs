@@ -1109,9 +1109,9 @@ impl FastSolver {
     /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
     fn exchange(&mut self, l: usize, q: usize) {
         let r = self.r;
-        let al = 1.0 / self.alpha[l];
+        let al = self.alpha[l];
         for k in 0..r {
-            self.binv[l * r + k] *= al;
+            self.binv[l * r + k] /= al;
         }
         for t in 0..r {
             if t != l {
