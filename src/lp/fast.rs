@@ -1131,6 +1131,74 @@ impl FastSolver {
         self.basis[l] = q;
     }
 
+    /// Final refinement of the weights against the LP as stated (full-rank tables): the basic
+    /// solution of an optimal basis of neighbouring grid points (condition 1e6–1e9) is accurate
+    /// to κ·ε only. Two steps of iterative refinement x += B̄⁻¹ ρ with the residual
+    /// ρ = b̄ − B̄ x of the original system [1; b(z_i)] computed in double-double arithmetic
+    /// (exact products, compensated sums) bring x to about ε; B̄⁻¹ ρ = B⁻¹ (√n R⁻ᵀ ρ) uses the
+    /// basis inverse at hand. Kept only if the steps converge and the weights stay
+    /// non-negative.
+    fn refine_original(&mut self, moments: &[f64]) {
+        let (r, mm) = (self.r, self.m + 1);
+        debug_assert_eq!(r, mm);
+        if self.basis.contains(&ART) {
+            return;
+        }
+        self.xold.copy_from_slice(&self.x);
+        let mut steps = [0.0f64; 2];
+        for step in steps.iter_mut() {
+            // lo_rhs = ρ (double-double residual rounded to f64).
+            self.residual_original(moments);
+            // u = √n R⁻ᵀ ρ (forward substitution, every function kept).
+            for j in 0..mm {
+                let coef = &self.rcoef[j * r..(j + 1) * r];
+                let mut acc = self.lo_rhs[j];
+                for k in 0..j {
+                    acc -= coef[k] * self.u[k];
+                }
+                self.u[j] = acc / coef[j];
+            }
+            let sn = (self.n as f64).sqrt();
+            for k in 0..r {
+                self.u[k] *= sn;
+            }
+            mat_vec(&self.binv, &self.u, &mut self.alpha, r);
+            for t in 0..r {
+                self.x[t] += self.alpha[t];
+            }
+            *step = self.alpha.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        }
+        // Converging (the second correction much smaller than the first, or at rounding
+        // level) and still a distribution: keep.
+        let ok = (steps[1] <= 0.25 * steps[0] || steps[1] <= 4.0 * f64::EPSILON)
+            && self.x.iter().all(|v| v.is_finite() && *v >= -TOL_P);
+        if ok {
+            self.x.iter_mut().for_each(|v| *v = v.max(0.0));
+        } else {
+            self.x.copy_from_slice(&self.xold);
+        }
+    }
+
+    /// ρ = b̄ − Σ_t x_t [1; b(z_{B_t})] in double-double arithmetic, rounded into lo_rhs.
+    fn residual_original(&mut self, moments: &[f64]) {
+        let mm = self.m + 1;
+        for j in 0..mm {
+            let (mut hi, mut lo) = (if j == 0 { 1.0 } else { moments[j - 1] }, 0.0);
+            for t in 0..self.r {
+                let v = if j == 0 {
+                    1.0
+                } else {
+                    self.table.row(self.basis[t])[j - 1]
+                };
+                let (p, pe) = two_prod(self.x[t], v);
+                let (sum, se) = two_sum(hi, -p);
+                hi = sum;
+                lo += se - pe;
+            }
+            self.lo_rhs[j] = hi + lo;
+        }
+    }
+
     /// Final refinement in the original coordinates: least squares of the (row-equilibrated)
     /// system [1; b(z_i)] w = [1; b] on the support found, accepted when the weights stay
     /// non-negative and the residual shrinks. The transformed moments c carry the rounding of
@@ -1531,7 +1599,9 @@ impl FastSolver {
                         }
                         self.last_c.copy_from_slice(&self.c0);
                     }
-                    if !c_given {
+                    if self.r == self.m + 1 {
+                        self.refine_original(moments);
+                    } else if !c_given {
                         self.polish_original(moments);
                     }
                     return Ok(self.solution(kf));
@@ -1580,6 +1650,30 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
+}
+
+/// Exact product a·b = p + e (Dekker's splitting; no FMA needed).
+#[inline]
+fn two_prod(a: f64, b: f64) -> (f64, f64) {
+    const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
+    let p = a * b;
+    let split = |v: f64| {
+        let c = SPLIT * v;
+        let h = c - (c - v);
+        (h, v - h)
+    };
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    let e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+    (p, e)
+}
+
+/// Exact sum a + b = s + e (Knuth's TwoSum).
+#[inline]
+fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
 }
 
 /// out = A v for row-major r × r A.
