@@ -12,6 +12,8 @@
 //! G(b, z_f). A reduced cost of −δ < 0 still bounds the gap: G_B − G* ≤ δ (shift y along the
 //! constant row).
 
+#![allow(clippy::needless_range_loop)] // exact Gaussian elimination on small matrices
+
 use momentlab::lp::bench::problems;
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::instances::power_table;
