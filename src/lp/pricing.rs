@@ -275,16 +275,7 @@ impl ColumnTable {
         _mm256_storeu_pd(v.as_mut_ptr().add(4), bv1);
         _mm256_storeu_pd(ix.as_mut_ptr(), bi0);
         _mm256_storeu_pd(ix.as_mut_ptr().add(4), bi1);
-        let mut out = best;
-        for l in 0..LANES {
-            if ix[l] >= 0.0 {
-                let j = ix[l] as usize;
-                if v[l] < out.1 || (v[l] == out.1 && j < out.0) {
-                    out = (j, v[l]);
-                }
-            }
-        }
-        out
+        reduce_lanes(&v, &ix, best)
     }
 
     /// [`Self::scan`] for R rows with AVX-512: one register of eight columns per block, the
@@ -333,20 +324,15 @@ impl ColumnTable {
                 bi = _mm512_mask_blend_pd(m, bi, idx);
             }
         }
-        let mut v = [0.0f64; LANES];
-        let mut ix = [0.0f64; LANES];
-        _mm512_storeu_pd(v.as_mut_ptr(), bv);
-        _mm512_storeu_pd(ix.as_mut_ptr(), bi);
-        let mut out = best;
-        for l in 0..LANES {
-            if ix[l] >= 0.0 {
-                let j = ix[l] as usize;
-                if v[l] < out.1 || (v[l] == out.1 && j < out.0) {
-                    out = (j, v[l]);
-                }
-            }
+        // Lane reduction without data-dependent branches: the lowest value, then the lowest
+        // index among the lanes holding it (lanes still at best.1 never improved).
+        let minv = _mm512_reduce_min_pd(bv);
+        if !(minv < best.1) {
+            return best;
         }
-        out
+        let eq = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(bv, _mm512_set1_pd(minv));
+        let j = _mm512_mask_reduce_min_pd(eq, bi);
+        (j as usize, minv)
     }
 
     /// [`Self::scan`] without SIMD (any row count; also the reference in tests).
@@ -368,6 +354,23 @@ impl ColumnTable {
         }
         out
     }
+}
+
+/// The lowest of the lane minima `v` (with column indices `ix`, −1 where a lane never went
+/// below best.1) and its lowest index, or `best` when no lane improved; branch-free selects.
+#[inline(always)]
+fn reduce_lanes(v: &[f64; LANES], ix: &[f64; LANES], best: (usize, f64)) -> (usize, f64) {
+    let minv = v
+        .iter()
+        .fold(f64::INFINITY, |a, &b| if b < a { b } else { a });
+    if !(minv < best.1) {
+        return best;
+    }
+    let j = v.iter().zip(ix).fold(
+        f64::INFINITY,
+        |a, (&vl, &il)| if vl == minv && il < a { il } else { a },
+    );
+    (j as usize, minv)
 }
 
 #[cfg(test)]
