@@ -99,10 +99,26 @@ pub struct FastStats {
     pub hint_rejected: u64,
     /// Crossover pivots (start distribution → basic feasible solution).
     pub crossover_pivots: u64,
+    /// Optima whose weights, refined against the LP as stated, were infeasible: solved again
+    /// with every basic solution refined.
+    pub accurate_retries: u64,
 }
 
 /// Index of the artificial column in a basis.
 const ART: usize = usize::MAX;
+
+/// What [`FastSolver::refine_steps`] found.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Refined {
+    /// Refined weights are a distribution (kept).
+    Feasible,
+    /// Refined weights negative, but the unrefined ones (kept) reproduce the moments to
+    /// rounding: a numerically singular basis.
+    Undetermined,
+    /// Refined weights negative and the unrefined ones (kept) not accurate: the basis is not
+    /// primal feasible.
+    Infeasible,
+}
 
 enum Outcome {
     Optimal,
@@ -111,6 +127,9 @@ enum Outcome {
     Failed,
     /// The final basis is slightly primal infeasible after refactorisation: run again from it.
     Retry,
+    /// An optimum whose weights are not reliable (see `finish_optimal`): run again from it in
+    /// accurate mode; the current weights stand if that run fails.
+    RetryAccurate,
 }
 
 /// Fast exact solver for Algorithm 1; see the module documentation.
@@ -161,6 +180,12 @@ pub struct FastSolver {
     s: Vec<f64>,
     /// The transformed moments of the current problem (c may be perturbed during a run).
     c0: Vec<f64>,
+    /// The moments of the current problem as given.
+    b_orig: Vec<f64>,
+    /// Refine every basic solution against the LP as stated (set when an optimum's weights
+    /// turned out infeasible on refinement; per solve).
+    accurate: bool,
+    x_backup: Vec<f64>,
     /// Duals and weights before the last verification refactorisation.
     yold: Vec<f64>,
     xold: Vec<f64>,
@@ -305,6 +330,9 @@ impl FastSolver {
             art: vec![0.0; r],
             s: vec![0.0; n],
             c0: vec![0.0; r],
+            b_orig: vec![0.0; m],
+            accurate: false,
+            x_backup: vec![0.0; r],
             yold: vec![0.0; r],
             xold: vec![0.0; r],
             amax,
@@ -560,6 +588,10 @@ impl FastSolver {
                 }
             }
         }
+        if self.accurate && self.c == self.c0 {
+            // Accurate mode (see `finish_optimal`): against the LP as stated.
+            let _ = self.refine_steps();
+        }
     }
 
     /// y = c_Bᵀ B⁻¹ for costs cost(B_t).
@@ -677,6 +709,26 @@ impl FastSolver {
             } else {
                 self.price_partial(kf_eff)
             };
+            if partial.0 == usize::MAX && !bland && !verified && since_refactor > 0 {
+                // About to prove optimality with a full pass: refactorise first, so that the
+                // pass prices with fresh duals (the updated ones of an ill-conditioned basis
+                // can be off by far more than the tolerance, and a pass with them would have
+                // to be repeated).
+                self.yold.copy_from_slice(&self.y);
+                self.xold.copy_from_slice(&self.x);
+                if !self.refactor() {
+                    if rescues < 3 && self.rescue() {
+                        rescues += 1;
+                        phase1 = false;
+                        since_refactor = 0;
+                        continue;
+                    }
+                    return Outcome::Failed;
+                }
+                since_refactor = 0;
+                verified = true;
+                self.duals(phase1, kf);
+            }
             if partial.0 == usize::MAX {
                 self.stats.full_pricing += 1;
             }
@@ -792,10 +844,10 @@ impl FastSolver {
                     if self.x.iter().any(|&v| v <= 1e-8) {
                         self.polish();
                     }
-                    return Outcome::Optimal;
+                    return self.finish_optimal();
                 }
                 if self.polish() {
-                    return Outcome::Optimal;
+                    return self.finish_optimal();
                 }
                 if rescues < 3 && self.rescue() {
                     rescues += 1;
@@ -1131,24 +1183,29 @@ impl FastSolver {
         self.basis[l] = q;
     }
 
-    /// Final refinement of the weights against the LP as stated (full-rank tables): the basic
-    /// solution of an optimal basis of neighbouring grid points (condition 1e6–1e9) is accurate
-    /// to κ·ε only. Two steps of iterative refinement x += B̄⁻¹ ρ with the residual
+    /// Refinement of the weights against the LP as stated (full-rank tables, real columns
+    /// only): the basic solution of a basis of neighbouring grid points (condition 1e6–1e9) is
+    /// accurate to κ·ε only. Two steps of iterative refinement x += B̄⁻¹ ρ with the residual
     /// ρ = b̄ − B̄ x of the original system [1; b(z_i)] computed in double-double arithmetic
     /// (exact products, compensated sums) bring x to about ε; B̄⁻¹ ρ = B⁻¹ (√n R⁻ᵀ ρ) uses the
-    /// basis inverse at hand. Kept only if the steps converge and the weights stay
-    /// non-negative.
-    fn refine_original(&mut self, moments: &[f64]) {
+    /// basis inverse at hand. Returns None (x unchanged) when the steps do not converge or the
+    /// basis holds the artificial column. A refined x with negative weights while the
+    /// unrefined one reproduced the moments to 1e-12 (relative) means a numerically singular
+    /// basis, whose weights are not determined: then the unrefined, valid x is kept.
+    fn refine_steps(&mut self) -> Option<Refined> {
         let (r, mm) = (self.r, self.m + 1);
-        debug_assert_eq!(r, mm);
-        if self.basis.contains(&ART) {
-            return;
+        if r != mm || self.basis.contains(&ART) {
+            return None;
         }
-        self.xold.copy_from_slice(&self.x);
+        self.x_backup.copy_from_slice(&self.x);
         let mut steps = [0.0f64; 2];
+        let mut res0 = f64::NAN;
         for step in steps.iter_mut() {
             // lo_rhs = ρ (double-double residual rounded to f64).
-            self.residual_original(moments);
+            let res = self.residual_original();
+            if res0.is_nan() {
+                res0 = res;
+            }
             // u = √n R⁻ᵀ ρ (forward substitution, every function kept).
             for j in 0..mm {
                 let coef = &self.rcoef[j * r..(j + 1) * r];
@@ -1168,22 +1225,52 @@ impl FastSolver {
             }
             *step = self.alpha.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         }
-        // Converging (the second correction much smaller than the first, or at rounding
-        // level) and still a distribution: keep.
-        let ok = (steps[1] <= 0.25 * steps[0] || steps[1] <= 4.0 * f64::EPSILON)
-            && self.x.iter().all(|v| v.is_finite() && *v >= -TOL_P);
-        if ok {
-            self.x.iter_mut().for_each(|v| *v = v.max(0.0));
-        } else {
-            self.x.copy_from_slice(&self.xold);
+        // Converging: the second correction much smaller than the first, or at rounding level.
+        let converged = (steps[1] <= 0.25 * steps[0] || steps[1] <= 4.0 * f64::EPSILON)
+            && self.x.iter().all(|v| v.is_finite());
+        if !converged {
+            self.x.copy_from_slice(&self.x_backup);
+            return None;
         }
+        if self.x.iter().all(|&v| v >= -TOL_P) {
+            self.x.iter_mut().for_each(|v| *v = v.max(0.0));
+            return Some(Refined::Feasible);
+        }
+        self.x.copy_from_slice(&self.x_backup);
+        let valid = res0 <= 1e-12 && self.x.iter().all(|&v| v >= -TOL_P);
+        Some(if valid {
+            Refined::Undetermined
+        } else {
+            Refined::Infeasible
+        })
     }
 
-    /// ρ = b̄ − Σ_t x_t [1; b(z_{B_t})] in double-double arithmetic, rounded into lo_rhs.
-    fn residual_original(&mut self, moments: &[f64]) {
+    /// At a phase-2 optimum: the weights refined against the LP as stated
+    /// ([`Self::refine_steps`]). If they show that the basis is not primal feasible after all
+    /// (its f64 weights were off by more than TOL_P), run again in accurate mode, where every
+    /// basic solution is refined the same way.
+    fn finish_optimal(&mut self) -> Outcome {
+        match self.refine_steps() {
+            None | Some(Refined::Feasible) => {}
+            Some(Refined::Undetermined) | Some(Refined::Infeasible) => {
+                if !self.accurate {
+                    self.accurate = true;
+                    self.stats.accurate_retries += 1;
+                    return Outcome::RetryAccurate;
+                }
+                self.stats.loose += 1;
+            }
+        }
+        Outcome::Optimal
+    }
+
+    /// ρ = b̄ − Σ_t x_t [1; b(z_{B_t})] in double-double arithmetic, rounded into lo_rhs;
+    /// returns max_j |ρ_j| / max_i |M_j(z_i)| (relative to the row scales).
+    fn residual_original(&mut self) -> f64 {
         let mm = self.m + 1;
+        let mut worst = 0.0f64;
         for j in 0..mm {
-            let (mut hi, mut lo) = (if j == 0 { 1.0 } else { moments[j - 1] }, 0.0);
+            let (mut hi, mut lo) = (if j == 0 { 1.0 } else { self.b_orig[j - 1] }, 0.0);
             for t in 0..self.r {
                 let v = if j == 0 {
                     1.0
@@ -1196,7 +1283,9 @@ impl FastSolver {
                 lo += se - pe;
             }
             self.lo_rhs[j] = hi + lo;
+            worst = worst.max(self.lo_rhs[j].abs() * self.oscale[j]);
         }
+        worst
     }
 
     /// Final refinement in the original coordinates: least squares of the (row-equilibrated)
@@ -1531,6 +1620,8 @@ impl FastSolver {
             bail!("z_f is NaN");
         }
         self.stats.solves += 1;
+        self.accurate = false;
+        self.b_orig.copy_from_slice(moments);
         if !c_given && !self.transform(moments) {
             self.stats.infeasible += 1;
             return Ok(Solution::infeasible());
@@ -1561,6 +1652,7 @@ impl FastSolver {
             warm_or_cold
         };
         let mut cold_runs = 0;
+        let mut stash: Option<(Solution, Vec<usize>)> = None;
         for _attempt in 0..6 {
             if let Start::Hint = start {
                 self.c.copy_from_slice(&self.c0);
@@ -1589,6 +1681,13 @@ impl FastSolver {
             self.c.copy_from_slice(&self.c0);
             let out = self.run(kf, cold_runs >= 2);
             match out {
+                Outcome::RetryAccurate => {
+                    self.stats.restarts += 1;
+                    // The answer if the accurate run fails: this optimum, whose weights
+                    // reproduce the moments (to rounding, or were all the data allow).
+                    stash = Some((self.solution(kf), self.basis.clone()));
+                    start = Start::Current;
+                }
                 Outcome::Optimal => {
                     self.last_bound =
                         f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
@@ -1599,9 +1698,7 @@ impl FastSolver {
                         }
                         self.last_c.copy_from_slice(&self.c0);
                     }
-                    if self.r == self.m + 1 {
-                        self.refine_original(moments);
-                    } else if !c_given {
+                    if self.r < self.m + 1 && !c_given {
                         self.polish_original(moments);
                     }
                     return Ok(self.solution(kf));
@@ -1616,7 +1713,7 @@ impl FastSolver {
                 }
                 Outcome::Failed => {
                     self.stats.restarts += 1;
-                    if cold_runs >= 2 {
+                    if cold_runs >= 2 || stash.is_some() {
                         break;
                     }
                     start = if matches!(start, Start::Hint) {
@@ -1626,6 +1723,14 @@ impl FastSolver {
                     };
                 }
             }
+        }
+        if let Some((sol, basis)) = stash {
+            self.stats.loose += 1;
+            if self.warm {
+                self.warm_basis = Some(basis);
+                self.last_c.copy_from_slice(&self.c0);
+            }
+            return Ok(sol);
         }
         // Last resort: the general-purpose solver.
         self.stats.fallbacks += 1;
