@@ -327,7 +327,7 @@ impl ColumnTable {
         // Lane reduction without data-dependent branches: the lowest value, then the lowest
         // index among the lanes holding it (lanes still at best.1 never improved).
         let minv = _mm512_reduce_min_pd(bv);
-        if !(minv < best.1) {
+        if minv.partial_cmp(&best.1) != Some(std::cmp::Ordering::Less) {
             return best;
         }
         let eq = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(bv, _mm512_set1_pd(minv));
@@ -363,7 +363,7 @@ fn reduce_lanes(v: &[f64; LANES], ix: &[f64; LANES], best: (usize, f64)) -> (usi
     let minv = v
         .iter()
         .fold(f64::INFINITY, |a, &b| if b < a { b } else { a });
-    if !(minv < best.1) {
+    if minv.partial_cmp(&best.1) != Some(std::cmp::Ordering::Less) {
         return best;
     }
     let j = v.iter().zip(ix).fold(
