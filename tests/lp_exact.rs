@@ -361,7 +361,7 @@ fn numerically_singular_optimal_basis_still_answers() {
         let sol = fast.solve(&b, zf).unwrap();
         assert_eq!(sol.status, Status::Optimal);
         // The support reproduces the moments.
-        let mut got = vec![0.0; 4];
+        let mut got = [0.0; 4];
         let mut tmp = vec![0.0; 4];
         let mut mass = 0.0;
         for &(z, w) in &sol.support {
