@@ -424,35 +424,6 @@ impl FastSolver {
         }
     }
 
-    #[doc(hidden)]
-    pub fn profile_pricing(&mut self, zf: f64, reps: usize) -> (f64, f64, f64, f64) {
-        let kf = self.table.grid().points().partition_point(|&z| z < zf);
-        self.duals(false, kf);
-        let t0 = std::time::Instant::now();
-        let mut acc = 0usize;
-        for _ in 0..reps {
-            acc = acc.wrapping_add(std::hint::black_box(self.price_partial(kf)).0);
-        }
-        let tp = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
-        let t0 = std::time::Instant::now();
-        for _ in 0..reps {
-            acc = acc.wrapping_add(std::hint::black_box(self.price_full(kf)).0);
-        }
-        let tf = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
-        let t0 = std::time::Instant::now();
-        for _ in 0..reps {
-            self.duals(false, std::hint::black_box(kf));
-        }
-        let td = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
-        let t0 = std::time::Instant::now();
-        for _ in 0..reps {
-            self.factor();
-        }
-        let ti = t0.elapsed().as_secs_f64() * 1e9 / reps as f64;
-        std::hint::black_box(acc);
-        (tp, tf, td, ti)
-    }
-
     /// Forget the warm-start basis.
     pub fn reset(&mut self) {
         self.warm_basis = None;
