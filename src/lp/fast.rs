@@ -11,9 +11,11 @@
 //!   vectors c = √n · R^{-T} b̄. This keeps bases such as exp(20z) next to z numerically sane.
 //!   Numerically dependent functions (relative residual < 1e-10) are dropped and their moment
 //!   is checked for consistency instead.
-//! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing in one dense pass over a
-//!   column-major table, a Harris-style ratio test, Bland's rule after repeated degenerate pivots,
-//!   a refactorisation every 32 pivots and before optimality is accepted.
+//! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
+//!   subgrid, the neighbours of z_f and of the support, the fine window around the best; a full
+//!   pass proves optimality) with the blocked SIMD kernels of [`super::pricing`], a Harris-style
+//!   ratio test, Bland's rule after repeated degenerate pivots, a refactorisation every 16
+//!   pivots and before the optimality-proving pass.
 //! * **Phase 1** uses a single artificial column: from any start basis B with x = B⁻¹c, the
 //!   artificial d = −Σ_{x_t<0} a_{B_t} replaces the most negative basic variable, which makes the
 //!   basis feasible; phase 1 then minimises the artificial's weight. Moments are infeasible when
@@ -27,6 +29,9 @@
 //!   point: a crossover turns it into a basic feasible solution of no greater cost (support
 //!   columns of greatest volume as the basis, every other support point pushed to weight 0 or
 //!   into the basis by one ratio test), so phase 1 is skipped.
+//! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
+//!   original system in double-double arithmetic); weights that turn out infeasible trigger a
+//!   rerun in accurate mode (see `finish_optimal`).
 //! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), and as the
 //!   last resort the reference solver (counted in [`FastStats::fallbacks`]); never an endless loop.
 
