@@ -64,8 +64,11 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     println!(
-        "Algorithm 1, power basis m = {}, realistic kernel moments ({} LPs fast, {} reference per n)",
-        cfg.m, cfg.problems, cfg.reference_problems
+        "Algorithm 1, power basis m = {}, realistic kernel moments ({} LPs fast, {} reference per n; pricing kernel {}, MOMENTLAB_PRICING=scalar|avx2|avx512 to choose)",
+        cfg.m,
+        cfg.problems,
+        cfg.reference_problems,
+        crate::lp::pricing_kernel()
     );
     println!(
         "{:>6} | {:>12} | {:>9} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>9} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>9}",

@@ -31,6 +31,8 @@ pub struct BenchConfig {
 /// Results for one grid size.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct BenchRow {
+    /// Pricing kernel of the fast solver ("avx512", "avx2", "scalar").
+    pub pricing_kernel: &'static str,
     pub n: usize,
     pub m: usize,
     pub problems: usize,
@@ -215,6 +217,7 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let fast_dist_mean_us = mean(&td);
     let fast_dist_us = median(&mut td);
     Ok(BenchRow {
+        pricing_kernel: super::pricing_kernel(),
         n,
         m: cfg.m,
         problems: probs.len(),

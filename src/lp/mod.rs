@@ -16,6 +16,12 @@ pub mod reference;
 use crate::Grid;
 use anyhow::{bail, Result};
 
+/// The pricing kernel the fast solver uses on this CPU ("avx512", "avx2" or "scalar"; the
+/// environment variable `MOMENTLAB_PRICING` selects a supported one).
+pub fn pricing_kernel() -> &'static str {
+    pricing::Kernel::detect().name()
+}
+
 /// The values b(z_i) of a basis on a grid: the constraint columns of Algorithm 1.
 #[derive(Clone, Debug)]
 pub struct GridTable {

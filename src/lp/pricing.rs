@@ -25,7 +25,6 @@ pub(crate) enum Kernel {
 
 impl Kernel {
     /// Every kernel (supported or not).
-    #[allow(dead_code)] // used by the tests
     pub(crate) fn all() -> Vec<Kernel> {
         #[cfg(target_arch = "x86_64")]
         return vec![Kernel::Scalar, Kernel::Avx2, Kernel::Avx512];
@@ -47,9 +46,33 @@ impl Kernel {
         }
     }
 
-    /// The fastest supported kernel.
-    #[inline]
+    /// The kernel to use: `MOMENTLAB_PRICING=scalar|avx2|avx512` if set and supported (for
+    /// benchmarks on one machine), else the fastest supported one.
     pub(crate) fn detect() -> Kernel {
+        if let Ok(name) = std::env::var("MOMENTLAB_PRICING") {
+            let wanted = Kernel::all()
+                .into_iter()
+                .find(|k| k.name() == name.trim().to_ascii_lowercase());
+            if let Some(k) = wanted.filter(|k| k.supported()) {
+                return k;
+            }
+        }
+        Kernel::fastest()
+    }
+
+    /// Lower-case name (as in `MOMENTLAB_PRICING`).
+    pub(crate) fn name(self) -> &'static str {
+        match self {
+            Kernel::Scalar => "scalar",
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx2 => "avx2",
+            #[cfg(target_arch = "x86_64")]
+            Kernel::Avx512 => "avx512",
+        }
+    }
+
+    /// The fastest supported kernel.
+    pub(crate) fn fastest() -> Kernel {
         #[cfg(target_arch = "x86_64")]
         {
             if Kernel::Avx512.supported() {
