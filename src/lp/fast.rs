@@ -144,8 +144,6 @@ pub struct FastSolver {
     m: usize,
     /// Numerical rank of [1, b_1..b_m] on the grid (= number of rows of the transformed LP).
     r: usize,
-    /// Transformed columns, column-major: cols[k*n + i] = a_i[k].
-    cols: Vec<f64>,
     /// Transformed columns, row-major: rows[i*r + k] = a_i[k].
     rows: Vec<f64>,
     /// For function j (0 = constant): coefficients R[k][j], k < r, at rcoef[j*r + k].
@@ -309,7 +307,6 @@ impl FastSolver {
             n,
             m,
             r,
-            cols,
             rows,
             rcoef,
             kept,
@@ -711,7 +708,7 @@ impl FastSolver {
             let (q, dq) = if partial.0 != usize::MAX {
                 partial
             } else if bland {
-                price_bland(&self.cols, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
+                price_bland(&self.fine, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
             } else {
                 self.price_full(kf_eff)
             };
@@ -774,7 +771,7 @@ impl FastSolver {
                     }
                     // Feasible: drive the (zero) artificial out of the basis. With the phase-1
                     // duals, s = row art_pos of B⁻¹A; pick the largest pivot element.
-                    price(&self.cols, n, r, &self.y, 0, &self.basis, &mut self.s);
+                    price(&self.fine, n, r, &self.y, 0, &self.basis, &mut self.s);
                     let mut best = None;
                     let mut best_v = TOL_PIV;
                     for i in 0..n {
@@ -1975,7 +1972,7 @@ fn max_volume_rows(rows: &[f64], n: usize, r: usize) -> Vec<usize> {
 /// reduced cost d_i = [i < kf] − s_i and that reduced cost.
 /// Basic columns are excluded (their reduced cost is 0 in exact arithmetic).
 fn price(
-    cols: &[f64],
+    table: &ColumnTable,
     n: usize,
     r: usize,
     y: &[f64],
@@ -1988,16 +1985,16 @@ fn price(
         if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
         {
             // SAFETY: the CPU supports the features enabled on `price_avx2`.
-            return unsafe { price_avx2(cols, n, r, y, kf, basis, s) };
+            return unsafe { price_avx2(table, n, r, y, kf, basis, s) };
         }
     }
-    price_generic::<false>(cols, n, r, y, kf, basis, s)
+    price_generic::<false>(table, n, r, y, kf, basis, s)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 unsafe fn price_avx2(
-    cols: &[f64],
+    table: &ColumnTable,
     n: usize,
     r: usize,
     y: &[f64],
@@ -2005,12 +2002,12 @@ unsafe fn price_avx2(
     basis: &[usize],
     s: &mut [f64],
 ) -> (usize, f64) {
-    price_generic::<true>(cols, n, r, y, kf, basis, s)
+    price_generic::<true>(table, n, r, y, kf, basis, s)
 }
 
 #[inline(always)]
 fn price_generic<const FMA: bool>(
-    cols: &[f64],
+    table: &ColumnTable,
     n: usize,
     r: usize,
     y: &[f64],
@@ -2018,6 +2015,7 @@ fn price_generic<const FMA: bool>(
     basis: &[usize],
     s: &mut [f64],
 ) -> (usize, f64) {
+    let (cols, ld) = table.rows();
     let s = &mut s[..n];
     let y0 = y[0];
     for (si, &c) in s.iter_mut().zip(&cols[..n]) {
@@ -2025,7 +2023,7 @@ fn price_generic<const FMA: bool>(
     }
     for k in 1..r {
         let yk = y[k];
-        for (si, &c) in s.iter_mut().zip(&cols[k * n..(k + 1) * n]) {
+        for (si, &c) in s.iter_mut().zip(&cols[k * ld..k * ld + n]) {
             *si = if FMA {
                 yk.mul_add(c, *si)
             } else {
@@ -2084,7 +2082,7 @@ fn argmax(s: &[f64]) -> (usize, f64) {
 
 /// Bland's rule: the first column with a negative reduced cost (after computing s).
 fn price_bland(
-    cols: &[f64],
+    table: &ColumnTable,
     n: usize,
     r: usize,
     y: &[f64],
@@ -2092,7 +2090,7 @@ fn price_bland(
     basis: &[usize],
     s: &mut [f64],
 ) -> (usize, f64) {
-    let (iq, dq) = price(cols, n, r, y, kf, basis, s);
+    let (iq, dq) = price(table, n, r, y, kf, basis, s);
     if dq >= -TOL_D {
         return (iq, dq);
     }

@@ -129,6 +129,11 @@ impl ColumnTable {
         self.data[k * self.ld + j]
     }
 
+    /// All entries, row by row (row k at `[k * ld ..]`), and the leading dimension ld.
+    pub(crate) fn rows(&self) -> (&[f64], usize) {
+        (&self.data, self.ld)
+    }
+
     /// Exclude column j < len from (or readmit it to) pricing; padding is always excluded.
     pub(crate) fn set_excluded(&mut self, j: usize, excluded: bool) {
         assert!(j < self.len, "column {j} out of range");
