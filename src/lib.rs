@@ -18,15 +18,20 @@
 //! * [`metrics`]: error of a technique against PCF over all fragments of all layers.
 //! * [`quantize`]: optimal affine quantization transforms θ.
 //! * [`search`]: the candidate sweep (racing, shards, resumable).
-//! * [`report`]: plots and HTML/Markdown reports.
+//! * [`report`]: plots and HTML/Markdown reports, the stability study's files.
+//! * [`pipeline`]: the whole study (typed configuration, resumable steps) behind
+//!   `momentlab reproduce`.
+//! * [`artefact`]: JSON files written atomically, JSON lines appended (one helper for all).
 //! * [`cli`]: the thin command-line layer.
 
+pub mod artefact;
 pub mod basis;
 pub mod cli;
 pub mod grid;
 pub mod kernel;
 pub mod lp;
 pub mod metrics;
+pub mod pipeline;
 pub mod quantize;
 pub mod render;
 pub mod report;

@@ -25,12 +25,12 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     pub stride: usize,
     /// Comma-separated bias strengths α (> 0).
-    #[arg(
-        long,
-        default_value = "1e-8,3e-8,1e-7,3e-7,1e-6,3e-6,1e-5,3e-5,1e-4,3e-4,1e-3,3e-3,1e-2"
-    )]
+    #[arg(long, default_value = DEFAULT_ALPHAS)]
     pub alphas: String,
 }
+
+/// The bias strengths α of the study.
+pub const DEFAULT_ALPHAS: &str = "1e-8,3e-8,1e-7,3e-7,1e-6,3e-6,1e-5,3e-5,1e-4,3e-4,1e-3,3e-3,1e-2";
 
 fn load_theta(dir: &Path, m: usize) -> Result<Option<Theta>> {
     let p = dir.join(format!("theta{m}.json"));

@@ -64,7 +64,7 @@ pub fn run(args: Args) -> Result<()> {
         for prec in [Precision::F32, Precision::F64] {
             let t = build(name, &Params::with(prec, None))
                 .with_context(|| format!("--techniques: '{name}'"))?;
-            all.push(super::reproduce::measured(
+            all.push(crate::pipeline::techniques::measured(
                 &stacks,
                 t.as_ref(),
                 name,

@@ -1,7 +1,7 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
 use crate::metrics::Bias;
-use crate::search::run::{load_table, report_for};
+use crate::search::run::{load_table, ranking_lines, report_for, sweep_line};
 use crate::search::{
     read_rows, report, sweep_dataset, Dataset, FunctionTable, Progress, SamplePlan, SweepOptions,
     SweepResult,
@@ -267,12 +267,8 @@ pub fn run(args: Args) -> Result<()> {
         Some(&progress),
     )?;
     bar.finish_and_clear();
-    if let Some(s) = &r.summary {
-        eprintln!(
-            "search: sweep done in {:.1} s: {} candidates ({} degenerate, {} duplicates), stages {:?}, {} on all fragments, {} LP solves planned ({:.1} % of exhaustive on the kept fragments, {:.0} solves/s)",
-            r.sweep_seconds, s.candidates, s.degenerate, s.duplicates, s.stages, s.full, s.lp_solves,
-            s.sampled_share * 100.0, s.lp_solves as f64 / r.sweep_seconds.max(1e-9)
-        );
+    if let Some(line) = sweep_line(&r) {
+        eprintln!("{line}");
     }
     if shard[1] > 1 {
         eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", shard[0], shard[1]);
@@ -288,24 +284,7 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn print_ranking(s: &report::Summary) {
-    if let Some(b) = &s.best {
-        eprintln!(
-            "search: best of {} candidates: ({}) {:.4} % ± {:.4} %",
-            s.scored,
-            b.functions.join(", "),
-            b.error * 100.0,
-            b.stderr * 100.0
-        );
-    }
-    for r in &s.references {
-        if let Some(rank) = r.rank {
-            eprintln!(
-                "search: {} {:.4} % ± {:.4} %, rank {rank} of {}",
-                r.label,
-                r.error * 100.0,
-                r.stderr * 100.0,
-                s.scored
-            );
-        }
+    for line in ranking_lines(s) {
+        eprintln!("{line}");
     }
 }

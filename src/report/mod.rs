@@ -5,3 +5,4 @@ pub mod document;
 pub mod pareto;
 pub mod pictures;
 pub mod recommend;
+pub mod stability;

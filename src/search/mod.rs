@@ -8,11 +8,13 @@
 //! * [`dataset`]: the sampled fragments with their depth distributions on the grid.
 //! * [`score`]: Algorithm 1 errors |G − PCF| of one candidate over a list of fragments.
 //! * [`sweep`]: racing / successive halving, resumable results files, shards.
-//! * [`results`]: the results rows, reading/writing them, `merge`.
+//! * [`results`]: the results rows, reading/writing them.
+//! * [`merge`]: combining the results of sharded runs.
 //! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown), references.
 //! * [`run`]: the whole sweep on depth stacks ([`sweep_stacks`]) for the CLI and `reproduce`.
 
 pub mod dataset;
+pub mod merge;
 pub mod report;
 pub mod results;
 pub mod run;
@@ -21,7 +23,8 @@ pub mod span;
 pub mod sweep;
 
 pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
-pub use results::{merge_dirs, read_rows, Row};
+pub use merge::merge_dirs;
+pub use results::{read_rows, Row};
 pub use run::{sweep_dataset, sweep_stacks, SweepOptions, SweepResult};
 pub use score::Scorer;
 pub use sweep::{run_sweep, Hooks, Outcome, Progress, SweepConfig, SweepSummary};

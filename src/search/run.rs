@@ -286,3 +286,40 @@ pub fn report_for(
 fn scored_rows(rows: &[Row]) -> usize {
     rows.iter().filter(|r| r.error.is_some()).count()
 }
+
+/// One line about a finished sweep (candidates, stages, LP solves and their rate); None when
+/// the sweep was stopped before the end.
+pub fn sweep_line(r: &SweepResult) -> Option<String> {
+    let s = r.summary.as_ref()?;
+    Some(format!(
+        "search: sweep done in {:.1} s: {} candidates ({} degenerate, {} duplicates), stages {:?}, {} on all fragments, {} LP solves planned ({:.1} % of exhaustive on the kept fragments, {:.0} solves/s)",
+        r.sweep_seconds, s.candidates, s.degenerate, s.duplicates, s.stages, s.full, s.lp_solves,
+        s.sampled_share * 100.0, s.lp_solves as f64 / r.sweep_seconds.max(1e-9)
+    ))
+}
+
+/// Lines naming the best candidate and the ranks of the references.
+pub fn ranking_lines(s: &Summary) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(b) = &s.best {
+        out.push(format!(
+            "search: best of {} candidates: ({}) {:.4} % ± {:.4} %",
+            s.scored,
+            b.functions.join(", "),
+            b.error * 100.0,
+            b.stderr * 100.0
+        ));
+    }
+    for r in &s.references {
+        if let Some(rank) = r.rank {
+            out.push(format!(
+                "search: {} {:.4} % ± {:.4} %, rank {rank} of {}",
+                r.label,
+                r.error * 100.0,
+                r.stderr * 100.0,
+                s.scored
+            ));
+        }
+    }
+    out
+}

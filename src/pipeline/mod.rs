@@ -1,0 +1,171 @@
+//! The study as library code: a typed [`Config`] and the steps of a run, each resumable by its
+//! artefacts (a step whose files exist is read back instead of recomputed; `fresh` starts over).
+//!
+//! ```text
+//! 1 stacks      render (or read back) the depth stacks          results/<run>/stacks/
+//! 2 techniques  every technique against PCF on the same fragments, speed, pictures
+//!                                                               reports/<run>/evaluate/, pictures/
+//! 3 grid        LP grid refinement per scene                    grid_refinement.{json,svg}
+//! 4 sweep       candidate sweeps (racing)                       results/<run>/search-m<m>/, search/
+//! 5 theta       optimal quantization transforms θ               theta/
+//! 6 quantize    8/16/32-bit moment shadow maps                  quantize/
+//! 7 stability   where each technique fails                      stability/
+//! 8 recommend   speed against accuracy, per-scene recommendation speed_accuracy.svg, recommend.json
+//! 9 report      index.html + report.md
+//! ```
+//!
+//! `momentlab reproduce` is a thin caller of [`run`].
+
+pub mod config;
+pub mod grid;
+pub mod progress;
+pub mod quantize;
+pub mod recommend;
+pub mod report;
+pub mod stability;
+pub mod stacks;
+pub mod sweep;
+pub mod techniques;
+pub mod theta;
+
+pub use config::{Config, Plan, Preset};
+
+use crate::report::recommend::Recommendation;
+use anyhow::{Context, Result};
+use progress::{pct, Steps};
+use std::path::PathBuf;
+
+/// The folders of a run.
+#[derive(Clone, Debug)]
+pub struct Paths {
+    /// `<reports>/<run>`: the report and the small artefacts.
+    pub out: PathBuf,
+    /// `<results>/<run>`: stacks and sweep rows.
+    pub data: PathBuf,
+    pub stacks: PathBuf,
+}
+
+impl Paths {
+    pub fn of(cfg: &Config) -> Paths {
+        let data = cfg.data_dir();
+        Paths {
+            out: cfg.report_dir(),
+            stacks: data.join("stacks"),
+            data,
+        }
+    }
+}
+
+/// What a finished run returns.
+#[derive(Clone, Debug)]
+pub struct Outcome {
+    /// `<reports>/<run>/index.html`.
+    pub report: PathBuf,
+    pub recommendations: Vec<Recommendation>,
+    pub seconds: f64,
+}
+
+/// Run (or resume) the whole study.
+pub fn run(cfg: &Config) -> Result<Outcome> {
+    let plan = cfg.plan()?;
+    let p = Paths::of(cfg);
+    if cfg.fresh {
+        for d in [&p.out, &p.data] {
+            if d.exists() {
+                std::fs::remove_dir_all(d).with_context(|| format!("removing {}", d.display()))?;
+            }
+        }
+    }
+    for d in [&p.out, &p.data] {
+        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    }
+    let mut step = Steps::new(9);
+
+    step.start(&format!(
+        "render the default dataset at {0}×{0}",
+        plan.resolution
+    ));
+    let stacks = stacks::load_or_render(&p.stacks, plan.resolution)?;
+    let fragments: usize = stacks.iter().map(|s| s.fragment_count()).sum();
+    eprintln!("  {} views, {fragments} fragments", stacks.len());
+
+    step.start("closed forms, baselines and LP candidates against PCF");
+    let all = techniques::evaluate_all(&stacks, &plan, &p.out.join("evaluate"))?;
+    let pictures = techniques::pictures(&stacks, &plan, &p.out.join("pictures"))?;
+
+    step.start("LP grid: refine n until the error settles");
+    let refinement = grid::refine(&stacks, &plan, &p.out.join("grid_refinement.json"))?;
+    let chosen_grid = grid::choose(&refinement, cfg.tolerance / 10.0);
+    grid::chart(
+        &refinement,
+        &chosen_grid,
+        &p.out.join("grid_refinement.svg"),
+    )?;
+
+    step.start("candidate sweep (racing)");
+    let search_report = p.out.join("search");
+    let search_notes = if cfg.skip_search {
+        vec!["skipped (--skip-search)".to_string()]
+    } else {
+        sweep::run_all(
+            &stacks,
+            &plan,
+            &sweep::Folders {
+                stacks: &p.stacks,
+                data: &p.data,
+                report: &search_report,
+            },
+        )?
+    };
+
+    step.start("optimal quantization transforms θ");
+    let theta_dir = p.out.join("theta");
+    let theta_rows = theta::run(&plan, &theta_dir)?;
+
+    step.start("quantized moment shadow maps (8/16/32 bit, θ)");
+    quantize::run(&plan, &p.stacks, &theta_dir, &p.out.join("quantize"))?;
+
+    step.start("stability where methods fail");
+    stability::run(&plan, &p.out.join("stability"))?;
+
+    step.start("speed against accuracy, recommendations");
+    let (entries, recs) = recommend::run(&all, cfg.tolerance, &p.out)?;
+
+    step.start("report");
+    let doc = report::build(report::ReportInputs {
+        plan: &plan,
+        config: cfg,
+        stacks: &stacks,
+        all: &all,
+        entries: &entries,
+        recs: &recs,
+        chosen_grid: &chosen_grid,
+        refinement: &refinement,
+        theta_rows: &theta_rows,
+        search_notes: &search_notes,
+        search_report: &search_report,
+        out: &p.out,
+        pictures: &pictures,
+        seconds: step.elapsed(),
+    })?;
+    doc.write(&p.out)?;
+
+    let seconds = step.elapsed();
+    eprintln!("\nSummary ({seconds:.0} s):");
+    for r in &recs {
+        eprintln!(
+            "  {:<8} recommended: {} ({}), error {} (best {} by {})",
+            r.scene,
+            r.name,
+            r.precision,
+            pct(r.error),
+            pct(r.best_error),
+            r.best_name
+        );
+    }
+    Ok(Outcome {
+        report: p.out.join("index.html"),
+        recommendations: recs,
+        seconds,
+    })
+}

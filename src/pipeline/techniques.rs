@@ -1,0 +1,200 @@
+//! Step 2: every technique of the study on the same fragments (error against PCF, speed), one
+//! artefact `evaluate/<technique>_<precision>.json` each, and the shadow pictures.
+
+use super::progress::{bar, pct};
+use super::Plan;
+use crate::artefact::{read_json, write_json};
+use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
+use crate::report::pictures;
+use crate::report::recommend::{per_scene, Measured};
+use crate::stack::DepthStack;
+use crate::technique::linalg::Precision;
+use crate::technique::{self, registry, timing, Technique};
+use anyhow::Result;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The LP candidates of the study (Algorithm 1 with the paper's bases).
+pub const LP_CANDIDATES: &[(&str, &str)] = &[
+    ("lp:z,z^2", "LP (z, z²)"),
+    ("lp:z,z^2,z^3", "LP (z, z², z³)"),
+    ("lp:z,z^2,z^3,z^4", "LP b_MSM"),
+    ("lp:sin(2πz),cos(2πz),sin(4πz),cos(4πz)", "LP b_TMSM"),
+];
+
+/// The closed-form techniques of the study: every registry name except the general
+/// `hamburger` (at m = 4 it is `hamburger4`, only slower).
+pub fn closed_forms() -> impl Iterator<Item = &'static str> {
+    registry::CLOSED_FORM_NAMES
+        .iter()
+        .copied()
+        .filter(|&n| n != "hamburger")
+}
+
+/// One evaluation of the study: a technique at a storage precision, the fragments it sees
+/// (every `stride`-th) and the random inputs of its speed measurement.
+pub struct Job {
+    pub name: String,
+    pub precision: String,
+    pub technique: Box<dyn Technique>,
+    pub stride: usize,
+    pub speed_inputs: usize,
+}
+
+/// The jobs of a plan: closed forms at f32 and f64, the LP candidates at f64.
+pub fn jobs(plan: &Plan) -> Result<Vec<Job>> {
+    let mut jobs = Vec::new();
+    for name in closed_forms() {
+        for prec in [Precision::F32, Precision::F64] {
+            let technique = match registry::build(name, &registry::Params::with(prec, None)) {
+                Ok(t) => t,
+                Err(_) => technique::by_name(name)?,
+            };
+            jobs.push(Job {
+                name: name.into(),
+                precision: prec.name().into(),
+                technique,
+                stride: 1,
+                speed_inputs: plan.speed_inputs,
+            });
+        }
+    }
+    for &(spec, _) in LP_CANDIDATES {
+        jobs.push(Job {
+            name: spec.into(),
+            precision: "f64".into(),
+            technique: technique::by_name(spec)?,
+            stride: plan.lp_stride,
+            speed_inputs: plan.lp_speed_inputs,
+        });
+    }
+    Ok(jobs)
+}
+
+/// The artefact file of a job: the name with non-alphanumerics replaced.
+pub fn artefact_name(name: &str, precision: &str) -> String {
+    let safe: String = name
+        .replace('π', "pi")
+        .chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect();
+    format!("{safe}_{precision}.json")
+}
+
+/// Every job, read back from `dir` when its artefact exists, otherwise measured and written.
+pub fn evaluate_all(stacks: &[DepthStack], plan: &Plan, dir: &Path) -> Result<Vec<Measured>> {
+    let mut all = Vec::new();
+    for j in jobs(plan)? {
+        let file = dir.join(artefact_name(&j.name, &j.precision));
+        let m = match read_json::<Measured>(&file) {
+            Ok(m) => m,
+            Err(_) => {
+                let m = measured(
+                    stacks,
+                    j.technique.as_ref(),
+                    &j.name,
+                    &j.precision,
+                    j.stride,
+                    j.speed_inputs,
+                )?;
+                write_json(&file, &m)?;
+                m
+            }
+        };
+        eprintln!(
+            "  {:<44} {}  error {:>9}  {:>9.1} ns/fragment  {} bit/texel",
+            j.name,
+            j.precision,
+            pct(m.error),
+            m.ns_per_fragment,
+            m.bits_per_texel
+        );
+        all.push(m);
+    }
+    Ok(all)
+}
+
+/// Evaluate one technique on every `stride`-th fragment of the stacks, with a progress bar.
+pub fn evaluate(
+    stacks: &[DepthStack],
+    t: &dyn Technique,
+    label: &str,
+    stride: usize,
+) -> Result<EvalReport> {
+    let b = Arc::new(bar(0, label));
+    let bb = b.clone();
+    let opts = EvalOptions {
+        bias: Bias::default(),
+        subsample: if stride > 1 {
+            Subsample::Stride(stride)
+        } else {
+            Subsample::All
+        },
+        progress: Some(Arc::new(move |done, total| {
+            bb.set_length(total as u64);
+            bb.set_position(done as u64);
+        })),
+        ..Default::default()
+    };
+    let r = metrics::evaluate(stacks, t, &opts)?;
+    b.finish_and_clear();
+    Ok(r)
+}
+
+/// Error against PCF (every `stride`-th fragment) and speed (`speed_inputs` random inputs) of
+/// one technique configuration.
+pub fn measured(
+    stacks: &[DepthStack],
+    t: &dyn Technique,
+    name: &str,
+    precision: &str,
+    stride: usize,
+    speed_inputs: usize,
+) -> Result<Measured> {
+    let r = evaluate(stacks, t, name, stride)?;
+    let ns = timing::measure(t, speed_inputs, 3, 2015);
+    Ok(Measured {
+        name: name.to_string(),
+        precision: precision.to_string(),
+        // f64 storage doubles the texel size of the f32 layout the techniques report.
+        bits_per_texel: if precision == "f64" {
+            2 * t.bits_per_texel()
+        } else {
+            t.bits_per_texel()
+        },
+        ns_per_fragment: ns,
+        error: r.error,
+        fragments: r.fragments,
+        trivial: r.trivial,
+        non_finite: r.non_finite,
+        seconds: r.seconds,
+        scenes: per_scene(&r),
+    })
+}
+
+/// Hamburger 4MSM pictures of `plan.pictures` evenly spaced views into `dir` (kept when they
+/// exist); returns (path relative to the report, caption).
+pub fn pictures(stacks: &[DepthStack], plan: &Plan, dir: &Path) -> Result<Vec<(String, String)>> {
+    let h4 = technique::by_name("hamburger4")?;
+    let mut files = Vec::new();
+    for st in stacks
+        .iter()
+        .step_by((stacks.len() / plan.pictures.max(1)).max(1))
+    {
+        let name = format!("{}_{}_hamburger4.png", st.meta.scene, st.meta.view);
+        let p = dir.join(&name);
+        if !p.exists() {
+            std::fs::create_dir_all(dir)?;
+            let sh = metrics::front_shadows(st, Subject::Technique(h4.as_ref()), &Bias::default())?;
+            pictures::write_png(&p, &pictures::view_picture(st, &sh)?)?;
+        }
+        files.push((
+            format!("pictures/{name}"),
+            format!("{} / {}", st.meta.scene, st.meta.view),
+        ));
+        if files.len() >= plan.pictures {
+            break;
+        }
+    }
+    Ok(files)
+}
