@@ -22,6 +22,7 @@
 //! * [`pipeline`]: the whole study (typed configuration, resumable steps) behind
 //!   `momentlab reproduce`.
 //! * [`artefact`]: JSON files written atomically, JSON lines appended (one helper for all).
+//! * [`progress`]: progress bars on a terminal, periodic lines in batch logs.
 //! * [`cli`]: the thin command-line layer.
 
 pub mod artefact;
@@ -32,6 +33,7 @@ pub mod kernel;
 pub mod lp;
 pub mod metrics;
 pub mod pipeline;
+pub mod progress;
 pub mod quantize;
 pub mod render;
 pub mod report;

@@ -3,8 +3,8 @@
 //! in the same run. The timing loop lives in [`crate::lp::bench`].
 
 use crate::lp::bench::{run_one, BenchConfig, BenchRow};
+use crate::progress::Bar;
 use anyhow::{bail, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
@@ -49,14 +49,12 @@ pub fn run(args: Args) -> Result<()> {
     };
     let mut rows: Vec<BenchRow> = Vec::new();
     for &n in &cfg.ns {
-        let bar = ProgressBar::new(cfg.reference_problems.min(cfg.problems) as u64);
-        bar.set_style(
-            ProgressStyle::with_template("n = {msg}: reference {pos}/{len} {bar:30} {eta}")
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        let bar = Bar::new(
+            &format!("bench lp n = {n}: reference solves"),
+            cfg.reference_problems.min(cfg.problems) as u64,
         );
-        bar.set_message(n.to_string());
         let row = run_one(&cfg, n, || bar.inc(1))?;
-        bar.finish_and_clear();
+        bar.finish();
         rows.push(row);
     }
     if args.json {

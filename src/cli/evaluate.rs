@@ -2,10 +2,10 @@
 //! stacks (mean |G − PCF|, Peters & Klein 2015, Section 3.2), a table per view, JSON, pictures.
 
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
+use crate::progress::Bar;
 use crate::report::pictures;
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -125,25 +125,19 @@ pub fn run(args: Args) -> Result<()> {
         bail!("no depth stacks to evaluate");
     }
 
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} evaluate [{elapsed_precise}] {bar:40} {pos}/{len} fragments ({per_sec}, eta {eta})",
-        )
-        .expect("valid template"),
-    );
+    let bar = Arc::new(Bar::new("evaluate fragments", 0));
     let pb = bar.clone();
     let opts = EvalOptions {
         bias,
         subsample,
         progress: Some(Arc::new(move |done, total| {
-            pb.set_length(total as u64);
-            pb.set_position(done as u64);
+            pb.set_total(total as u64);
+            pb.set_done(done as u64);
         })),
         ..Default::default()
     };
     let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
-    bar.finish_and_clear();
+    bar.finish();
 
     if let Some(dir) = &args.pictures {
         write_pictures(dir, &stacks, subject, &bias)?;
@@ -159,10 +153,7 @@ pub fn run(args: Args) -> Result<()> {
 fn write_pictures(dir: &Path, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
     std::fs::create_dir_all(dir)
         .with_context(|| format!("cannot create picture directory {}", dir.display()))?;
-    let bar = ProgressBar::new(stacks.len() as u64);
-    bar.set_style(
-        ProgressStyle::with_template("pictures {bar:30} {pos}/{len} views").expect("template"),
-    );
+    let bar = Bar::new("pictures (views)", stacks.len() as u64);
     for s in stacks {
         let shadows = metrics::front_shadows(s, subject, bias)?;
         let img = pictures::view_picture(s, &shadows)?;
@@ -175,7 +166,7 @@ fn write_pictures(dir: &Path, stacks: &[DepthStack], subject: Subject, bias: &Bi
         pictures::write_png(&dir.join(name), &img)?;
         bar.inc(1);
     }
-    bar.finish_and_clear();
+    bar.finish();
     eprintln!(
         "wrote {} pictures to {} (panels: front depth | layers | PCF | technique | |error|)",
         stacks.len(),

@@ -132,10 +132,11 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
     // Fail early (unknown or unavailable solver) before spawning work.
     make_solver(&solver, table.clone())?;
 
-    let bar = indicatif::ProgressBar::new(input.problems.len() as u64);
-    if input.problems.len() < 1000 {
-        bar.set_draw_target(indicatif::ProgressDrawTarget::hidden());
-    }
+    let bar = if input.problems.len() < 1000 {
+        crate::progress::Bar::hidden()
+    } else {
+        crate::progress::Bar::new("lp problems", input.problems.len() as u64)
+    };
     let chunks: Vec<Vec<Output>> = input
         .problems
         .par_chunks(CHUNK)
@@ -164,7 +165,7 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
             Ok(out)
         })
         .collect::<Result<_>>()?;
-    bar.finish_and_clear();
+    bar.finish();
     let out = Results {
         results: chunks.into_iter().flatten().collect(),
     };

@@ -17,6 +17,7 @@ pub mod search;
 pub mod shadow;
 pub mod stability;
 pub mod theta;
+pub mod threads;
 
 use anyhow::Result;
 use clap::{Parser, Subcommand};
@@ -64,6 +65,7 @@ pub enum Command {
 /// Entry point of the binary.
 pub fn main() -> Result<()> {
     let cli = Cli::parse();
+    threads::init_from_env()?;
     match cli.command {
         Command::Lp(a) => lp::run(a),
         Command::Candidates(a) => candidates::run(a),

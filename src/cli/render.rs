@@ -1,10 +1,10 @@
 //! `momentlab render`: ray-cast depth stacks of the scenes (embedded default dataset unless
 //! `--scenes DIR`) and write one `<scene>_<view>.exr` + `.json` per view.
 
+use crate::progress::Bar;
 use crate::render::{self, Scene};
 use crate::stack;
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -67,17 +67,13 @@ pub fn run(args: Args) -> Result<()> {
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
     let views: usize = scenes.iter().map(|s| s.lights.len()).sum();
-    let bar = ProgressBar::new((views * args.resolution) as u64);
-    bar.set_style(
-        ProgressStyle::with_template("{msg:>16} [{bar:40}] {pos}/{len} rows ({elapsed})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = Bar::new("render rows", (views * args.resolution) as u64);
     let start = Instant::now();
     let mut lines = Vec::new();
     let (mut total_frags, mut max_layers) = (0usize, 0usize);
     for s in &scenes {
         for (i, light) in s.lights.iter().enumerate() {
-            bar.set_message(format!("{}/{}", s.name, light.name));
+            bar.set_label(&format!("render rows ({}/{})", s.name, light.name));
             let t0 = Instant::now();
             let st = render::render_view_with(s, i, args.resolution, &|k| bar.inc(k));
             let dt = t0.elapsed().as_secs_f64();
@@ -107,7 +103,7 @@ pub fn run(args: Args) -> Result<()> {
             ));
         }
     }
-    bar.finish_and_clear();
+    bar.finish();
     for l in &lines {
         println!("{l}");
     }

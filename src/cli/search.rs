@@ -9,7 +9,6 @@ use crate::search::{
 use crate::stack::DepthStack;
 use crate::Grid;
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use std::path::PathBuf;
 
 /// Boxed so the subcommand enum stays small.
@@ -244,18 +243,9 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("report: written to {}", args.report.display());
         return Ok(());
     }
-    let bar = ProgressBar::new(0);
-    bar.set_style(
-        ProgressStyle::with_template("{msg} [{elapsed_precise}] {wide_bar} {percent}% (ETA {eta})")
-            .map_err(|e| anyhow::anyhow!("progress style: {e}"))?,
-    );
+    let bar = crate::progress::Bar::new("search", 0);
     let progress = |p: Progress| match p {
-        Progress::Phase { name, units } => {
-            bar.set_message(name);
-            bar.set_length(units);
-            bar.set_position(0);
-            bar.reset_eta();
-        }
+        Progress::Phase { name, units } => bar.phase(&format!("search {name}"), units),
         Progress::Advance(u) => bar.inc(u),
     };
     let r: SweepResult = sweep_dataset(
@@ -266,7 +256,7 @@ pub fn run(args: Args) -> Result<()> {
         &results,
         Some(&progress),
     )?;
-    bar.finish_and_clear();
+    bar.finish();
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");
     }

@@ -2,9 +2,9 @@
 //! [`crate::report::stability`], documented in docs/stability.md); writes a Markdown table,
 //! JSON and SVG heat maps to the output directory.
 
+use crate::progress::Bar;
 use crate::report::stability::{self, Options};
-use anyhow::{anyhow, Result};
-use indicatif::{ProgressBar, ProgressStyle};
+use anyhow::Result;
 use std::path::PathBuf;
 
 use crate::report::stability::DEFAULT_TECHNIQUES;
@@ -36,13 +36,9 @@ pub fn run(args: Args) -> Result<()> {
         grid: args.grid,
         techniques: args.techniques.split(',').map(str::to_string).collect(),
     };
-    let pb = ProgressBar::new(0);
-    pb.set_style(
-        ProgressStyle::with_template("stability {bar:40} {pos}/{len} inputs {elapsed}")
-            .map_err(|e| anyhow!("{e}"))?,
-    );
-    let o = stability::study(&opts, &|n| pb.set_length(n as u64), &|n| pb.inc(n as u64))?;
-    pb.finish_and_clear();
+    let pb = Bar::new("stability inputs", 0);
+    let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;
+    pb.finish();
     for s in &o.skipped {
         eprintln!("skipping technique {s}");
     }

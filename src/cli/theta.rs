@@ -2,9 +2,9 @@
 //! 2015 paper). JSON to stdout or --output; HLSL/GLSL snippets to --snippets DIR.
 
 use crate::basis::Catalog;
+use crate::progress::Bar;
 use crate::quantize::{self, codegen, curve, optimize, theta, volume, Curve};
 use anyhow::{bail, Context, Result};
-use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -109,21 +109,16 @@ pub fn run(args: Args) -> Result<()> {
         hop_sigma: args.hop_sigma,
         ..Default::default()
     };
-    let pb = ProgressBar::new(args.restarts as u64);
-    pb.set_style(
-        ProgressStyle::with_template("theta m={msg} [{bar:30}] {pos}/{len} starts {elapsed}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
-    pb.set_message(format!("{m}"));
+    let pb = Bar::new(&format!("theta m={m} starts"), args.restarts as u64);
     let t0 = Instant::now();
     let best = std::sync::Mutex::new(f64::NEG_INFINITY);
     let out = optimize::optimize(curve.as_ref(), &opts, &|_k, g| {
         let mut b = best.lock().unwrap();
         *b = b.max(g);
-        pb.set_message(format!("{m} best {:.4} bits", *b));
+        pb.set_label(&format!("theta m={m} starts (best {:.4} bits)", *b));
         pb.inc(1);
     })?;
-    pb.finish_and_clear();
+    pb.finish();
     let seconds = t0.elapsed().as_secs_f64();
     let th = &out.theta;
     let ver = theta::verify(th, curve.as_ref())?;

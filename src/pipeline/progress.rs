@@ -1,22 +1,12 @@
-//! What the study shows while it runs: numbered step lines and progress bars on stderr (bars
-//! hidden when `CI` is set).
+//! What the study shows while it runs: numbered step lines and progress ([`crate::progress`]:
+//! a bar on a terminal, periodic lines in logs) on stderr.
 
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::progress::Bar;
 use std::time::Instant;
 
-/// A progress bar with a label (hidden under CI).
-pub fn bar(len: u64, what: &str) -> ProgressBar {
-    let b = if std::env::var_os("CI").is_some() {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(len)
-    };
-    b.set_style(
-        ProgressStyle::with_template("  {msg:<38} {wide_bar} {pos}/{len} ({eta})")
-            .expect("valid template"),
-    );
-    b.set_message(what.to_string());
-    b
+/// A progress display with a label.
+pub fn bar(len: u64, what: &str) -> Bar {
+    Bar::new(&format!("  {what}"), len)
 }
 
 /// The numbered steps of a run: "[k/total] what (elapsed s)".

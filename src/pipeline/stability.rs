@@ -20,8 +20,8 @@ pub fn run(plan: &Plan, out: &Path) -> Result<()> {
         techniques: DEFAULT_TECHNIQUES.split(',').map(str::to_string).collect(),
     };
     let b = bar(0, "stability");
-    let o = study(&opts, &|n| b.set_length(n as u64), &|n| b.inc(n as u64))?;
-    b.finish_and_clear();
+    let o = study(&opts, &|n| b.set_total(n as u64), &|n| b.inc(n as u64))?;
+    b.finish();
     for s in &o.skipped {
         eprintln!("skipping technique {s}");
     }

@@ -78,15 +78,12 @@ fn sweep(stacks: &[DepthStack], opts: &SweepOptions, results: &Path) -> Result<(
     let b = bar(0, &format!("sweep m = {}", opts.m));
     let progress = |p: Progress| match p {
         Progress::Phase { name, units } => {
-            b.set_message(name);
-            b.set_length(units);
-            b.set_position(0);
-            b.reset_eta();
+            b.phase(&format!("  sweep m = {} {name}", opts.m), units)
         }
         Progress::Advance(u) => b.inc(u),
     };
     let r = sweep_stacks(stacks, opts, results, Some(&progress))?;
-    b.finish_and_clear();
+    b.finish();
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");
     }

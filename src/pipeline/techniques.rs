@@ -131,13 +131,13 @@ pub fn evaluate(
             Subsample::All
         },
         progress: Some(Arc::new(move |done, total| {
-            bb.set_length(total as u64);
-            bb.set_position(done as u64);
+            bb.set_total(total as u64);
+            bb.set_done(done as u64);
         })),
         ..Default::default()
     };
     let r = metrics::evaluate(stacks, t, &opts)?;
-    b.finish_and_clear();
+    b.finish();
     Ok(r)
 }
 

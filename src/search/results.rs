@@ -14,6 +14,9 @@ pub const RESULTS_FILE: &str = "results.jsonl";
 pub const CONFIG_FILE: &str = "config.json";
 /// Written when a run (or merge) has finished.
 pub const COMPLETE_FILE: &str = "complete.json";
+/// Written into a shard's directory by a batch task that failed (scripts/slurm/search-array.sh):
+/// one line saying how and where; removed when the task starts again.
+pub const FAILED_FILE: &str = "FAILED";
 
 /// One candidate's result.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
