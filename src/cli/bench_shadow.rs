@@ -31,6 +31,7 @@ const TECHNIQUES: &[&str] = &[
     "hausdorff4",
     "hamburger6",
     "hamburger",
+    "tmsm",
 ];
 
 #[derive(serde::Serialize)]

@@ -36,6 +36,7 @@ pub trait Real:
     fn acos(self) -> Self;
     fn atan2(self, x: Self) -> Self;
     fn is_finite(self) -> bool;
+    fn is_nan(self) -> bool;
     fn max(self, o: Self) -> Self;
     fn min(self, o: Self) -> Self;
 }
@@ -85,6 +86,10 @@ macro_rules! impl_real {
             #[inline(always)]
             fn is_finite(self) -> bool {
                 <$t>::is_finite(self)
+            }
+            #[inline(always)]
+            fn is_nan(self) -> bool {
+                <$t>::is_nan(self)
             }
             #[inline(always)]
             fn max(self, o: Self) -> Self {

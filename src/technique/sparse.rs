@@ -8,7 +8,7 @@
 //! factorization and is numerically more stable). The roots z₂ < z₃ of c₂z² + c₁z + c₀ carry the
 //! weights w₃ = (b₁ − z₂)/(z₃ − z₂), w₂ = 1 − w₃ (evaluated as (z₃ − b₁)/(z₃ − z₂)), and w₂z₂ʲ + w₃z₃ʲ = b_j for j = 1, 2, 3.
 
-use super::tmsm::Real;
+use super::linalg::Real;
 
 /// Two Diracs at `z[0] < z[1]` with weights `w` (w ≥ 0, w[0] + w[1] = 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -33,7 +33,7 @@ pub fn two_diracs<T: Real>(b1: T, b2: T, b3: T) -> Option<TwoDiracs<T>> {
 
 /// Theorem 1 with a choice of the c₀ formula.
 pub fn two_diracs_with<T: Real>(b1: T, b2: T, b3: T, c0_form: C0) -> Option<TwoDiracs<T>> {
-    let zero = T::c(0.0);
+    let zero = T::of(0.0);
     let finite = |v: T| v.abs().to_f64().is_finite();
     if !(finite(b1) && finite(b2) && finite(b3)) {
         return None;
@@ -50,7 +50,7 @@ pub fn two_diracs_with<T: Real>(b1: T, b2: T, b3: T, c0_form: C0) -> Option<TwoD
     // Roots of c₂z² + c₁z + c₀ (distinct and real by Theorem 1; clamp rounding).
     let p = c1 / c2;
     let q = c0 / c2;
-    let hp = p * T::c(0.5);
+    let hp = p * T::of(0.5);
     let disc = max0(hp * hp - q);
     let s = disc.sqrt();
     let big = if hp >= zero { -hp - s } else { -hp + s };
@@ -77,19 +77,19 @@ pub fn two_diracs_with<T: Real>(b1: T, b2: T, b3: T, c0_form: C0) -> Option<TwoD
 }
 
 fn clamp01<T: Real>(v: T) -> T {
-    if v < T::c(0.0) {
-        T::c(0.0)
-    } else if v > T::c(1.0) {
-        T::c(1.0)
+    if v < T::of(0.0) {
+        T::of(0.0)
+    } else if v > T::of(1.0) {
+        T::of(1.0)
     } else {
         v
     }
 }
 
 fn max0<T: Real>(v: T) -> T {
-    if v > T::c(0.0) {
+    if v > T::of(0.0) {
         v
     } else {
-        T::c(0.0)
+        T::of(0.0)
     }
 }

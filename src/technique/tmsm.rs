@@ -6,99 +6,22 @@
 //! With t = 2πz, c_k = E[e^{ikt}] (c₁ = b₂ + i·b₁, c₂ = b₄ + i·b₃) and the shadowed arc
 //! A = [0, 2πz_f), rotated by a = πz_f so that A = (−a, a):
 //! * Toeplitz matrix singular (≤ 2 Diracs): the distribution is unique, G = its mass on A.
-//! * `E[h] ≤ −|E[h e^{is}]|` with h(s) = cos s − cos a: a distribution on the lit arc exists, G = 0.
+//! * `E[h] ≤ −|E[h e^{is}]|` with h(s) = cos s − cos a: a distribution on the lit arc exists, G = 0
+//!   (checked first: the G-only path returns here without building any candidate).
 //! * otherwise G = the minimum over the primal-feasible candidates (docs/tmsm.md §4):
 //!   (I)/(II) the canonical 3-Dirac representations through z_f and through 0 (a quadratic);
 //!   (III-s) Diracs at 0, z_f and symmetric ±d (closed form);
 //!   (III-q) Diracs at 0, z_f, x ∈ A, y ∉ A with x from a quartic in tan(x/2).
+//!
+//! Points of the circle are kept as unit complex numbers (one sin/cos pair per evaluation for
+//! e^{ia}; a point is in A ⇔ its real part exceeds cos a), angles are formed only for the
+//! reported support and the singular cases. [`sharp_bound`] allocates nothing.
 
+use super::linalg::Real;
 use super::{ClosedForm, Evaluator, Stateless, Technique};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
-/// The floating-point operations the solver needs; implemented for f32 and f64 so the same
-/// code gives both precision paths.
-pub trait Real:
-    Copy
-    + PartialOrd
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
-{
-    fn c(x: f64) -> Self;
-    fn to_f64(self) -> f64;
-    fn sqrt(self) -> Self;
-    fn sin(self) -> Self;
-    fn cos(self) -> Self;
-    fn atan(self) -> Self;
-    fn atan2(self, x: Self) -> Self;
-    fn acos(self) -> Self;
-    fn cbrt(self) -> Self;
-    fn abs(self) -> Self;
-    fn is_nan(self) -> bool;
-    /// Machine epsilon.
-    fn eps() -> Self;
-}
-
-macro_rules! impl_real {
-    ($t:ty) => {
-        impl Real for $t {
-            #[inline]
-            fn c(x: f64) -> Self {
-                x as $t
-            }
-            #[inline]
-            fn to_f64(self) -> f64 {
-                self as f64
-            }
-            #[inline]
-            fn sqrt(self) -> Self {
-                <$t>::sqrt(self)
-            }
-            #[inline]
-            fn sin(self) -> Self {
-                <$t>::sin(self)
-            }
-            #[inline]
-            fn cos(self) -> Self {
-                <$t>::cos(self)
-            }
-            #[inline]
-            fn atan(self) -> Self {
-                <$t>::atan(self)
-            }
-            #[inline]
-            fn atan2(self, x: Self) -> Self {
-                <$t>::atan2(self, x)
-            }
-            #[inline]
-            fn acos(self) -> Self {
-                <$t>::acos(self)
-            }
-            #[inline]
-            fn cbrt(self) -> Self {
-                <$t>::cbrt(self)
-            }
-            #[inline]
-            fn abs(self) -> Self {
-                <$t>::abs(self)
-            }
-            #[inline]
-            fn is_nan(self) -> bool {
-                <$t>::is_nan(self)
-            }
-            #[inline]
-            fn eps() -> Self {
-                <$t>::EPSILON
-            }
-        }
-    };
-}
-impl_real!(f32);
-impl_real!(f64);
-
-#[inline]
+#[inline(always)]
 fn min<T: Real>(a: T, b: T) -> T {
     if b < a {
         b
@@ -106,7 +29,7 @@ fn min<T: Real>(a: T, b: T) -> T {
         a
     }
 }
-#[inline]
+#[inline(always)]
 fn max<T: Real>(a: T, b: T) -> T {
     if b > a {
         b
@@ -123,28 +46,28 @@ pub struct Cx<T> {
 }
 
 impl<T: Real> Cx<T> {
-    #[inline]
+    #[inline(always)]
     pub fn new(re: T, im: T) -> Self {
         Cx { re, im }
     }
-    #[inline]
+    #[inline(always)]
     pub fn real(re: T) -> Self {
-        Cx { re, im: T::c(0.0) }
+        Cx { re, im: T::ZERO }
     }
     /// e^{iφ}
     #[inline]
     pub fn unit(phi: T) -> Self {
         Cx::new(phi.cos(), phi.sin())
     }
-    #[inline]
+    #[inline(always)]
     pub fn conj(self) -> Self {
         Cx::new(self.re, -self.im)
     }
-    #[inline]
+    #[inline(always)]
     pub fn norm2(self) -> T {
         self.re * self.re + self.im * self.im
     }
-    #[inline]
+    #[inline(always)]
     pub fn abs(self) -> T {
         self.norm2().sqrt()
     }
@@ -152,35 +75,46 @@ impl<T: Real> Cx<T> {
     pub fn arg(self) -> T {
         self.im.atan2(self.re)
     }
-    #[inline]
+    #[inline(always)]
     pub fn scale(self, s: T) -> Self {
         Cx::new(self.re * s, self.im * s)
     }
+    /// z/|z| (the point of the unit circle with the same argument); 1 for z = 0 (arg 0 = 0).
+    #[inline(always)]
+    pub fn normalized(self) -> Self {
+        let r = self.abs();
+        if r > T::ZERO {
+            self.scale(T::ONE / r)
+        } else {
+            Cx::real(T::ONE)
+        }
+    }
     /// Principal square root.
+    #[inline]
     pub fn sqrt(self) -> Self {
         let r = self.abs();
-        let re = ((r + self.re) * T::c(0.5)).sqrt();
-        let im = ((r - self.re) * T::c(0.5)).sqrt();
-        Cx::new(re, if self.im < T::c(0.0) { -im } else { im })
+        let re = ((r + self.re) * T::of(0.5)).sqrt();
+        let im = ((r - self.re) * T::of(0.5)).sqrt();
+        Cx::new(re, if self.im < T::ZERO { -im } else { im })
     }
 }
 impl<T: Real> Add for Cx<T> {
     type Output = Self;
-    #[inline]
+    #[inline(always)]
     fn add(self, o: Self) -> Self {
         Cx::new(self.re + o.re, self.im + o.im)
     }
 }
 impl<T: Real> Sub for Cx<T> {
     type Output = Self;
-    #[inline]
+    #[inline(always)]
     fn sub(self, o: Self) -> Self {
         Cx::new(self.re - o.re, self.im - o.im)
     }
 }
 impl<T: Real> Mul for Cx<T> {
     type Output = Self;
-    #[inline]
+    #[inline(always)]
     fn mul(self, o: Self) -> Self {
         Cx::new(
             self.re * o.re - self.im * o.im,
@@ -190,7 +124,7 @@ impl<T: Real> Mul for Cx<T> {
 }
 impl<T: Real> Div for Cx<T> {
     type Output = Self;
-    #[inline]
+    #[inline(always)]
     fn div(self, o: Self) -> Self {
         let d = o.norm2();
         Cx::new(
@@ -201,7 +135,7 @@ impl<T: Real> Div for Cx<T> {
 }
 impl<T: Real> Neg for Cx<T> {
     type Output = Self;
-    #[inline]
+    #[inline(always)]
     fn neg(self) -> Self {
         Cx::new(-self.re, -self.im)
     }
@@ -220,24 +154,29 @@ struct Tol<T> {
 }
 
 impl<T: Real> Tol<T> {
+    #[inline(always)]
     fn get() -> Tol<T> {
-        if T::eps().to_f64() > 1e-10 {
-            // f32
+        if is_single::<T>() {
             Tol {
-                single: T::c(1e-5),
-                double: T::c(1e-4),
-                weight: T::c(1e-4),
-                angle: T::c(1e-5),
+                single: T::of(1e-5),
+                double: T::of(1e-4),
+                weight: T::of(1e-4),
+                angle: T::of(1e-5),
             }
         } else {
             Tol {
-                single: T::c(2.2e-12),
-                double: T::c(2.2e-11),
-                weight: T::c(2.2e-8),
-                angle: T::c(2.2e-10),
+                single: T::of(2.2e-12),
+                double: T::of(2.2e-11),
+                weight: T::of(2.2e-8),
+                angle: T::of(2.2e-10),
             }
         }
     }
+}
+
+#[inline(always)]
+fn is_single<T: Real>() -> bool {
+    T::EPS.to_f64() > 1e-10
 }
 
 /// The TMSM basis b(z) = (sin 2πz, cos 2πz, sin 4πz, cos 4πz) (paper, Equation 1).
@@ -251,9 +190,9 @@ pub fn basis(z: f64, out: &mut [f64]) {
 
 /// Sharp lower bound G(b, z_f) of Problem 1 for b_TMSM on the circle [0,1) (shadowed arc
 /// [0, z_f)), unbiased, in precision T. NaN in → NaN out; z_f ≤ 0 → 0, z_f ≥ 1 → 1.
-/// Derivation: docs/tmsm.md.
+/// Derivation: docs/tmsm.md. No heap allocation; the minimiser is not built.
 pub fn sharp_bound<T: Real>(b: [T; 4], zf: T) -> T {
-    solve(b, zf).g
+    evaluate::<T, false>(b, zf).g
 }
 
 /// Which branch of docs/tmsm.md produced the result.
@@ -289,58 +228,99 @@ pub struct Detail<T> {
 
 /// [`sharp_bound`] with the branch taken and the minimising distribution.
 pub fn solve<T: Real>(b: [T; 4], zf: T) -> Detail<T> {
-    let zero = T::c(0.0);
-    let one = T::c(1.0);
-    let trivial = |g: T| Detail {
-        g,
-        case: Case::Trivial,
-        support: Vec::new(),
-    };
-    if zf.is_nan() || b.iter().any(|v| v.is_nan()) {
-        return trivial(T::c(f64::NAN));
-    }
-    if zf <= zero {
-        return trivial(zero);
-    }
-    if zf >= one {
-        return trivial(one);
-    }
+    let out = evaluate::<T, true>(b, zf);
     let tol = Tol::<T>::get();
-    let a = T::c(std::f64::consts::PI) * zf;
-    // Moments in the frame rotated by −a: the shadowed arc is (−a, a) (docs/tmsm.md §1).
-    let rot = Cx::unit(-a);
-    let c1 = Cx::new(b[1], b[0]) * rot;
-    let c2 = Cx::new(b[3], b[2]) * rot * rot;
-    let m1 = c1.norm2();
-    let to_z = |s: T, shadowed_seam: bool| {
-        // rotated angle s → depth z ∈ [0,1]; the seam (s = −a) goes to 0 or 1.
-        let tau = T::c(std::f64::consts::TAU);
-        let mut t = s + a;
-        while t < zero {
+    let tau = T::of(std::f64::consts::TAU);
+    let a = out.a;
+    let shadowed_seam = matches!(out.case, Case::OneDirac | Case::TwoDiracs);
+    // rotated point e^{is} → depth z ∈ [0,1]; the seam (s = −a) goes to 0 or 1.
+    let to_z = |p: Cx<T>| {
+        let mut t = p.arg() + a;
+        while t < T::ZERO {
             t = t + tau;
         }
         while t >= tau {
             t = t - tau;
         }
         let near_seam = t.abs() <= tol.angle || (tau - t).abs() <= tol.angle;
-        if near_seam {
-            if shadowed_seam {
-                zero
-            } else {
-                one
-            }
-        } else {
-            t / tau
+        match (near_seam, shadowed_seam) {
+            (true, true) => T::ZERO,
+            (true, false) => T::ONE,
+            _ => t / tau,
         }
     };
+    Detail {
+        g: out.g,
+        case: out.case,
+        support: out.atoms[..out.n]
+            .iter()
+            .map(|&(p, w)| (to_z(p), w))
+            .collect(),
+    }
+}
+
+/// What [`evaluate`] found: G, the branch, and (when asked for) the minimiser as unit complex
+/// numbers in the frame rotated by −a with their weights.
+struct Outcome<T> {
+    g: T,
+    case: Case,
+    a: T,
+    atoms: [(Cx<T>, T); 4],
+    n: usize,
+}
+
+impl<T: Real> Outcome<T> {
+    #[inline(always)]
+    fn bare(g: T, case: Case, a: T) -> Self {
+        Outcome {
+            g,
+            case,
+            a,
+            atoms: [(Cx::real(T::ZERO), T::ZERO); 4],
+            n: 0,
+        }
+    }
+    #[inline(always)]
+    fn set(&mut self, g: T, case: Case, atoms: &[(Cx<T>, T)]) {
+        self.g = g;
+        self.case = case;
+        self.atoms[..atoms.len()].copy_from_slice(atoms);
+        self.n = atoms.len();
+    }
+}
+
+/// The solver; with `SUPPORT = false` only G is meaningful (no minimiser is kept, the lit-arc
+/// branch returns at once).
+#[inline(always)]
+fn evaluate<T: Real, const SUPPORT: bool>(b: [T; 4], zf: T) -> Outcome<T> {
+    let zero = T::ZERO;
+    let one = T::ONE;
+    if zf.is_nan() || b.iter().any(|v| v.is_nan()) {
+        return Outcome::bare(T::of(f64::NAN), Case::Trivial, zero);
+    }
+    if zf <= zero {
+        return Outcome::bare(zero, Case::Trivial, zero);
+    }
+    if zf >= one {
+        return Outcome::bare(one, Case::Trivial, zero);
+    }
+    let tol = Tol::<T>::get();
+    let a = T::of(std::f64::consts::PI) * zf;
+    // e^{ia}: the only trigonometry of the PD path.
+    let ea = Cx::new(a.cos(), a.sin());
+    // Moments in the frame rotated by −a: the shadowed arc is (−a, a) (docs/tmsm.md §1).
+    let rot = ea.conj();
+    let c1 = Cx::new(b[1], b[0]) * rot;
+    let c2 = Cx::new(b[3], b[2]) * rot * rot;
+    let m1 = c1.norm2();
     if one - m1 <= tol.single {
         // One Dirac (docs/tmsm.md §2).
-        let s = c1.arg();
-        return Detail {
-            g: mass_on_arc(&[(s, one)], a, tol.angle),
-            case: Case::OneDirac,
-            support: vec![(to_z(s, true), one)],
-        };
+        let g = mass_on_arc(&[(c1.arg(), one)], a, tol.angle);
+        let mut out = Outcome::bare(g, Case::OneDirac, a);
+        if SUPPORT {
+            out.set(g, Case::OneDirac, &[(c1.normalized(), one)]);
+        }
+        return out;
     }
     // Schur parameter γ₂; |γ₂| = 1 ⇔ Toeplitz matrix singular (two Diracs).
     let gamma = (c2 - c1 * c1).scale(one / (one - m1));
@@ -349,85 +329,90 @@ pub fn solve<T: Real>(b: [T; 4], zf: T) -> Detail<T> {
         let beta = -gamma;
         let alpha = -c1 - beta * c1.conj();
         let (z1, z2) = quadratic_roots(alpha, beta);
-        let (z1, z2) = (Cx::unit(z1.arg()), Cx::unit(z2.arg()));
+        let (z1, z2) = (z1.normalized(), z2.normalized());
         let w1 = ((c1 - z2) / (z1 - z2)).re;
         let w1 = max(zero, min(one, w1));
-        let atoms = [(z1.arg(), w1), (z2.arg(), one - w1)];
-        return Detail {
-            g: mass_on_arc(&atoms, a, tol.angle),
-            case: Case::TwoDiracs,
-            support: atoms.iter().map(|&(s, w)| (to_z(s, true), w)).collect(),
-        };
+        let g = mass_on_arc(&[(z1.arg(), w1), (z2.arg(), one - w1)], a, tol.angle);
+        let mut out = Outcome::bare(g, Case::TwoDiracs, a);
+        if SUPPORT {
+            out.set(g, Case::TwoDiracs, &[(z1, w1), (z2, one - w1)]);
+        }
+        return out;
     }
-    let (g, case, atoms) = pd_bound(c1, c2, a, &tol);
-    Detail {
-        g,
-        case,
-        support: atoms.iter().map(|&(s, w)| (to_z(s, false), w)).collect(),
-    }
+    pd_bound::<T, SUPPORT>(c1, c2, ea, a, &tol)
 }
 
 /// Mass of a few Diracs (angle in the rotated frame, weight) on the shadowed arc [−a, a):
 /// an atom within `tol` of −a (z = 0) is shadowed, within `tol` of a (z = z_f) is lit.
+#[inline(always)]
 fn mass_on_arc<T: Real>(atoms: &[(T, T)], a: T, tol: T) -> T {
-    let mut g = T::c(0.0);
+    let mut g = T::ZERO;
     for &(s, w) in atoms {
         if s >= -a - tol && s < a - tol {
             g = g + w;
         }
     }
-    max(T::c(0.0), min(T::c(1.0), g))
+    max(T::ZERO, min(T::ONE, g))
 }
 
+#[inline(always)]
 fn quadratic_roots<T: Real>(p: Cx<T>, q: Cx<T>) -> (Cx<T>, Cx<T>) {
     // z² + p z + q = 0, the numerically stable pair.
-    let half = T::c(0.5);
-    let d = (p * p).scale(T::c(0.25)) - q;
+    let half = T::of(0.5);
+    let d = (p * p).scale(T::of(0.25)) - q;
     let s = d.sqrt();
     let hp = p.scale(half);
     // Choose the sign that avoids cancellation.
-    let big = if (hp.re * s.re + hp.im * s.im) >= T::c(0.0) {
+    let big = if (hp.re * s.re + hp.im * s.im) >= T::ZERO {
         -hp - s
     } else {
         -hp + s
     };
-    if big.norm2() == T::c(0.0) {
+    if big.norm2() == T::ZERO {
         return (big, big);
     }
     (big, q / big)
 }
 
-/// Positive definite Toeplitz matrix: the candidate enumeration of docs/tmsm.md §3–§4.
-fn pd_bound<T: Real>(c1: Cx<T>, c2: Cx<T>, a: T, tol: &Tol<T>) -> (T, Case, Vec<(T, T)>) {
-    let zero = T::c(0.0);
-    let one = T::c(1.0);
-    let half = T::c(0.5);
-    let (sa, ca) = (a.sin(), a.cos());
+/// Positive definite Toeplitz matrix: the candidate enumeration of docs/tmsm.md §3–§4, with
+/// ea = e^{ia}. A unit point z lies in the open shadowed arc ⇔ Re z > cos a.
+#[inline(always)]
+fn pd_bound<T: Real, const SUPPORT: bool>(
+    c1: Cx<T>,
+    c2: Cx<T>,
+    ea: Cx<T>,
+    a: T,
+    tol: &Tol<T>,
+) -> Outcome<T> {
+    let zero = T::ZERO;
+    let one = T::ONE;
+    let half = T::of(0.5);
+    let ca = ea.re;
     // h(s) = cos s − cos a ≥ 0 exactly on the shadowed arc; H0 = E[h], H1 = E[h e^{is}].
     let h0 = c1.re - ca;
     let h1 = (c2 + Cx::real(one)).scale(half) - c1.scale(ca);
     // The localizing matrix of the lit arc is PSD: a distribution on the lit arc exists and
     // G = 0; the canonical representation through z_f or 0 is one (docs/tmsm.md §3).
     let lit_arc = -h0 >= h1.abs();
-    let ea = Cx::unit(a);
+    let mut out = Outcome::bare(one, Case::LitArc, a);
+    if lit_arc && !SUPPORT {
+        out.g = zero;
+        return out;
+    }
     let ema = ea.conj();
-    let mut best = one;
-    let mut case = Case::LitArc;
-    let mut support: Vec<(T, T)> = Vec::new();
+    let ok = |w: &[T]| w.iter().all(|&wi| wi >= -tol.weight);
     // (I), (II): canonical representations through z_f (s = a) and through 0 (s = −a).
     for (zeta, this) in [(ea, Case::ThroughZf), (ema, Case::ThroughZero)] {
         if let Some((z2, z3)) = canonical(c1, c2, zeta) {
             let w = weights3([zeta, z2, z3], c1, c2);
             let mut g = zero;
             for (z, wi) in [(z2, w[1]), (z3, w[2])] {
-                if z.arg().abs() < a {
+                if z.re > ca {
                     g = g + wi;
                 }
             }
-            if w.iter().all(|&wi| wi >= -tol.weight) && g < best {
-                best = g;
-                case = this;
-                support = vec![(zeta.arg(), w[0]), (z2.arg(), w[1]), (z3.arg(), w[2])];
+            if ok(&w) && g < out.g {
+                out.set(g, this, &[(zeta, w[0]), (z2, w[1]), (z3, w[2])]);
             }
         }
     }
@@ -435,59 +420,97 @@ fn pd_bound<T: Real>(c1: Cx<T>, c2: Cx<T>, a: T, tol: &Tol<T>) -> (T, Case, Vec<
     if h0 > zero {
         let cd = h1.re / h0;
         if cd > ca && cd <= one {
-            let d = cd.acos();
-            let nodes = [ea, ema, Cx::unit(d), Cx::unit(-d)];
-            let w = weights4(nodes, c1, c2);
             let g = h0 * h0 / (h1.re - h0 * ca);
-            if w.iter().all(|&wi| wi >= -tol.weight) && g < best {
-                best = g;
-                case = Case::Symmetric;
-                support = vec![(a, w[0]), (-a, w[1]), (d, w[2]), (-d, w[3])];
+            let ed = Cx::new(cd, max(zero, one - cd * cd).sqrt());
+            // The weights (feasibility) only matter if the candidate improves G.
+            if g < out.g {
+                let w = weights4([ea, ema, ed, ed.conj()], c1, c2);
+                if ok(&w) {
+                    out.set(
+                        g,
+                        Case::Symmetric,
+                        &[(ea, w[0]), (ema, w[1]), (ed, w[2]), (ed.conj(), w[3])],
+                    );
+                }
             }
         }
     }
-    // (III-q): Diracs at ±a, x ∈ (−a, a), y outside; τ = tan(x/2) = k σ solves the quartic of
-    // docs/tmsm.md §4.4.
+    // (III-q) can only lower G below the current best; a best of 0 is final (G is clamped).
+    if SUPPORT || out.g > zero {
+        quartic_candidates(c1, c2, ea, h0, h1, tol, &mut out);
+    }
+    if lit_arc {
+        out.g = zero;
+        out.case = Case::LitArc;
+        return out;
+    }
+    out.g = max(zero, min(one, out.g));
+    out
+}
+
+/// (III-q): Diracs at ±a, x ∈ (−a, a), y outside; τ = tan(x/2) = k σ solves the quartic of
+/// docs/tmsm.md §4.4. e^{ix} = (1 − τ² + 2iτ)/(1 + τ²), e^{iu} ∝ sin x + i(cos x − cos a),
+/// e^{iy} = e^{ix}·e^{−2iu}.
+#[inline(always)]
+fn quartic_candidates<T: Real>(
+    c1: Cx<T>,
+    c2: Cx<T>,
+    ea: Cx<T>,
+    h0: T,
+    h1: Cx<T>,
+    tol: &Tol<T>,
+    out: &mut Outcome<T>,
+) {
+    let one = T::ONE;
+    let two = T::of(2.0);
+    let (ca, sa) = (ea.re, ea.im);
+    let ema = ea.conj();
     let (p, q) = (h1.re, h1.im);
     let (am, bm) = (one - ca, one + ca);
     let k = sa / bm; // tan(a/2)
     let coef = [
         q * am,
-        T::c(2.0) * (h0 - p * (one + am)) * k,
-        T::c(-6.0) * q * k * k,
-        T::c(2.0) * (h0 + p * (one + bm)) * k * k * k,
+        two * (h0 - p * (one + am)) * k,
+        T::of(-6.0) * q * k * k,
+        two * (h0 + p * (one + bm)) * k * k * k,
         q * bm * k * k * k * k,
     ];
-    let mut roots = [zero; 4];
+    let mut roots = [T::ZERO; 4];
     let nr = roots_in_interval(coef, -one, one, &mut roots);
     for &sigma in &roots[..nr] {
         if sigma.abs() >= one {
             continue;
         }
-        let x = T::c(2.0) * (k * sigma).atan();
-        let u = (x.cos() - ca).atan2(x.sin());
-        let zy = Cx::unit(x - T::c(2.0) * u);
-        if zy.arg().abs() <= a {
+        let tau = k * sigma;
+        let t2 = tau * tau;
+        let inv = one / (one + t2);
+        let zx = Cx::new((one - t2) * inv, two * tau * inv);
+        let eu = Cx::new(zx.im, zx.re - ca).normalized().conj();
+        let zy = zx * eu * eu;
+        if zy.re >= ca {
             continue;
         }
-        let zx = Cx::unit(x);
-        let w = weights4([ea, ema, zx, zy], c1, c2);
-        if w.iter().all(|&wi| wi >= -tol.weight) && w[2] < best {
-            best = w[2];
-            case = Case::Quartic;
-            support = vec![(a, w[0]), (-a, w[1]), (x, w[2]), (zy.arg(), w[3])];
+        let nodes = [ea, ema, zx, zy];
+        // G of this candidate is the weight at x; the other weights only if it improves G.
+        if !(weight4(&nodes, 2, c1, c2) < out.g) {
+            continue;
+        }
+        let w = weights4(nodes, c1, c2);
+        if w.iter().all(|&wi| wi >= -tol.weight) && w[2] < out.g {
+            out.set(
+                w[2],
+                Case::Quartic,
+                &[(ea, w[0]), (ema, w[1]), (zx, w[2]), (zy, w[3])],
+            );
         }
     }
-    if lit_arc {
-        return (zero, Case::LitArc, support);
-    }
-    (max(zero, min(one, best)), case, support)
 }
 
 /// The other two atoms of the canonical 3-Dirac representation through ζ: P(z) = (z−ζ)(z²+αz+β)
-/// with E[z^{−1}P] = E[z^{−2}P] = 0 (docs/tmsm.md §4.1).
+/// with E[z^{−1}P] = E[z^{−2}P] = 0 (docs/tmsm.md §4.1), projected onto the unit circle.
+#[inline(always)]
 fn canonical<T: Real>(c1: Cx<T>, c2: Cx<T>, zeta: Cx<T>) -> Option<(Cx<T>, Cx<T>)> {
-    let one = Cx::real(T::c(1.0));
+    let one = Cx::real(T::ONE);
     let a11 = c1 - zeta;
     let a12 = one - zeta * c1.conj();
     let a21 = a12;
@@ -495,22 +518,23 @@ fn canonical<T: Real>(c1: Cx<T>, c2: Cx<T>, zeta: Cx<T>) -> Option<(Cx<T>, Cx<T>
     let r1 = zeta * c1 - c2;
     let r2 = zeta - c1;
     let det = a11 * a22 - a12 * a21;
-    if det.norm2() == T::c(0.0) || det.re.is_nan() {
+    if det.norm2() == T::ZERO || det.re.is_nan() {
         return None;
     }
     let alpha = (r1 * a22 - a12 * r2) / det;
     let beta = (a11 * r2 - a21 * r1) / det;
     let (z2, z3) = quadratic_roots(alpha, beta);
-    if z2.norm2() == T::c(0.0) || z3.norm2() == T::c(0.0) {
+    if z2.norm2() == T::ZERO || z3.norm2() == T::ZERO {
         return None;
     }
-    Some((Cx::unit(z2.arg()), Cx::unit(z3.arg())))
+    Some((z2.normalized(), z3.normalized()))
 }
 
 /// Weights of a distribution on three points of the unit circle from c₁, c₂ (Lagrange basis).
+#[inline(always)]
 fn weights3<T: Real>(z: [Cx<T>; 3], c1: Cx<T>, c2: Cx<T>) -> [T; 3] {
-    let one = Cx::real(T::c(1.0));
-    let mut w = [T::c(0.0); 3];
+    let one = Cx::real(T::ONE);
+    let mut w = [T::ZERO; 3];
     for i in 0..3 {
         let (j, k) = ((i + 1) % 3, (i + 2) % 3);
         let e1 = -(z[j] + z[k]);
@@ -524,119 +548,207 @@ fn weights3<T: Real>(z: [Cx<T>; 3], c1: Cx<T>, c2: Cx<T>) -> [T; 3] {
 
 /// Weights of a distribution on four points of the unit circle from c₋₁, c₀, c₁, c₂ (Lagrange
 /// basis in span{z⁻¹, 1, z, z²}); valid when the moments are consistent with these points.
+#[inline(always)]
 fn weights4<T: Real>(z: [Cx<T>; 4], c1: Cx<T>, c2: Cx<T>) -> [T; 4] {
-    let mut w = [T::c(0.0); 4];
-    for i in 0..4 {
-        let o: Vec<usize> = (0..4).filter(|&j| j != i).collect();
-        let (p, q, r) = (z[o[0]], z[o[1]], z[o[2]]);
-        let e2 = -(p + q + r);
-        let e1 = p * q + p * r + q * r;
-        let e0 = -(p * q * r);
-        let num = c2 + e2 * c1 + e1 + e0 * c1.conj();
-        let den = z[i].conj() * (z[i] - p) * (z[i] - q) * (z[i] - r);
-        w[i] = (num / den).re;
-    }
-    w
+    [0, 1, 2, 3].map(|i| weight4(&z, i, c1, c2))
 }
 
-/// Real roots of Σ coef[j] σ^j (degree ≤ 4; negligible leading coefficients are dropped, which
-/// only removes roots near infinity). Closed form (Ferrari / Cardano) followed by two Newton
-/// steps on the original polynomial. Near-real complex pairs are returned as real candidates.
-pub fn real_roots_upto4<T: Real>(coef: [T; 5], out: &mut [T; 4]) -> usize {
-    let zero = T::c(0.0);
-    let scale = coef.iter().fold(zero, |m, c| max(m, c.abs()));
-    if scale == zero || scale.is_nan() {
-        return 0;
-    }
-    let c: Vec<T> = coef.iter().map(|&v| v / scale).collect();
-    let small = T::c(16.0) * T::eps();
-    let mut deg = 4;
-    while deg > 0 && c[deg].abs() <= small {
-        deg -= 1;
-    }
-    let mut n = 0;
-    let mut push = |r: T, out: &mut [T; 4]| {
-        if n < 4 && !r.is_nan() {
-            out[n] = r;
-            n += 1;
-        }
-    };
-    match deg {
-        0 => {}
-        1 => push(-c[0] / c[1], out),
-        2 => {
-            let mut r = [zero; 2];
-            let k = quad_real(c[1] / c[2], c[0] / c[2], &mut r);
-            for &v in &r[..k] {
-                push(v, out);
-            }
-        }
-        3 => {
-            let mut r = [zero; 3];
-            let k = cubic_real(c[2] / c[3], c[1] / c[3], c[0] / c[3], &mut r);
-            for &v in &r[..k] {
-                push(v, out);
-            }
-        }
-        _ => {
-            let mut r = [zero; 4];
-            let k = quartic_real(c[3] / c[4], c[2] / c[4], c[1] / c[4], c[0] / c[4], &mut r);
-            for &v in &r[..k] {
-                push(v, out);
-            }
-        }
-    }
-    // Newton polishing on the normalized polynomial.
-    for r in out.iter_mut().take(n) {
-        for _ in 0..2 {
-            let (mut p, mut dp) = (zero, zero);
-            for j in (0..=deg).rev() {
-                dp = dp * *r + p;
-                p = p * *r + c[j];
-            }
-            if dp != zero {
-                let nr = *r - p / dp;
-                if !nr.is_nan() {
-                    *r = nr;
-                }
-            }
-        }
-    }
-    n
+/// The weight of node i in [`weights4`]: Re[(c₂ + e₂c₁ + e₁ + e₀c̄₁) / (z̄_i Π_{j≠i}(z_i − z_j))]
+/// with e_k the coefficients of Π_{j≠i}(z − z_j).
+#[inline(always)]
+fn weight4<T: Real>(z: &[Cx<T>; 4], i: usize, c1: Cx<T>, c2: Cx<T>) -> T {
+    const OTHERS: [[usize; 3]; 4] = [[1, 2, 3], [0, 2, 3], [0, 1, 3], [0, 1, 2]];
+    let [p, q, r] = OTHERS[i].map(|j| z[j]);
+    let e2 = -(p + q + r);
+    let e1 = p * q + p * r + q * r;
+    let e0 = -(p * q * r);
+    let num = c2 + e2 * c1 + e1 + e0 * c1.conj();
+    let den = z[i].conj() * (z[i] - p) * (z[i] - q) * (z[i] - r);
+    (num / den).re
 }
 
-/// Real roots in [lo, hi] of Σ coef[j] σ^j (degree ≤ 4) by derivative isolation: the roots of
-/// the derivative split [lo, hi] into monotone pieces, each sign change is bracketed and
-/// bisected (Newton-accelerated). Unlike Ferrari this never loses a root in the interval when
-/// the quartic also has a root near infinity (the f32 failure mode), at the price of iterations.
+/// Real roots in [lo, hi] of Σ coef[j] σ^j (degree ≤ 4), ascending.
+///
+/// Quartics: Descartes' rule of signs after the Möbius map σ = lo + (hi − lo)·t/(1 + t) (which
+/// sends t ∈ (0, ∞) to (lo, hi)) bounds the number of roots in (lo, hi) with the right parity:
+/// no sign variation ⇒ no root; one ⇒ exactly one simple root, found by safeguarded Newton;
+/// more ⇒ bisect the interval and test the halves (Vincent–Collins–Akritas), up to
+/// [`MAX_SPLITS`] levels. Coefficients too small to trust their sign (roots at the ends, multiple
+/// or nearly multiple roots) and pieces still ambiguous at the last level fall back to derivative
+/// isolation ([`isolate`]): the roots of the derivative split the piece into monotone parts,
+/// each sign change is solved by safeguarded Newton, and a critical point where |p| is at
+/// rounding level is reported as a (double) root. Unlike Ferrari's formula this never loses a
+/// root in the interval when the quartic also has a root near infinity (the f32 failure mode).
 pub fn roots_in_interval<T: Real>(coef: [T; 5], lo: T, hi: T, out: &mut [T; 4]) -> usize {
-    let zero = T::c(0.0);
+    let zero = T::ZERO;
     let scale = coef.iter().fold(zero, |m, c| max(m, c.abs()));
     if scale == zero || scale.is_nan() {
         return 0;
     }
-    let mut c = [zero; 5];
-    for j in 0..5 {
-        c[j] = coef[j] / scale;
-    }
+    let inv = T::ONE / scale;
+    let c = coef.map(|v| v * inv);
     let mut deg = 4;
     while deg > 0 && c[deg] == zero {
         deg -= 1;
     }
-    isolate(&c, deg, lo, hi, out)
+    if deg < 4 {
+        return isolate(&c, deg, lo, hi, out);
+    }
+    let mut n = 0;
+    descartes_roots(&c, lo, hi, 0, out, &mut n);
+    n
 }
 
-fn horner<T: Real>(c: &[T; 5], deg: usize, x: T) -> (T, T) {
-    let (mut p, mut dp) = (T::c(0.0), T::c(0.0));
+/// Levels of interval bisection before [`roots_in_interval`] falls back to isolation.
+const MAX_SPLITS: u32 = 5;
+
+fn descartes_roots<T: Real>(c: &[T; 5], lo: T, hi: T, level: u32, out: &mut [T; 4], n: &mut usize) {
+    let bound = descartes_bound(c, lo, hi);
+    if bound == Some(0) {
+        return;
+    }
+    if bound == Some(1) {
+        let (pa, pb) = (horner(c, 4, lo).0, horner(c, 4, hi).0);
+        if (pa < T::ZERO) != (pb < T::ZERO) && pa != T::ZERO && pb != T::ZERO {
+            if *n < 4 {
+                out[*n] = newton_in_bracket(c, 4, lo, hi, pa, pb);
+                *n += 1;
+            }
+            return;
+        }
+    }
+    if bound.is_some() && level < MAX_SPLITS {
+        let mid = (lo + hi) * T::of(0.5);
+        descartes_roots(c, lo, mid, level + 1, out, n);
+        descartes_roots(c, mid, hi, level + 1, out, n);
+        return;
+    }
+    let mut tmp = [T::ZERO; 4];
+    let k = isolate(c, 4, lo, hi, &mut tmp);
+    for &r in &tmp[..k] {
+        if *n < 4 {
+            out[*n] = r;
+            *n += 1;
+        }
+    }
+}
+
+/// Sign variations of (1 + t)⁴·p(lo + (hi − lo)·t/(1 + t)) as a polynomial in t: an upper bound
+/// on the number of roots of p in (lo, hi), of the same parity. `None` when a coefficient is
+/// within its rounding error of 0 (its sign is not reliable; includes roots at lo or hi).
+#[inline(always)]
+fn descartes_bound<T: Real>(c: &[T; 5], lo: T, hi: T) -> Option<u32> {
+    // p(lo + w·s): Taylor shift to lo, then scale by w = hi − lo; the same on |c| at |lo|
+    // bounds the magnitude of the terms (for the rounding guard).
+    let w = hi - lo;
+    let (mut d, mut m) = (*c, c.map(|v| v.abs()));
+    let alo = lo.abs();
+    for i in 0..4 {
+        for j in (i..4).rev() {
+            d[j] = d[j] + lo * d[j + 1];
+            m[j] = m[j] + alo * m[j + 1];
+        }
+    }
+    let mut f = T::ONE;
+    for j in 0..5 {
+        d[j] = d[j] * f;
+        m[j] = m[j] * f;
+        f = f * w;
+    }
+    // Σ d_j s^j·(1+t)⁴ with s = t/(1+t) is Σ d_j t^j (1+t)^{4−j}.
+    const BINOM: [[f64; 5]; 5] = [
+        [1.0, 4.0, 6.0, 4.0, 1.0],
+        [0.0, 1.0, 3.0, 3.0, 1.0],
+        [0.0, 0.0, 1.0, 2.0, 1.0],
+        [0.0, 0.0, 0.0, 1.0, 1.0],
+        [0.0, 0.0, 0.0, 0.0, 1.0],
+    ];
+    let mut q = [T::ZERO; 5];
+    let mut mag = [T::ZERO; 5];
+    for j in 0..5 {
+        for k in j..5 {
+            let bk = T::of(BINOM[j][k]);
+            q[k] = q[k] + bk * d[j];
+            mag[k] = mag[k] + bk * m[j];
+        }
+    }
+    let guard = T::of(64.0) * T::EPS;
+    let mut changes = 0;
+    let mut prev_neg: Option<bool> = None;
+    for k in 0..5 {
+        if mag[k] == T::ZERO && k != 0 && k != 4 {
+            continue; // an exact zero coefficient
+        }
+        if q[k].abs() <= guard * mag[k] {
+            return None;
+        }
+        let neg = q[k] < T::ZERO;
+        if prev_neg.is_some_and(|p| p != neg) {
+            changes += 1;
+        }
+        prev_neg = Some(neg);
+    }
+    Some(changes)
+}
+
+/// p(x), p′(x) and Σ|c_j||x|^j (the scale of p's rounding error at x).
+#[inline(always)]
+fn horner<T: Real>(c: &[T; 5], deg: usize, x: T) -> (T, T, T) {
+    let (mut p, mut dp, mut mag) = (T::ZERO, T::ZERO, T::ZERO);
+    let ax = x.abs();
     for j in (0..=deg).rev() {
         dp = dp * x + p;
         p = p * x + c[j];
+        mag = mag * ax + c[j].abs();
     }
-    (p, dp)
+    (p, dp, mag)
 }
 
+/// The root of p in [a, b] given p(a) = `pa`, p(b) = `pb` of opposite signs: from the secant
+/// point, Newton steps kept inside the shrinking bracket (bisection otherwise), stopped when p
+/// is at rounding level, a step is at rounding level of x or the bracket has collapsed.
+fn newton_in_bracket<T: Real>(c: &[T; 5], deg: usize, mut a: T, mut b: T, pa: T, pb: T) -> T {
+    let half = T::of(0.5);
+    let iters = if is_single::<T>() { 30 } else { 60 };
+    let stop = T::EPS * T::of(4.0);
+    let floor = T::of(1.0 / 1024.0);
+    let neg_at_a = pa < T::ZERO;
+    let secant = a - pa * (b - a) / (pb - pa);
+    let mut x = if secant > a && secant < b {
+        secant
+    } else {
+        (a + b) * half
+    };
+    for _ in 0..iters {
+        let (px, dpx, mag) = horner(c, deg, x);
+        if px.abs() <= stop * mag {
+            break;
+        }
+        if (px < T::ZERO) == neg_at_a {
+            a = x;
+        } else {
+            b = x;
+        }
+        let nx = if dpx != T::ZERO { x - px / dpx } else { a };
+        if nx > a && nx < b {
+            let step = (nx - x).abs();
+            x = nx;
+            if step <= stop * max(x.abs(), floor) {
+                break;
+            }
+        } else {
+            x = (a + b) * half;
+        }
+        if b - a <= stop * max(a.abs(), b.abs()) {
+            break;
+        }
+    }
+    x
+}
+
+/// Derivative isolation (see [`roots_in_interval`]); roots come out ascending.
 fn isolate<T: Real>(c: &[T; 5], deg: usize, lo: T, hi: T, out: &mut [T; 4]) -> usize {
-    let zero = T::c(0.0);
+    let zero = T::ZERO;
     match deg {
         0 => 0,
         1 => {
@@ -649,182 +761,42 @@ fn isolate<T: Real>(c: &[T; 5], deg: usize, lo: T, hi: T, out: &mut [T; 4]) -> u
             }
         }
         _ => {
-            // Critical points from the derivative.
+            // Critical points from the derivative (ascending).
             let mut d = [zero; 5];
             for j in 1..=deg {
-                d[j - 1] = c[j] * T::c(j as f64);
+                d[j - 1] = c[j] * T::of(j as f64);
             }
             let mut crit = [zero; 4];
             let nc = isolate(&d, deg - 1, lo, hi, &mut crit);
-            crit[..nc].sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
             let mut pts = [lo; 6];
             pts[1..1 + nc].copy_from_slice(&crit[..nc]);
             pts[1 + nc] = hi;
             let np = nc + 2;
             let mut n = 0;
-            let iters = if T::eps().to_f64() > 1e-10 { 30 } else { 60 };
+            let mut pa = horner(c, deg, pts[0]).0;
             for w in 0..np - 1 {
-                let (mut a, mut b) = (pts[w], pts[w + 1]);
-                let (pa, _) = horner(c, deg, a);
-                let (pb, _) = horner(c, deg, b);
-                if pa == zero && w == 0 {
-                    if n < 4 {
-                        out[n] = a;
-                        n += 1;
-                    }
-                    continue;
-                }
-                if (pa < zero) == (pb < zero) || pb == zero {
+                let (a, b) = (pts[w], pts[w + 1]);
+                let pb = horner(c, deg, b).0;
+                let root = if pa == zero && w == 0 {
+                    Some(a)
+                } else if (pa < zero) == (pb < zero) || pb == zero {
                     // No sign change; a touching (double) root at a critical point shows up
                     // as |p| tiny there.
                     let touching =
-                        pb == zero || (w + 1 < np - 1 && pb.abs() <= T::c(64.0) * T::eps());
-                    if touching && n < 4 {
-                        out[n] = b;
-                        n += 1;
-                    }
-                    continue;
-                }
-                let neg_at_a = pa < zero;
-                let mut x = (a + b) * T::c(0.5);
-                for _ in 0..iters {
-                    let (px, dpx) = horner(c, deg, x);
-                    if px == zero {
-                        break;
-                    }
-                    if (px < zero) == neg_at_a {
-                        a = x;
-                    } else {
-                        b = x;
-                    }
-                    // Newton step if it stays inside the bracket, else bisection.
-                    let nx = if dpx != zero { x - px / dpx } else { a };
-                    x = if nx > a && nx < b {
-                        nx
-                    } else {
-                        (a + b) * T::c(0.5)
-                    };
-                    if b - a <= T::eps() * T::c(4.0) * max(a.abs(), b.abs()) {
-                        break;
-                    }
-                }
-                if n < 4 {
-                    out[n] = x;
+                        pb == zero || (w + 1 < np - 1 && pb.abs() <= T::of(64.0) * T::EPS);
+                    touching.then_some(b)
+                } else {
+                    Some(newton_in_bracket(c, deg, a, b, pa, pb))
+                };
+                if let (Some(r), true) = (root, n < 4) {
+                    out[n] = r;
                     n += 1;
                 }
+                pa = pb;
             }
             n
         }
     }
-}
-
-/// Real roots of x² + p x + q. A complex pair yields its real part as one candidate (rounding
-/// turns close real roots into complex pairs; candidates are validated by the caller).
-fn quad_real<T: Real>(p: T, q: T, out: &mut [T; 2]) -> usize {
-    let zero = T::c(0.0);
-    let hp = p * T::c(0.5);
-    let d = hp * hp - q;
-    if d < zero {
-        out[0] = -hp;
-        return 1;
-    }
-    let s = d.sqrt();
-    let big = if hp >= zero { -hp - s } else { -hp + s };
-    if big == zero {
-        out[0] = zero;
-        out[1] = zero;
-        return 2;
-    }
-    out[0] = big;
-    out[1] = q / big;
-    2
-}
-
-/// Real roots of x³ + a x² + b x + c (Cardano / trigonometric form).
-fn cubic_real<T: Real>(a: T, b: T, c: T, out: &mut [T; 3]) -> usize {
-    let third = T::c(1.0 / 3.0);
-    let a3 = a * third;
-    let p = b - a * a3;
-    let q = T::c(2.0) * a3 * a3 * a3 - a3 * b + c;
-    // t³ + p t + q = 0, x = t − a/3
-    let disc = (q * T::c(0.5)) * (q * T::c(0.5)) + (p * third) * (p * third) * (p * third);
-    if disc > T::c(0.0) {
-        let s = disc.sqrt();
-        let u = (-q * T::c(0.5) + s).cbrt();
-        let v = (-q * T::c(0.5) - s).cbrt();
-        out[0] = u + v - a3;
-        1
-    } else {
-        let r = (-p * third).sqrt();
-        if r == T::c(0.0) {
-            out[0] = -a3;
-            return 1;
-        }
-        let arg = max(T::c(-1.0), min(T::c(1.0), -q / (T::c(2.0) * r * r * r)));
-        let phi = arg.acos() * third;
-        let tau = T::c(std::f64::consts::TAU) * third;
-        for (k, o) in out.iter_mut().enumerate() {
-            *o = T::c(2.0) * r * (phi - tau * T::c(k as f64)).cos() - a3;
-        }
-        3
-    }
-}
-
-/// Real roots of x⁴ + a x³ + b x² + c x + d (Ferrari with the resolvent cubic).
-fn quartic_real<T: Real>(a: T, b: T, c: T, d: T, out: &mut [T; 4]) -> usize {
-    let zero = T::c(0.0);
-    let a4 = a * T::c(0.25);
-    let a2 = a4 * a4;
-    // Depressed: y⁴ + p y² + q y + r, x = y − a/4.
-    let p = b - T::c(6.0) * a2;
-    let q = c - T::c(2.0) * b * a4 + T::c(8.0) * a2 * a4;
-    let r = d - c * a4 + b * a2 - T::c(3.0) * a2 * a2;
-    let mut n = 0;
-    // Characteristic root size L: p ~ L², q ~ L³, r ~ L⁴.
-    let scale = max(max(p.abs().sqrt(), q.abs().cbrt()), r.abs().sqrt().sqrt());
-    if q.abs() <= T::c(64.0) * T::eps() * scale * scale * scale {
-        // Biquadratic: y² = Y with Y² + p Y + r = 0.
-        let mut ys = [zero; 2];
-        let k = quad_real(p, r, &mut ys);
-        for &y2 in &ys[..k] {
-            if y2 >= zero {
-                let y = y2.sqrt();
-                out[n] = y - a4;
-                out[n + 1] = -y - a4;
-                n += 2;
-            } else {
-                out[n] = -a4;
-                n += 1;
-            }
-        }
-        return n;
-    }
-    // Resolvent cubic 8m³ + 8p m² + (2p² − 8r) m − q² = 0, take its largest root m > 0.
-    let mut ms = [zero; 3];
-    let k = cubic_real(p, p * p * T::c(0.25) - r, -q * q * T::c(0.125), &mut ms);
-    let mut m = ms[0];
-    for &v in &ms[1..k] {
-        m = max(m, v);
-    }
-    if m <= zero {
-        return 0;
-    }
-    let s = (T::c(2.0) * m).sqrt();
-    let t = q / (T::c(2.0) * s); // = q·sqrt(2m)/(4m)
-    let half_p_m = p * T::c(0.5) + m;
-    // y² − s y + (p/2 + m + t) = 0 and y² + s y + (p/2 + m − t) = 0.
-    let mut ys = [zero; 2];
-    let k1 = quad_real(-s, half_p_m + t, &mut ys);
-    for &y in &ys[..k1] {
-        out[n] = y - a4;
-        n += 1;
-    }
-    let k2 = quad_real(s, half_p_m - t, &mut ys);
-    for &y in &ys[..k2] {
-        out[n] = y - a4;
-        n += 1;
-    }
-    n
 }
 
 /// TMSM as a [`Technique`]: biased moments b' = (1 − α)·b + α·b*, by default b* = 0 (the
@@ -940,23 +912,40 @@ impl Technique for Tmsm {
 mod tests {
     use super::*;
 
+    /// Ascending coefficients of lead·Π(σ − r_i).
+    fn poly_from_roots(r: &[f64], lead: f64) -> [f64; 5] {
+        let mut c = [0.0; 5];
+        c[0] = lead;
+        for (n, &x) in r.iter().enumerate() {
+            for j in (0..=n + 1).rev() {
+                let lower = if j > 0 { c[j - 1] } else { 0.0 };
+                c[j] = lower - x * c[j];
+            }
+        }
+        c
+    }
+
     #[test]
-    fn quartic_roots_of_known_polynomial() {
-        // (x − 0.3)(x + 0.7)(x − 0.9)(x + 0.05)
-        let r = [0.3, -0.7, 0.9, -0.05];
-        let e1: f64 = r.iter().sum();
-        let e2 = r[0] * r[1] + r[0] * r[2] + r[0] * r[3] + r[1] * r[2] + r[1] * r[3] + r[2] * r[3];
-        let e3 = r[0] * r[1] * r[2] + r[0] * r[1] * r[3] + r[0] * r[2] * r[3] + r[1] * r[2] * r[3];
-        let e4 = r[0] * r[1] * r[2] * r[3];
-        let mut out = [0.0; 4];
-        let n = real_roots_upto4([e4, -e3, e2, -e1, 1.0], &mut out);
-        assert_eq!(n, 4);
-        let mut got = out;
-        got.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        let mut want = r;
-        want.sort_by(|a, b| a.partial_cmp(b).unwrap());
-        for (g, w) in got.iter().zip(want) {
-            assert!((g - w).abs() < 1e-12, "{got:?} vs {want:?}");
+    fn roots_in_interval_finds_exactly_the_roots_inside() {
+        // (roots, distinct roots in [−1, 1]); a double root may be reported once or twice.
+        let cases: [(&[f64], &[f64]); 6] = [
+            (&[0.3, -0.7, 0.9, -0.05], &[-0.7, -0.05, 0.3, 0.9]),
+            (&[0.3, 2.0, -3.0, 5.0], &[0.3]),
+            (&[1e-3, -1e-3, 7.0, 9.0], &[-1e-3, 1e-3]),
+            (&[0.5, 0.5, 3.0, -4.0], &[0.5]),
+            (&[2.0, 3.0, -2.0, 1e6], &[]),
+            (&[-0.999, 0.2, 0.21, 0.999], &[-0.999, 0.2, 0.21, 0.999]),
+        ];
+        for (roots, want) in cases {
+            let c = poly_from_roots(roots, 1.7);
+            let mut out = [0.0; 4];
+            let n = roots_in_interval(c, -1.0, 1.0, &mut out);
+            let mut got = out[..n].to_vec();
+            got.dedup_by(|x, y| (*x - *y).abs() < 1e-6);
+            assert_eq!(got.len(), want.len(), "{roots:?}: {got:?}");
+            for (g, w) in got.iter().zip(want) {
+                assert!((g - w).abs() < 1e-6, "{roots:?}: {got:?}");
+            }
         }
     }
 
