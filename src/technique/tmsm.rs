@@ -237,10 +237,10 @@ pub fn solve<T: Real>(b: [T; 4], zf: T) -> Detail<T> {
     let to_z = |p: Cx<T>| {
         let mut t = p.arg() + a;
         while t < T::ZERO {
-            t = t + tau;
+            t += tau;
         }
         while t >= tau {
-            t = t - tau;
+            t -= tau;
         }
         let near_seam = t.abs() <= tol.angle || (tau - t).abs() <= tol.angle;
         match (near_seam, shadowed_seam) {
@@ -349,7 +349,7 @@ fn mass_on_arc<T: Real>(atoms: &[(T, T)], a: T, tol: T) -> T {
     let mut g = T::ZERO;
     for &(s, w) in atoms {
         if s >= -a - tol && s < a - tol {
-            g = g + w;
+            g += w;
         }
     }
     max(T::ZERO, min(T::ONE, g))
@@ -408,7 +408,7 @@ fn pd_bound<T: Real, const SUPPORT: bool>(
             let mut g = zero;
             for (z, wi) in [(z2, w[1]), (z3, w[2])] {
                 if z.re > ca {
-                    g = g + wi;
+                    g += wi;
                 }
             }
             if ok(&w) && g < out.g {
@@ -492,7 +492,7 @@ fn quartic_candidates<T: Real>(
         }
         let nodes = [ea, ema, zx, zy];
         // G of this candidate is the weight at x; the other weights only if it improves G.
-        if !(weight4(&nodes, 2, c1, c2) < out.g) {
+        if weight4(&nodes, 2, c1, c2).partial_cmp(&out.g) != Some(std::cmp::Ordering::Less) {
             continue;
         }
         let w = weights4(nodes, c1, c2);
@@ -645,15 +645,15 @@ fn descartes_bound<T: Real>(c: &[T; 5], lo: T, hi: T) -> Option<u32> {
     let alo = lo.abs();
     for i in 0..4 {
         for j in (i..4).rev() {
-            d[j] = d[j] + lo * d[j + 1];
-            m[j] = m[j] + alo * m[j + 1];
+            d[j] += lo * d[j + 1];
+            m[j] += alo * m[j + 1];
         }
     }
     let mut f = T::ONE;
     for j in 0..5 {
-        d[j] = d[j] * f;
-        m[j] = m[j] * f;
-        f = f * w;
+        d[j] *= f;
+        m[j] *= f;
+        f *= w;
     }
     // Σ d_j s^j·(1+t)⁴ with s = t/(1+t) is Σ d_j t^j (1+t)^{4−j}.
     const BINOM: [[f64; 5]; 5] = [
@@ -668,8 +668,8 @@ fn descartes_bound<T: Real>(c: &[T; 5], lo: T, hi: T) -> Option<u32> {
     for j in 0..5 {
         for k in j..5 {
             let bk = T::of(BINOM[j][k]);
-            q[k] = q[k] + bk * d[j];
-            mag[k] = mag[k] + bk * m[j];
+            q[k] += bk * d[j];
+            mag[k] += bk * m[j];
         }
     }
     let guard = T::of(64.0) * T::EPS;
