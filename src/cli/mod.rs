@@ -9,6 +9,7 @@ pub mod evaluate;
 pub mod import;
 pub mod lp;
 pub mod merge;
+pub mod plan;
 pub mod quantize;
 pub mod recommend;
 pub mod render;

@@ -103,6 +103,10 @@ pub struct Opts {
     /// Only write the report from existing results (e.g. after `merge`).
     #[arg(long)]
     pub report_only: bool,
+    /// Dry run: candidates, fragments, LP solves and core-hours (from a short calibration on
+    /// this machine) for racing and --exhaustive, per task with --shard; nothing is written.
+    #[arg(long, conflicts_with = "report_only")]
+    pub plan: bool,
     /// Other results directories (e.g. the m = 2 and m = 3 sweeps) for the side-by-side plot.
     #[arg(long, value_delimiter = ',')]
     pub compare: Vec<PathBuf>,
@@ -233,6 +237,13 @@ pub fn run(args: Args) -> Result<()> {
         t_data.elapsed().as_secs_f64(),
         results.display()
     );
+    if args.plan {
+        let setup = t_data.elapsed().as_secs_f64();
+        let plan =
+            crate::search::run::plan_dataset(&data, &table, &opts, super::plan::CALIBRATION)?;
+        super::plan::print(&plan, &opts, setup);
+        return Ok(());
+    }
     if args.report_only {
         if args.no_report {
             bail!("--report-only and --no-report contradict each other");

@@ -15,10 +15,12 @@
 
 pub mod dataset;
 pub mod merge;
+pub mod plan;
 pub mod report;
 pub mod results;
 pub mod run;
 pub mod score;
+pub mod select;
 pub mod span;
 pub mod sweep;
 

@@ -199,26 +199,7 @@ pub fn sweep_dataset(
 ) -> Result<SweepResult> {
     let t0 = Instant::now();
     let scorer = Scorer::new(data, table, &opts.solver, opts.chunk)?;
-    let cfg = SweepConfig {
-        seed: opts.seed,
-        top: opts.top,
-        exhaustive: opts.exhaustive,
-        candidates: resolve_candidates(
-            table,
-            opts.m,
-            opts.candidates.as_deref(),
-            opts.names.as_deref(),
-        )?,
-        shard: opts.shard,
-        first_sample: opts.first_sample,
-        growth: opts.growth,
-        keep: opts.keep,
-        max_keep: opts.max_keep,
-        z: opts.z,
-        pilot: opts.pilot,
-        batch: opts.batch,
-        ..SweepConfig::new(opts.m, &scorer, &opts.dataset)
-    };
+    let cfg = sweep_config(opts, &scorer)?;
     let hooks = Hooks {
         stop_after_batches: None,
         progress,
@@ -245,6 +226,44 @@ pub fn sweep_dataset(
     }
     out.seconds = t0.elapsed().as_secs_f64();
     Ok(out)
+}
+
+/// The [`SweepConfig`] of `opts` on `scorer`'s data and catalog.
+pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig> {
+    Ok(SweepConfig {
+        seed: opts.seed,
+        top: opts.top,
+        exhaustive: opts.exhaustive,
+        candidates: resolve_candidates(
+            scorer.table(),
+            opts.m,
+            opts.candidates.as_deref(),
+            opts.names.as_deref(),
+        )?,
+        shard: opts.shard,
+        first_sample: opts.first_sample,
+        growth: opts.growth,
+        keep: opts.keep,
+        max_keep: opts.max_keep,
+        z: opts.z,
+        pilot: opts.pilot,
+        batch: opts.batch,
+        ..SweepConfig::new(opts.m, scorer, &opts.dataset)
+    })
+}
+
+/// The plan of the sweep `opts` on a prepared dataset and table, with a calibration of
+/// `calibration` = [candidates, fragments] LP solves ([`super::plan`]).
+pub fn plan_dataset(
+    data: &Dataset,
+    table: &FunctionTable,
+    opts: &SweepOptions,
+    calibration: [usize; 2],
+) -> Result<super::plan::Plan> {
+    crate::basis::candidates::check_m(table.len(), opts.m)?;
+    let scorer = Scorer::new(data, table, &opts.solver, opts.chunk)?;
+    let cfg = sweep_config(opts, &scorer)?;
+    super::plan::plan(&cfg, &scorer, calibration)
 }
 
 /// References, ranking and (if `opts.report_dir`) the report files for existing `rows`.

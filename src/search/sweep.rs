@@ -39,11 +39,9 @@
 use super::results::{
     append_jsonl, read_json, read_jsonl, write_json, Row, COMPLETE_FILE, CONFIG_FILE, RESULTS_FILE,
 };
-use super::span::{Flag, SpanAnalyzer};
 use super::Scorer;
 use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::Path;
@@ -309,37 +307,14 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     }
 
     // --- candidates and flags -----------------------------------------------------------------
-    let all: Vec<(u64, Vec<usize>)> = match &cfg.candidates {
-        None => all_subsets(nf, cfg.m),
-        Some(list) => {
-            let set: BTreeSet<u64> = list.iter().copied().collect();
-            set.into_iter()
-                .map(|i| Ok((i, bc::index_to_subset(nf, cfg.m, i)?)))
-                .collect::<Result<_>>()?
-        }
-    };
+    let all = super::select::selected(cfg)?;
     let in_run: BTreeSet<u64> = all.iter().map(|c| c.0).collect();
     let mine: Vec<(u64, Vec<usize>)> = all
         .into_iter()
         .filter(|(i, _)| *i as usize % shard_n == shard_i)
         .collect();
     let subsets: HashMap<u64, Vec<usize>> = mine.iter().cloned().collect();
-    let spans = SpanAnalyzer::new(scorer.table(), cfg.tol);
-    // Degenerate: the basis module's check (σ_min/σ_max of the normalised [1, b] on the grid)
-    // or ours (Gram–Schmidt residual); duplicates: our exact span comparison (see `span`).
-    let n_grid = scorer.table().grid().len();
-    let flags: Vec<Flag> = mine
-        .par_iter()
-        .map(|(_, c)| {
-            let gt = scorer.table().grid_table(c)?;
-            let info = crate::basis::candidates::analyze_values(n_grid, c.len(), gt.values());
-            Ok(if info.degenerate {
-                Flag::Degenerate
-            } else {
-                spans.flag(c)
-            })
-        })
-        .collect::<Result<_>>()?;
+    let flags = super::select::flags(scorer, &mine, &in_run, cfg.tol)?;
 
     let results = dir.join(RESULTS_FILE);
     let mut done: BTreeSet<u64> = read_jsonl::<Row>(&results, true)?
@@ -352,19 +327,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     let mut active: Vec<u64> = Vec::new();
     let mut flag_rows = Vec::new();
     let (mut n_degenerate, mut n_duplicate) = (0, 0);
-    for ((i, _), flag) in mine.iter().zip(&flags) {
-        let (degenerate, duplicate_of) = match flag {
-            Flag::Ok => (false, None),
-            Flag::Degenerate => (true, None),
-            Flag::DuplicateOf(rep) => {
-                let r = bc::subset_to_index(rep)?;
-                if in_run.contains(&r) {
-                    (false, Some(r))
-                } else {
-                    (false, None) // its representative is not part of this run: score it
-                }
-            }
-        };
+    for ((i, _), &(degenerate, duplicate_of)) in mine.iter().zip(&flags) {
         if !degenerate && duplicate_of.is_none() {
             active.push(*i);
             continue;

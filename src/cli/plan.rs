@@ -1,0 +1,162 @@
+//! The output of `momentlab search --plan`: what the sweep will cost, to size a Slurm job array
+//! (`--array`, `--cpus-per-task`, `--time`) before submitting (docs/search.md).
+
+use crate::search::plan::{Plan, Schedule};
+use crate::search::SweepOptions;
+
+/// Calibration sample: candidates × fragments, solved on one thread (≈ 0.1–1 s).
+pub const CALIBRATION: [usize; 2] = [32, 1024];
+
+/// Safety factor on the estimated time of a task for `--time`.
+const TIME_MARGIN: f64 = 1.5;
+
+/// Print the plan to stdout. `setup` is the seconds it took to build the dataset (each task
+/// pays it again).
+pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
+    let c = &plan.calibration;
+    let threads = rayon::current_num_threads();
+    let shards = opts.shard[1].max(1);
+    println!(
+        "plan: m = {}, {} candidates: {} scored, {} degenerate, {} duplicate spans; {} kept non-trivial fragments",
+        opts.m,
+        count(plan.candidates),
+        count(plan.candidates - plan.degenerate - plan.duplicates),
+        count(plan.degenerate),
+        count(plan.duplicates),
+        count(plan.fragments)
+    );
+    println!(
+        "plan: calibration: {} candidates × {} fragments = {} LP solves in {:.2} s on one thread ({} unsettled) → {} LP solves/s per core",
+        c.candidates,
+        count(c.fragments as u64),
+        count(c.lp_solves),
+        c.seconds,
+        c.failures,
+        count(c.rate().round() as u64)
+    );
+    println!(
+        "plan: {:<28} {:>12} {:>11} {:>18}",
+        "",
+        "LP solves",
+        "core-hours",
+        format!("wall, {threads} threads")
+    );
+    let mut rows: Vec<(String, &[Schedule])> = vec![(
+        format!("racing (keep {})", opts.keep),
+        plan.racing.as_slice(),
+    )];
+    if let Some(r) = &plan.racing_max_keep {
+        rows.push((format!("racing (max-keep {})", opts.max_keep), r.as_slice()));
+    }
+    rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
+    for (name, per) in &rows {
+        let total: u64 = per.iter().map(|s| s.lp_solves).sum();
+        let hours = c.core_hours(total);
+        let chosen = (name == "exhaustive") == opts.exhaustive;
+        println!(
+            "plan: {:<28} {:>12} {:>11} {:>18}",
+            format!("{}{name}", if chosen { "* " } else { "  " }),
+            big(total),
+            format!("{hours:.3}"),
+            duration(setup + hours * 3600.0 / threads as f64)
+        );
+    }
+    if let Some(s) = plan.racing.first().filter(|_| shards == 1) {
+        let stages: Vec<String> = s
+            .stages
+            .iter()
+            .map(|(c, f)| format!("{} × {}", count(*c), count(*f)))
+            .collect();
+        println!(
+            "plan: racing stages (candidates × fragments): {}; then {} on all {} fragments",
+            if stages.is_empty() {
+                "none".to_string()
+            } else {
+                stages.join(", ")
+            },
+            s.full,
+            count(plan.fragments)
+        );
+    }
+    let per = if opts.exhaustive {
+        &plan.exhaustive
+    } else {
+        &plan.racing
+    };
+    let largest = per.iter().map(|s| s.lp_solves).max().unwrap_or(0);
+    let hours = c.core_hours(largest);
+    if shards > 1 {
+        println!(
+            "plan: {shards} shards ({}): the largest task has {} LP solves = {:.3} core-hours (+ {:.0} s setup)",
+            if opts.exhaustive { "exhaustive" } else { "racing, each shard on its own" },
+            big(largest),
+            hours,
+            setup
+        );
+    }
+    let time = TIME_MARGIN * (setup + hours * 3600.0 / threads as f64);
+    println!(
+        "plan: Slurm: --array=0-{} --cpus-per-task={threads} --time={} ({TIME_MARGIN}× the estimate at this machine's speed per core)",
+        shards - 1,
+        slurm_time(time)
+    );
+}
+
+/// 1234567 → "1 234 567".
+fn count(n: u64) -> String {
+    let d = n.to_string();
+    let mut out = String::new();
+    for (i, ch) in d.chars().enumerate() {
+        if i > 0 && (d.len() - i).is_multiple_of(3) {
+            out.push(' ');
+        }
+        out.push(ch);
+    }
+    out
+}
+
+/// LP counts as "38.5 M", "1.01 G".
+fn big(n: u64) -> String {
+    let x = n as f64;
+    match n {
+        0..=99_999 => count(n),
+        100_000..=999_999_999 => format!("{:.3} M", x / 1e6),
+        _ => format!("{:.3} G", x / 1e9),
+    }
+}
+
+fn duration(secs: f64) -> String {
+    let s = secs.max(0.0).round() as u64;
+    match s {
+        0..=119 => format!("{s} s"),
+        120..=7199 => format!("{} min {} s", s / 60, s % 60),
+        _ => format!("{} h {} min", s / 3600, (s % 3600) / 60),
+    }
+}
+
+/// Seconds as Slurm's D-HH:MM:SS, rounded up to whole minutes (at least one).
+fn slurm_time(secs: f64) -> String {
+    let m = ((secs / 60.0).ceil() as u64).max(1);
+    let (d, h, mm) = (m / 1440, (m % 1440) / 60, m % 60);
+    if d > 0 {
+        format!("{d}-{h:02}:{mm:02}:00")
+    } else {
+        format!("{h:02}:{mm:02}:00")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats() {
+        assert_eq!(big(38_500_000), "38.500 M");
+        assert_eq!(big(1_010_000_000), "1.010 G");
+        assert_eq!(big(4_096), "4 096");
+        assert_eq!(slurm_time(1.0), "00:01:00");
+        assert_eq!(slurm_time(3601.0), "01:01:00");
+        assert_eq!(slurm_time(90_000.0), "1-01:00:00");
+        assert_eq!(duration(3725.0), "62 min 5 s");
+    }
+}

@@ -1,0 +1,116 @@
+//! `search --plan` schedules exactly what the sweep then does: on a synthetic dataset, the
+//! planned racing stages, fully scored candidates and LP solves equal the `complete.json` of
+//! real runs (racing, exhaustive, every shard, a candidate subset, several sample sizes); with
+//! max_keep > keep the real count lies within the planned range. The calibration times real
+//! solves.
+
+use momentlab::search::plan::{plan, Plan};
+use momentlab::search::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Scorer, SweepConfig};
+use momentlab::Grid;
+use std::path::PathBuf;
+
+fn table(grid: &Grid) -> FunctionTable {
+    // z, z², z³, sin 2πz, cos 2πz, e^{2z}, 1 − z (degenerate with z), 2z² + 1 (span of z²).
+    let names = ["z", "z^2", "z^3", "s", "c", "e", "1-z", "2z^2+1"];
+    FunctionTable::new(
+        grid,
+        names.iter().map(|s| s.to_string()).collect(),
+        |j, z| match j {
+            0 => z,
+            1 => z * z,
+            2 => z * z * z,
+            3 => (2.0 * std::f64::consts::PI * z).sin(),
+            4 => (2.0 * std::f64::consts::PI * z).cos(),
+            5 => (2.0 * z).exp(),
+            6 => 1.0 - z,
+            _ => 2.0 * z * z + 1.0,
+        },
+    )
+    .unwrap()
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("momentlab-plan-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn actual(cfg: &SweepConfig, s: &Scorer, name: &str) -> momentlab::search::SweepSummary {
+    let dir = tmp(name);
+    let out = run_sweep(cfg, s, &dir, &Hooks::default()).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    match out {
+        Outcome::Complete(s) => s,
+        Outcome::Stopped => panic!("stopped"),
+    }
+}
+
+#[test]
+fn plan_equals_the_sweeps_own_schedule() {
+    let grid = Grid::uniform(24).unwrap();
+    let table = table(&grid);
+    let mut checked = 0;
+    for (texels, first_sample, growth) in [(60, 40, 2), (25, 16, 3)] {
+        let data = Dataset::synthetic(11, &grid, 3, texels, 3).unwrap();
+        let s = Scorer::new(&data, &table, "reference", 16).unwrap();
+        for (m, candidates) in [
+            (2, None),
+            (3, None),
+            (3, Some(vec![0, 5, 9, 13, 20, 21, 30, 55])),
+        ] {
+            for exhaustive in [false, true] {
+                for shards in [1, 3] {
+                    let mut cfg = SweepConfig::new(m, &s, "synthetic");
+                    cfg.top = 4;
+                    cfg.first_sample = first_sample;
+                    cfg.growth = growth;
+                    cfg.pilot = 4;
+                    cfg.exhaustive = exhaustive;
+                    cfg.candidates = candidates.clone();
+                    cfg.shard = [0, shards];
+                    let p: Plan = plan(&cfg, &s, [3, 20]).unwrap();
+                    assert!(p.calibration.lp_solves > 0 && p.calibration.seconds > 0.0);
+                    let per = if exhaustive { &p.exhaustive } else { &p.racing };
+                    assert_eq!(per.len(), shards);
+                    let (mut deg, mut dup) = (0, 0);
+                    for (i, planned) in per.iter().enumerate() {
+                        cfg.shard = [i, shards];
+                        let a = actual(&cfg, &s, &format!("{m}{exhaustive}{shards}{i}"));
+                        assert_eq!(planned.lp_solves, a.lp_solves, "{cfg:?}");
+                        assert_eq!(planned.stages, a.stages, "{cfg:?}");
+                        assert_eq!(planned.full, a.full, "{cfg:?}");
+                        deg += a.degenerate;
+                        dup += a.duplicates;
+                        checked += 1;
+                    }
+                    assert_eq!((p.degenerate, p.duplicates), (deg, dup));
+                    assert!(p.degenerate + p.duplicates > 0 || candidates.is_some());
+                }
+            }
+        }
+    }
+    assert_eq!(checked, 2 * 3 * 2 * 4);
+}
+
+#[test]
+fn max_keep_above_keep_is_a_range() {
+    let grid = Grid::uniform(24).unwrap();
+    let table = table(&grid);
+    let data = Dataset::synthetic(11, &grid, 3, 60, 3).unwrap();
+    let s = Scorer::new(&data, &table, "reference", 16).unwrap();
+    let mut cfg = SweepConfig::new(3, &s, "synthetic");
+    cfg.top = 4;
+    cfg.first_sample = 40;
+    cfg.growth = 2;
+    cfg.pilot = 4;
+    cfg.max_keep = 0.75;
+    cfg.z = 100.0; // every candidate is "not significantly worse": the upper end is reached
+    let p = plan(&cfg, &s, [2, 10]).unwrap();
+    let (lo, hi) = (&p.racing[0], &p.racing_max_keep.as_ref().unwrap()[0]);
+    assert!(lo.lp_solves < hi.lp_solves);
+    let a = actual(&cfg, &s, "maxkeep");
+    assert_eq!(a.lp_solves, hi.lp_solves);
+    cfg.z = 0.0; // nobody beyond the kept fraction: the lower end
+    let a = actual(&cfg, &s, "keep");
+    assert_eq!(a.lp_solves, lo.lp_solves);
+}
