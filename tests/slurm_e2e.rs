@@ -284,6 +284,14 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
         log.contains("momentlab: 1 thread (SLURM_CPUS_PER_TASK)"),
         "{log}"
     );
+    // Progress in batch logs: plain lines with done/total, rate and time; no carriage returns.
+    assert!(!log.contains('\r'), "{log}");
+    let done = "search final: 167 candidates × 1032 fragments: 172 344/172 344 (100.0 %), ";
+    assert!(
+        log.lines()
+            .any(|l| l.starts_with(done) && l.contains("/s, elapsed ")),
+        "{log}"
+    );
 
     // A task that fails on a bad argument: the merge job (afterany, so it runs) refuses.
     let fail = root.join("fail");
