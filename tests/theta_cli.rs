@@ -10,7 +10,15 @@ fn bin() -> Command {
 fn theta2_json_and_snippets() {
     let dir = std::env::temp_dir().join(format!("momentlab_theta_cli_{}", std::process::id()));
     let out = bin()
-        .args(["theta", "--moments", "2", "--restarts", "2", "--snippets"])
+        .args([
+            "theta",
+            "--moments",
+            "2",
+            "--restarts",
+            "2",
+            "--json",
+            "--out",
+        ])
         .arg(&dir)
         .output()
         .unwrap();
@@ -29,6 +37,8 @@ fn theta2_json_and_snippets() {
         "gain_bits",
         "max_violation",
         "seconds",
+        "basin",
+        "best_start",
     ] {
         assert!(v.get(k).is_some(), "missing {k}");
     }
@@ -39,9 +49,21 @@ fn theta2_json_and_snippets() {
         let s = std::fs::read_to_string(dir.join(f)).unwrap();
         assert!(s.contains("ncodeMoments2") && s.contains("ecodeMoments2"));
     }
+    // the JSON file is what was printed; both starts reach the single θ2 basin
+    let file: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("theta2.json")).unwrap()).unwrap();
+    assert_eq!(file, v);
+    assert_eq!(v["basin"]["starts"].as_array().unwrap().len(), 2);
+    // a second run into the same directory refuses to overwrite, before searching
+    let again = bin()
+        .args(["theta", "--moments", "2", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(!again.status.success());
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert!(err.contains("exists") && err.contains("--force"), "{err}");
     // summary over a directory with only θ2: table lists ours and the published ones
-    let j = serde_json::to_string(&v).unwrap();
-    std::fs::write(dir.join("theta2.json"), j).unwrap();
     let out = bin()
         .args(["theta", "--summary"])
         .arg(&dir)
@@ -58,6 +80,28 @@ fn theta2_json_and_snippets() {
 }
 
 #[test]
+fn default_output_is_a_run_directory_under_results() {
+    let cwd = std::env::temp_dir().join(format!("momentlab_theta_cwd_{}", std::process::id()));
+    std::fs::create_dir_all(&cwd).unwrap();
+    let out = bin()
+        .current_dir(&cwd)
+        .args(["theta", "--moments", "2", "--restarts", "1"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(out.stdout.is_empty(), "JSON on stdout only with --json");
+    for f in ["theta2.json", "theta2.hlsl", "theta2.glsl"] {
+        assert!(cwd.join("results/theta2-seed1").join(f).exists(), "{f}");
+    }
+    assert!(!cwd.join("reports").exists());
+    let _ = std::fs::remove_dir_all(&cwd);
+}
+
+#[test]
 fn bad_input_gives_one_line_errors() {
     for args in [
         vec!["theta", "--moments", "0"],
@@ -65,6 +109,18 @@ fn bad_input_gives_one_line_errors() {
         vec!["theta", "--basis", "z,2*z"],
         vec!["theta", "--basis", "z,no_such_function(z"],
         vec!["theta", "--moments", "2", "--restarts", "0"],
+        vec![
+            "theta",
+            "--moments",
+            "2",
+            "--restarts",
+            "4",
+            "--starts",
+            "4",
+        ],
+        vec!["theta", "--moments", "2", "--starts", "x"],
+        vec!["theta", "--moments", "2", "--hop-sigma", "0"],
+        vec!["theta", "--moments", "2", "--max-sweeps", "0"],
         vec!["theta"],
     ] {
         let out = bin().args(&args).output().unwrap();

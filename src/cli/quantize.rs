@@ -1,10 +1,12 @@
 //! `momentlab quantize`: quantized moment shadow maps on the depth stacks. Error against PCF
 //! over the bias α for canonical / optimized (θ) storage at 8 and 16 bits and 32-bit float,
-//! for VSM (θ₂), Hamburger 4MSM (θ₄) and 6MSM (θ₆).
+//! for VSM (θ₂), Hamburger 4MSM (θ₄), 6MSM (θ₆) and 8 moments (θ₈): ours from --theta-dir,
+//! the published θ₂/θ₄/θ₆ beside them.
 
 use crate::metrics::{Bias, Subsample};
+use crate::quantize::curve::MonomialCurve;
 use crate::quantize::study::{identity_theta, sweep, Config, Storage, Sweep, Tech};
-use crate::quantize::theta::{published, Theta};
+use crate::quantize::theta::{published, verify, Theta};
 use anyhow::{bail, Context, Result};
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -12,30 +14,47 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Directory of depth stacks (.exr + .json).
-    #[arg(long, default_value = "stacks/default")]
-    pub stacks: PathBuf,
-    /// Directory with our θ (theta2.json, theta4.json, theta6.json from `momentlab theta`).
+    /// Directory of depth stacks (.exr + .json); default: render the embedded default dataset.
+    #[arg(long)]
+    pub stacks: Option<PathBuf>,
+    /// Shadow-map resolution when rendering the default dataset, 1..=8192.
+    #[arg(long, default_value_t = 512)]
+    pub resolution: usize,
+    /// Directory with our θ (theta{m}.json from `momentlab theta`) for every technique run;
+    /// a missing file is an error.
     #[arg(long, default_value = "reports/theta")]
     pub theta_dir: PathBuf,
+    /// Comma-separated techniques: vsm (θ₂), 4msm (θ₄), 6msm (θ₆), 8msm (θ₈).
+    #[arg(long, default_value = "vsm,4msm,6msm,8msm")]
+    pub techniques: String,
     /// Output directory (quantize.json, quantize.md, quantize_alpha.svg).
-    #[arg(long, default_value = "reports/theta/quantize")]
+    #[arg(long, default_value = "results/quantize")]
     pub out: PathBuf,
-    /// Evaluate every k-th fragment only.
+    /// Overwrite existing output files (otherwise a name clash is an error).
+    #[arg(long)]
+    pub force: bool,
+    /// Evaluate every k-th fragment only, 1..=1000000.
     #[arg(long, default_value_t = 1)]
     pub stride: usize,
-    /// Comma-separated bias strengths α (> 0).
+    /// Comma-separated bias strengths α in (0, 1).
     #[arg(long, default_value = DEFAULT_ALPHAS)]
     pub alphas: String,
+    /// Print the sweeps as JSON on stdout instead of the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The bias strengths α of the study.
 pub const DEFAULT_ALPHAS: &str = "1e-8,3e-8,1e-7,3e-7,1e-6,3e-6,1e-5,3e-5,1e-4,3e-4,1e-3,3e-3,1e-2";
 
-fn load_theta(dir: &Path, m: usize) -> Result<Option<Theta>> {
+fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
     let p = dir.join(format!("theta{m}.json"));
-    if !p.exists() {
-        return Ok(None);
+    if !p.is_file() {
+        bail!(
+            "--theta-dir: {} not found (create it with `momentlab theta --moments {m} --out {}`)",
+            p.display(),
+            dir.display()
+        );
     }
     let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
     #[derive(serde::Deserialize)]
@@ -49,7 +68,63 @@ fn load_theta(dir: &Path, m: usize) -> Result<Option<Theta>> {
     if th.m() != m {
         bail!("{}: expected m = {m}, got {}", p.display(), th.m());
     }
-    Ok(Some(th))
+    let curve = MonomialCurve::power(m)?;
+    let v = verify(&th, &curve)?;
+    if v.max_violation > 1e-6 {
+        bail!(
+            "{}: θ(b([0,1])) leaves [0,1]^{m} by {:.2e} (exact verifier)",
+            p.display(),
+            v.max_violation
+        );
+    }
+    Ok(th)
+}
+
+fn configs(tech: Tech, ours: &Theta) -> Vec<Config> {
+    let m = tech.m();
+    let mut configs = vec![
+        Config {
+            name: "canonical 8-bit".into(),
+            theta: identity_theta(m),
+            storage: Storage::Unorm(8),
+        },
+        Config {
+            name: "canonical 16-bit".into(),
+            theta: identity_theta(m),
+            storage: Storage::Unorm(16),
+        },
+        Config {
+            name: "32-bit float".into(),
+            theta: identity_theta(m),
+            storage: Storage::Float32,
+        },
+    ];
+    for (label, th) in [("ours", Some(ours.clone())), ("published", published(m))] {
+        if let Some(th) = th {
+            for bits in [8, 16] {
+                configs.push(Config {
+                    name: format!("optimized {bits}-bit ({label} θ{m})"),
+                    theta: th.clone(),
+                    storage: Storage::Unorm(bits),
+                });
+            }
+        }
+    }
+    configs
+}
+
+fn load_stacks(args: &Args) -> Result<Vec<crate::stack::DepthStack>> {
+    match &args.stacks {
+        Some(dir) => crate::stack::load_dir(dir)
+            .with_context(|| format!("loading stacks from {}", dir.display())),
+        None => {
+            eprintln!(
+                "rendering the default dataset at {0}×{0} …",
+                args.resolution
+            );
+            crate::render::default_dataset(args.resolution)
+        }
+    }
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -64,11 +139,38 @@ pub fn run(args: Args) -> Result<()> {
                 .with_context(|| format!("--alphas: '{s}' is not a number in (0, 1)"))
         })
         .collect::<Result<_>>()?;
-    if args.stride == 0 {
-        bail!("--stride must be >= 1");
+    if !(1..=1_000_000).contains(&args.stride) {
+        bail!("--stride must be in 1..=1000000, got {}", args.stride);
     }
-    let stacks = crate::stack::load_dir(&args.stacks)
-        .with_context(|| format!("loading stacks from {}", args.stacks.display()))?;
+    if args.stacks.is_none() && !(1..=8192).contains(&args.resolution) {
+        bail!("--resolution must be in 1..=8192, got {}", args.resolution);
+    }
+    let techs: Vec<Tech> = args
+        .techniques
+        .split(',')
+        .map(|t| {
+            Tech::parse(t)
+                .with_context(|| format!("--techniques: '{t}' is not one of vsm, 4msm, 6msm, 8msm"))
+        })
+        .collect::<Result<_>>()?;
+    let files = ["quantize.json", "quantize.md", "quantize_alpha.svg"].map(|f| args.out.join(f));
+    if !args.force {
+        if let Some(f) = files.iter().find(|f| f.exists()) {
+            bail!(
+                "{} exists; choose another --out or pass --force to overwrite",
+                f.display()
+            );
+        }
+    }
+    // every θ before any expensive work
+    let thetas: Vec<Theta> = techs
+        .iter()
+        .map(|t| load_theta(&args.theta_dir, t.m()))
+        .collect::<Result<_>>()?;
+    let stacks = load_stacks(&args)?;
+    if stacks.is_empty() {
+        bail!("no depth stacks to evaluate");
+    }
     let sub = if args.stride > 1 {
         Subsample::Stride(args.stride)
     } else {
@@ -76,38 +178,8 @@ pub fn run(args: Args) -> Result<()> {
     };
     let t0 = Instant::now();
     let mut all: Vec<Sweep> = Vec::new();
-    for tech in [Tech::Vsm, Tech::Msm4, Tech::Msm6] {
-        let m = tech.m();
-        let ours = load_theta(&args.theta_dir, m)?;
-        let pubd = published(m);
-        let mut configs = vec![
-            Config {
-                name: "canonical 8-bit".into(),
-                theta: identity_theta(m),
-                storage: Storage::Unorm(8),
-            },
-            Config {
-                name: "canonical 16-bit".into(),
-                theta: identity_theta(m),
-                storage: Storage::Unorm(16),
-            },
-            Config {
-                name: "32-bit float".into(),
-                theta: identity_theta(m),
-                storage: Storage::Float32,
-            },
-        ];
-        for (label, th) in [("ours", ours), ("published", pubd)] {
-            if let Some(th) = th {
-                for bits in [8, 16] {
-                    configs.push(Config {
-                        name: format!("optimized {bits}-bit ({label} θ{m})"),
-                        theta: th.clone(),
-                        storage: Storage::Unorm(bits),
-                    });
-                }
-            }
-        }
+    for (tech, ours) in techs.iter().zip(&thetas) {
+        let configs = configs(*tech, ours);
         eprintln!(
             "quantize: {} ({} configurations)...",
             tech.name(),
@@ -115,33 +187,95 @@ pub fn run(args: Args) -> Result<()> {
         );
         all.extend(sweep(
             &stacks,
-            tech,
+            *tech,
             &configs,
             &alphas,
             &Bias::default(),
             &sub,
         )?);
     }
+    if all.first().is_none_or(|s| s.fragments == 0) {
+        bail!("the depth stacks have no fragments to evaluate (empty or all background)");
+    }
     let seconds = t0.elapsed().as_secs_f64();
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("creating {}", args.out.display()))?;
+    let stacks_label = args.stacks.as_ref().map_or_else(
+        || format!("default dataset rendered at {0}×{0}", args.resolution),
+        |p| p.display().to_string(),
+    );
+    let usable = usability(&all);
     let json = serde_json::json!({
-        "stacks": args.stacks, "views": stacks.len(), "stride": args.stride,
+        "stacks": stacks_label, "views": stacks.len(), "stride": args.stride,
+        "theta_dir": args.theta_dir,
         "b_star": "1/2 in every moment", "precision": "f64 reconstruction",
-        "seconds": seconds, "sweeps": all,
+        "seconds": seconds, "sweeps": all, "usable_16bit": usable,
     });
-    let p = args.out.join("quantize.json");
-    std::fs::write(&p, serde_json::to_string_pretty(&json)? + "\n")
-        .with_context(|| format!("writing {}", p.display()))?;
+    let text = serde_json::to_string_pretty(&json)? + "\n";
+    std::fs::write(&files[0], &text).with_context(|| format!("writing {}", files[0].display()))?;
+    let md = markdown(
+        &all,
+        &usable,
+        &stacks_label,
+        stacks.len(),
+        args.stride,
+        &alphas,
+    );
+    std::fs::write(&files[1], &md).with_context(|| format!("writing {}", files[1].display()))?;
+    std::fs::write(&files[2], plot(&all)?)
+        .with_context(|| format!("writing {}", files[2].display()))?;
+    if args.json {
+        print!("{text}");
+    } else {
+        print!("{md}");
+    }
+    eprintln!("quantize: {seconds:.1} s, wrote {}", args.out.display());
+    Ok(())
+}
+
+/// Factor by which 16-bit storage may exceed the 32-bit float deviation and still count as
+/// usable, and the absolute floor (mean |G − G_exact|) below which it always counts.
+const USABLE_FACTOR: f64 = 2.0;
+const USABLE_FLOOR: f64 = 1e-3;
+
+/// For every 16-bit configuration: the smallest α at which its deviation from unquantized
+/// moments is at most max(USABLE_FACTOR × the 32-bit float deviation at that α, USABLE_FLOOR).
+fn usability(all: &[Sweep]) -> Vec<serde_json::Value> {
+    let mut out = Vec::new();
+    for s in all.iter().filter(|s| s.config.contains("16-bit")) {
+        let Some(f32s) = all
+            .iter()
+            .find(|f| f.technique == s.technique && f.config == "32-bit float")
+        else {
+            continue;
+        };
+        let k = (0..s.alphas.len())
+            .find(|&i| s.deviation[i] <= (USABLE_FACTOR * f32s.deviation[i]).max(USABLE_FLOOR));
+        out.push(serde_json::json!({
+            "technique": s.technique, "config": s.config,
+            "smallest_usable_alpha": k.map(|i| s.alphas[i]),
+            "deviation_there": k.map(|i| s.deviation[i]),
+            "error_there": k.map(|i| s.errors[i]),
+            "f32_error_there": k.map(|i| f32s.errors[i]),
+        }));
+    }
+    out
+}
+
+fn markdown(
+    all: &[Sweep],
+    usable: &[serde_json::Value],
+    stacks: &str,
+    views: usize,
+    stride: usize,
+    alphas: &[f64],
+) -> String {
     let i3 = alphas.iter().position(|&a| (a - 3e-5).abs() < 1e-12);
     let mut md = format!(
-        "Mean |G − PCF| over {} fragments of {} views ({}), stride {}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone).\n\n| technique | storage | best α | error at best α | error at α = 3e-5 | deviation at best α | deviation at α = 3e-5 | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
+        "Mean |G − PCF| over {} fragments of {views} views ({stacks}), stride {stride}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone).\n\n| technique | storage | best α | error at best α | error at α = 3e-5 | deviation at best α | deviation at α = 3e-5 | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
         all.first().map_or(0, |s| s.fragments),
-        stacks.len(),
-        args.stacks.display(),
-        args.stride
     );
-    for s in &all {
+    for s in all {
         let k = s
             .alphas
             .iter()
@@ -159,24 +293,46 @@ pub fn run(args: Args) -> Result<()> {
             s.non_finite[k]
         ));
     }
-    let p = args.out.join("quantize.md");
-    std::fs::write(&p, &md).with_context(|| format!("writing {}", p.display()))?;
-    let p = args.out.join("quantize_alpha.svg");
-    std::fs::write(&p, plot(&all)?).with_context(|| format!("writing {}", p.display()))?;
-    print!("{md}");
-    eprintln!("quantize: {seconds:.1} s, wrote {}", args.out.display());
-    Ok(())
+    md.push_str(&format!(
+        "\n16-bit storage counted as usable from the smallest α at which its deviation is at most max({USABLE_FACTOR} × the 32-bit float deviation, {USABLE_FLOOR:.0e}):\n\n| technique | storage | smallest usable α | deviation there | error there | 32-bit float error there |\n|---|---|---|---|---|---|\n"
+    ));
+    for u in usable {
+        let f = |k: &str, p: &str| {
+            u[k].as_f64().map_or("never".to_string(), |v| match p {
+                "e" => format!("{v:.0e}"),
+                "d" => format!("{v:.2e}"),
+                _ => format!("{v:.5}"),
+            })
+        };
+        md.push_str(&format!(
+            "| {} | {} | {} | {} | {} | {} |\n",
+            u["technique"].as_str().unwrap_or(""),
+            u["config"].as_str().unwrap_or(""),
+            f("smallest_usable_alpha", "e"),
+            f("deviation_there", "d"),
+            f("error_there", "f"),
+            f("f32_error_there", "f"),
+        ));
+    }
+    md
 }
 
 /// Error against α (log–log), one panel per technique, one line per storage configuration.
 fn plot(all: &[Sweep]) -> Result<String> {
     let mut out = String::new();
     {
-        let root = SVGBackend::with_string(&mut out, (1500, 500)).into_drawing_area();
+        let mut techs: Vec<&str> = Vec::new();
+        for s in all {
+            if !techs.contains(&s.technique.as_str()) {
+                techs.push(&s.technique);
+            }
+        }
+        let n = techs.len().max(1);
+        let root = SVGBackend::with_string(&mut out, (500 * n as u32, 500)).into_drawing_area();
         root.fill(&WHITE)
             .map_err(|e| anyhow::anyhow!("plot: {e}"))?;
-        let panels = root.split_evenly((1, 3));
-        for (area, tech) in panels.iter().zip(["vsm", "4msm", "6msm"]) {
+        let panels = root.split_evenly((1, n));
+        for (area, tech) in panels.iter().zip(techs) {
             let sw: Vec<&Sweep> = all.iter().filter(|s| s.technique == tech).collect();
             if sw.is_empty() {
                 continue;

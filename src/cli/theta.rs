@@ -1,5 +1,6 @@
 //! `momentlab theta`: optimal affine quantization transform θ for a basis (Section 4.3 of the
-//! 2015 paper). JSON to stdout or --output; HLSL/GLSL snippets to --snippets DIR.
+//! 2015 paper). theta{m}.json and HLSL/GLSL snippets into --out DIR
+//! (default a run directory under results/; never overwrites without --force).
 
 use crate::basis::Catalog;
 use crate::progress::Bar;
@@ -11,38 +12,49 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Instead of searching: read DIR/theta{2,3,4,6}.json, re-verify them and the published
+    /// Instead of searching: read DIR/theta{2,…,8}.json (those present), re-verify them and the published
     /// θ₂/θ₄/θ₆, write DIR/comparison.md, DIR/summary.json and the Fig. 5 analogue
-    /// (DIR/fig5.svg, DIR/fig5.json).
+    /// (DIR/fig5.svg).
     #[arg(long, conflicts_with_all = ["moments", "basis"])]
     pub summary: Option<PathBuf>,
-    /// Power basis (z, z², …, z^m).
+    /// Power basis (z, z², …, z^m), m in 1..=12.
     #[arg(long, conflicts_with = "basis")]
     pub moments: Option<usize>,
     /// Comma-separated catalog names or formulas ("z,z^2,exp(2z)").
     #[arg(long)]
     pub basis: Option<String>,
-    /// Seed of the random starts.
+    /// Seed of the random starts (start k uses its own stream derived from seed and k).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Number of independent random starts.
+    /// Number of independent random starts, 1..=100000.
     #[arg(long, default_value_t = 16)]
     pub restarts: usize,
-    /// Maximum sweeps over all rows per start.
+    /// Run only these start indices of the seeded search (comma-separated, each below
+    /// --restarts): re-runs e.g. the starts that reached the best basin.
+    #[arg(long)]
+    pub starts: Option<String>,
+    /// Maximum sweeps over all rows per start, 1..=100000.
     #[arg(long, default_value_t = 400)]
     pub max_sweeps: usize,
-    /// Basin-hopping steps per start (perturb, re-ascend, keep if better).
+    /// Basin-hopping steps per start (perturb, re-ascend, keep if better), 0..=10000.
     #[arg(long, default_value_t = 0)]
     pub hops: usize,
-    /// Relative size of the basin-hopping perturbation.
+    /// Relative size of the basin-hopping perturbation, in (0, 10].
     #[arg(long, default_value_t = 0.2)]
     pub hop_sigma: f64,
-    /// Write the JSON here instead of stdout.
+    /// Starts within this many bits of the best count as reaching the best basin.
+    #[arg(long, default_value_t = 1e-3)]
+    pub basin_tol: f64,
+    /// Output directory for theta{m}.json and the HLSL/GLSL snippets theta{m}.hlsl|glsl
+    /// (default results/theta-m{m}-seed{seed}; for --basis a hash of the names replaces m).
     #[arg(long)]
-    pub output: Option<PathBuf>,
-    /// Directory for the HLSL/GLSL snippets (default reports/theta).
-    #[arg(long, default_value = "reports/theta")]
-    pub snippets: PathBuf,
+    pub out: Option<PathBuf>,
+    /// Overwrite existing output files (otherwise a name clash is an error).
+    #[arg(long)]
+    pub force: bool,
+    /// Also print the JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The curve for --moments / --basis: exact monomials when every name is "z" or "z^k",
@@ -94,35 +106,113 @@ fn snippet_tag(curve: &dyn Curve) -> String {
     }
 }
 
-pub fn run(args: Args) -> Result<()> {
-    if let Some(dir) = &args.summary {
-        return summary(dir);
+/// Parse and range-check the search options (before any work).
+fn options(args: &Args) -> Result<optimize::Options> {
+    if !(1..=100_000).contains(&args.restarts) {
+        bail!("--restarts must be in 1..=100000, got {}", args.restarts);
     }
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
-    let curve = build_curve(args.moments, args.basis.as_deref())?;
-    let m = curve.dim();
-    let opts = optimize::Options {
+    if !(1..=100_000).contains(&args.max_sweeps) {
+        bail!(
+            "--max-sweeps must be in 1..=100000, got {}",
+            args.max_sweeps
+        );
+    }
+    if args.hops > 10_000 {
+        bail!("--hops must be in 0..=10000, got {}", args.hops);
+    }
+    if !(args.hop_sigma > 0.0 && args.hop_sigma <= 10.0) {
+        bail!("--hop-sigma must be in (0, 10], got {}", args.hop_sigma);
+    }
+    if !(args.basin_tol >= 0.0 && args.basin_tol <= 1.0) {
+        bail!("--basin-tol must be in [0, 1] bits, got {}", args.basin_tol);
+    }
+    let only_starts = match &args.starts {
+        None => None,
+        Some(list) => {
+            let v = list
+                .split(',')
+                .map(|s| {
+                    s.trim()
+                        .parse::<usize>()
+                        .ok()
+                        .filter(|&k| k < args.restarts)
+                        .with_context(|| {
+                            format!(
+                                "--starts: '{s}' is not a start index below --restarts {}",
+                                args.restarts
+                            )
+                        })
+                })
+                .collect::<Result<Vec<_>>>()?;
+            Some(v)
+        }
+    };
+    Ok(optimize::Options {
         seed: args.seed,
         restarts: args.restarts,
         max_sweeps: args.max_sweeps,
         hops: args.hops,
         hop_sigma: args.hop_sigma,
+        only_starts,
         ..Default::default()
-    };
-    let pb = Bar::new(&format!("theta m={m} starts"), args.restarts as u64);
+    })
+}
+
+/// CPU seconds (user + system) of this process so far, from /proc/self/stat (Linux; clock
+/// ticks of 1/100 s); None elsewhere.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let rest = &s[s.rfind(')')? + 2..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // fields after the command: state is index 0, utime 11, stime 12
+    let ut: f64 = f.get(11)?.parse().ok()?;
+    let st: f64 = f.get(12)?.parse().ok()?;
+    Some((ut + st) / 100.0)
+}
+
+pub fn run(args: Args) -> Result<()> {
+    if let Some(dir) = &args.summary {
+        return summary(dir);
+    }
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let opts = options(&args)?;
+    let curve = build_curve(args.moments, args.basis.as_deref())?;
+    let m = curve.dim();
+    let tag = snippet_tag(curve.as_ref());
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("results/theta{tag}-seed{}", args.seed)));
+    let files: Vec<PathBuf> = ["json", "hlsl", "glsl"]
+        .iter()
+        .map(|e| dir.join(format!("theta{tag}.{e}")))
+        .collect();
+    if !args.force {
+        if let Some(f) = files.iter().find(|f| f.exists()) {
+            bail!(
+                "{} exists; choose another --out or pass --force to overwrite",
+                f.display()
+            );
+        }
+    }
+    let n_starts = opts.only_starts.as_ref().map_or(opts.restarts, |v| v.len());
+    let pb = Bar::new(&format!("theta m={m} starts"), n_starts as u64);
     let t0 = Instant::now();
+    let cpu0 = process_cpu_seconds();
     let best = std::sync::Mutex::new(f64::NEG_INFINITY);
     let out = optimize::optimize(curve.as_ref(), &opts, &|_k, g| {
-        let mut b = best.lock().unwrap();
+        let mut b = best.lock().unwrap_or_else(|e| e.into_inner());
         *b = b.max(g);
         pb.set_label(&format!("theta m={m} starts (best {:.4} bits)", *b));
         pb.inc(1);
     })?;
     pb.finish();
     let seconds = t0.elapsed().as_secs_f64();
+    let cpu_seconds = process_cpu_seconds().zip(cpu0).map(|(a, b)| a - b);
     let th = &out.theta;
     let ver = theta::verify(th, curve.as_ref())?;
     let gain = th.gain_bits();
+    let basin = optimize::basin(&out.start_gains, &out.start_indices, args.basin_tol);
     let power = matches!(curve.monomial_exponents(), Some(e) if e.iter().copied().eq(1..=m as u32));
     let mut j = json!({
         "m": m,
@@ -132,12 +222,19 @@ pub fn run(args: Args) -> Result<()> {
         "inverse": th.inverse,
         "gain_bits": gain,
         "max_violation": ver.max_violation,
+        "row_ranges": ver.row_ranges,
         "seconds": seconds,
+        "cpu_seconds": cpu_seconds,
+        "threads": rayon::current_num_threads(),
         "exact_verification": ver.exact,
         "seed": args.seed,
         "restarts": args.restarts,
         "hops": args.hops,
+        "hop_sigma": args.hop_sigma,
+        "start_indices": out.start_indices,
         "start_gains_bits": out.start_gains,
+        "best_start": out.best_start,
+        "basin": basin,
         "lps_solved": out.lps,
         "command": command,
     });
@@ -149,29 +246,29 @@ pub fn run(args: Args) -> Result<()> {
             j["published_gain_bits"] = json!(p.gain_bits());
         }
     }
-    let text = serde_json::to_string_pretty(&j)?;
-    match &args.output {
-        Some(p) => {
-            if let Some(d) = p.parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
-            }
-            std::fs::write(p, text + "\n").with_context(|| format!("writing {}", p.display()))?
-        }
-        None => println!("{text}"),
-    }
-    std::fs::create_dir_all(&args.snippets)
-        .with_context(|| format!("creating {}", args.snippets.display()))?;
-    let tag = snippet_tag(curve.as_ref());
+    let text = serde_json::to_string_pretty(&j)? + "\n";
+    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
+    std::fs::write(&files[0], &text).with_context(|| format!("writing {}", files[0].display()))?;
     let exps = curve.monomial_exponents();
-    for (lang, ext) in [(codegen::Lang::Hlsl, "hlsl"), (codegen::Lang::Glsl, "glsl")] {
-        let p = args.snippets.join(format!("theta{tag}.{ext}"));
-        std::fs::write(&p, codegen::snippet(th, exps.as_deref(), &tag, gain, lang))
-            .with_context(|| format!("writing {}", p.display()))?;
+    for (lang, f) in [
+        (codegen::Lang::Hlsl, &files[1]),
+        (codegen::Lang::Glsl, &files[2]),
+    ] {
+        std::fs::write(f, codegen::snippet(th, exps.as_deref(), &tag, gain, lang))
+            .with_context(|| format!("writing {}", f.display()))?;
+    }
+    if args.json {
+        print!("{text}");
     }
     eprintln!(
-        "theta m={m}: {gain:.6} bits, max violation {:.3e}, {seconds:.1} s, snippets in {}",
+        "theta m={m}: {gain:.6} bits, max violation {:.3e}, {seconds:.1} s wall{}, best basin \
+         reached by {}/{} starts (within {} bits), wrote {}",
         ver.max_violation,
-        args.snippets.display()
+        cpu_seconds.map_or(String::new(), |c| format!(" ({c:.1} s CPU)")),
+        basin.starts.len(),
+        n_starts,
+        args.basin_tol,
+        dir.display()
     );
     Ok(())
 }
@@ -204,9 +301,17 @@ fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json
 fn summary(dir: &std::path::Path) -> Result<()> {
     // quoted gains: 2015 paper Section 4.3 (θ2 2, θ3 6.2, θ4 12.2783), 2016 supplementary
     // Section 3 (θ6 30.511 / "30.5")
-    let quoted = [(2usize, "2"), (3, "6.2"), (4, "12.2783"), (6, "30.511")];
+    let quoted = [
+        (2usize, "2"),
+        (3, "6.2"),
+        (4, "12.2783"),
+        (5, "—"),
+        (6, "30.511"),
+        (7, "—"),
+        (8, "—"),
+    ];
     let mut md = String::from(
-        "| m | ours: gain (bits) | ours: time (s) | ours: max violation | published: gain (our verifier) | published: max violation | quoted in paper | volume bound (bits) | headroom ours (bits) |\n|---|---|---|---|---|---|---|---|---|\n",
+        "| m | ours: gain (bits) | ours: wall s | ours: CPU s | starts reaching the best (±basin tol) | runner-up basin (bits) | ours: max violation | published: gain (our verifier) | published: max violation | quoted in paper | volume bound (bits) | headroom ours (bits) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n",
     );
     let mut rows = Vec::new();
     let mut commands = String::new();
@@ -214,8 +319,11 @@ fn summary(dir: &std::path::Path) -> Result<()> {
         let curve = curve::MonomialCurve::power(m)?;
         let ours = read_theta(&dir.join(format!("theta{m}.json")))?;
         let pubd = theta::published(m);
+        if ours.is_none() && pubd.is_none() && q == "—" {
+            continue;
+        }
         let bound = volume::volume_bound_bits(m);
-        let (og, ov, ot) = match &ours {
+        let (og, ov, ot, oc) = match &ours {
             Some((th, v)) => {
                 let ver = theta::verify(th, &curve)?;
                 if let Some(c) = v.get("command").and_then(|c| c.as_str()) {
@@ -225,10 +333,24 @@ fn summary(dir: &std::path::Path) -> Result<()> {
                     Some(th.gain_bits()),
                     Some(ver.max_violation),
                     v.get("seconds").and_then(|s| s.as_f64()),
+                    v.get("cpu_seconds").and_then(|s| s.as_f64()),
                 )
             }
-            None => (None, None, None),
+            None => (None, None, None, None),
         };
+        let basin = ours.as_ref().and_then(|(_, v)| v.get("basin").cloned());
+        let share = basin.as_ref().map_or("—".to_string(), |b| {
+            let n = b["starts"].as_array().map_or(0, |a| a.len());
+            let tot = ours
+                .as_ref()
+                .and_then(|(_, v)| v["start_gains_bits"].as_array().map(|a| a.len()))
+                .unwrap_or(0);
+            format!("{n}/{tot} (±{})", b["tol_bits"])
+        });
+        let runner = basin
+            .as_ref()
+            .and_then(|b| b["runner_up_bits"].as_f64())
+            .map_or("—".to_string(), |v| format!("{v:.5}"));
         let (pg, pv) = match &pubd {
             Some(th) => (
                 Some(th.gain_bits()),
@@ -239,16 +361,18 @@ fn summary(dir: &std::path::Path) -> Result<()> {
         let f = |x: Option<f64>, p: usize| x.map_or("—".to_string(), |v| format!("{v:.p$}"));
         let e = |x: Option<f64>| x.map_or("—".to_string(), |v| format!("{v:.2e}"));
         md.push_str(&format!(
-            "| {m} | {} | {} | {} | {} | {} | {q} | {bound:.4} | {} |\n",
+            "| {m} | {} | {} | {} | {share} | {runner} | {} | {} | {} | {q} | {bound:.4} | {} |\n",
             f(og, 7),
             f(ot, 1),
+            f(oc, 1),
             e(ov),
             f(pg, 7),
             e(pv),
             f(og.map(|g| bound - g), 4)
         ));
         rows.push(json!({
-            "m": m, "ours_gain_bits": og, "ours_seconds": ot, "ours_max_violation": ov,
+            "m": m, "ours_gain_bits": og, "ours_seconds": ot, "ours_cpu_seconds": oc,
+            "ours_max_violation": ov, "basin": basin,
             "published_gain_bits": pg, "published_max_violation": pv, "quoted": q,
             "volume_bound_bits": bound, "headroom_bits": og.map(|g| bound - g),
         }));

@@ -13,11 +13,24 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
     if out.join("quantize.json").exists() {
         return Ok(());
     }
+    // every technique whose θ the run computed
+    let techniques: Vec<&str> = [(2, "vsm"), (4, "4msm"), (6, "6msm"), (8, "8msm")]
+        .into_iter()
+        .filter(|(m, _)| theta_dir.join(format!("theta{m}.json")).is_file())
+        .map(|(_, t)| t)
+        .collect();
+    if techniques.is_empty() {
+        return Ok(());
+    }
     quantize::run(quantize::Args {
-        stacks: stacks.to_path_buf(),
+        stacks: Some(stacks.to_path_buf()),
+        resolution: plan.resolution,
         theta_dir: theta_dir.to_path_buf(),
+        techniques: techniques.join(","),
         out: out.to_path_buf(),
+        force: true,
         stride: plan.quantize_stride,
         alphas: quantize::DEFAULT_ALPHAS.to_string(),
+        json: false,
     })
 }

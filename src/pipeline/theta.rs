@@ -14,27 +14,46 @@ use std::path::Path;
 /// One θ of the run: (m, entropy gain in bits, max violation, seconds).
 pub type ThetaRow = (usize, f64, f64, f64);
 
+fn args(m: usize, restarts: usize, dir: &Path) -> theta::Args {
+    theta::Args {
+        summary: None,
+        moments: Some(m),
+        basis: None,
+        seed: 1,
+        restarts,
+        starts: None,
+        max_sweeps: 400,
+        hops: 0,
+        hop_sigma: 0.2,
+        basin_tol: 1e-3,
+        out: Some(dir.to_path_buf()),
+        force: true,
+        json: false,
+    }
+}
+
 /// Compute the missing θ_m into `dir`, write the summary, return one row per m.
 pub fn run(plan: &Plan, dir: &Path) -> Result<Vec<ThetaRow>> {
     std::fs::create_dir_all(dir)?;
-    let mut rows = Vec::new();
+    let mut runs: Vec<(usize, theta::Args)> = Vec::new();
     for &m in &plan.theta_moments {
+        let mut a = args(m, plan.theta_restarts, dir);
+        if m >= 4 {
+            // Basin hopping for m ≥ 4, where few single ascents end in poorer local optima.
+            (a.hops, a.hop_sigma) = (10, 0.3);
+        }
+        runs.push((m, a));
+    }
+    for &(m, restarts, start) in &plan.theta_best_starts {
+        let mut a = args(m, restarts, dir);
+        a.starts = Some(start.to_string());
+        runs.push((m, a));
+    }
+    let mut rows = Vec::new();
+    for (m, a) in runs {
         let file = dir.join(format!("theta{m}.json"));
         if !file.exists() {
-            // Basin hopping for m ≥ 4, where single ascents end in poorer local optima.
-            let (hops, hop_sigma) = if m >= 4 { (10, 0.3) } else { (0, 0.2) };
-            theta::run(theta::Args {
-                summary: None,
-                moments: Some(m),
-                basis: None,
-                seed: 1,
-                restarts: plan.theta_restarts,
-                max_sweeps: 400,
-                hops,
-                hop_sigma,
-                output: Some(file.clone()),
-                snippets: dir.to_path_buf(),
-            })?;
+            theta::run(a)?;
         }
         #[derive(Deserialize)]
         struct T {
@@ -45,17 +64,9 @@ pub fn run(plan: &Plan, dir: &Path) -> Result<Vec<ThetaRow>> {
         let t: T = read_json(&file)?;
         rows.push((m, t.gain_bits, t.max_violation, t.seconds));
     }
-    theta::run(theta::Args {
-        summary: Some(dir.to_path_buf()),
-        moments: None,
-        basis: None,
-        seed: 1,
-        restarts: 16,
-        max_sweeps: 400,
-        hops: 0,
-        hop_sigma: 0.2,
-        output: None,
-        snippets: dir.to_path_buf(),
-    })?;
+    let mut s = args(2, 1, dir);
+    s.summary = Some(dir.to_path_buf());
+    s.moments = None;
+    theta::run(s)?;
     Ok(rows)
 }

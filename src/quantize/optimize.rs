@@ -5,10 +5,13 @@
 //! min_z a·b(z) ≤ 1} is convex and symmetric, so the best row given the others is the LP
 //! max c_i·a s.t. 0 ≤ a·b(z) + t ≤ 1. The semi-infinite constraint is handled by cutting
 //! planes: solve on a finite set of z, ask the curve's extrema oracle (exact derivative roots
-//! for polynomials) for the true extrema, add the violated ones, repeat. Work happens in a
-//! whitened coordinate system q = W(b − μ) (covariance of b over Chebyshev nodes = I), which
-//! keeps the LPs well conditioned; the result is mapped back and verified in the original
-//! basis. Independent random restarts run in parallel (rayon); the best is kept. A final
+//! for polynomials) for the true extrema, add the violated ones, repeat. Work happens in
+//! well-conditioned coordinates q = W(b − μ): for the power basis (z, …, z^m) the shifted
+//! Chebyshev polynomials q_k = T_k(2z − 1) (W exact integers), for other bases b whitened by
+//! its covariance over Chebyshev nodes; the result is mapped back to b (matrix and offset) and
+//! verified there. Independent random starts run in parallel (rayon), each with its own RNG
+//! stream derived from (seed, start index), so any start can be re-run alone; the best is
+//! kept and the share of starts that reach it is reported ([`basin`]). A final
 //! tie-break sweep picks, among rows of equal gain, the one with the smallest degree-weighted
 //! L1 norm Σ_j e_j |a_j| (prefers low-degree rows, e.g. z instead of z² in θ₂).
 
@@ -36,6 +39,9 @@ pub struct Options {
     /// re-ascend, keep if better.
     pub hops: usize,
     pub hop_sigma: f64,
+    /// Run only these start indices (of 0..restarts) instead of all: re-runs a start of a
+    /// seeded search exactly (e.g. the one that reached the best basin) in a fraction of the time.
+    pub only_starts: Option<Vec<usize>>,
 }
 
 impl Default for Options {
@@ -48,6 +54,7 @@ impl Default for Options {
             margin: 1e-9,
             hops: 0,
             hop_sigma: 0.2,
+            only_starts: None,
         }
     }
 }
@@ -58,6 +65,9 @@ pub struct Outcome {
     pub theta: Theta,
     /// Gain of each start after convergence (bits), in start order.
     pub start_gains: Vec<f64>,
+    /// The start index of each entry of `start_gains` (0..restarts, or `only_starts`).
+    pub start_indices: Vec<usize>,
+    /// Start index (not position) of the best start.
     pub best_start: usize,
     /// Total LPs solved.
     pub lps: usize,
@@ -73,6 +83,12 @@ struct Frame {
 impl Frame {
     fn new(curve: &dyn Curve) -> Result<Frame> {
         let m = curve.dim();
+        if curve
+            .monomial_exponents()
+            .is_some_and(|e| e.iter().copied().eq(1..=m as u32))
+        {
+            return Ok(Frame::chebyshev(m));
+        }
         let n = 2000;
         let mut xs = Vec::with_capacity(n);
         let mut mu = vec![0.0; m];
@@ -120,6 +136,15 @@ impl Frame {
         })
     }
 
+    /// Power basis: q_k = T_k(2z − 1), k = 1..m, i.e. W[k][j] = coefficient of z^{j+1} in
+    /// T_{k+1}(2z − 1) and W μ = −(T_k(−1))_k = −((−1)^k)_k.
+    fn chebyshev(m: usize) -> Frame {
+        let (w, c0) = shifted_chebyshev(m);
+        let lu = Lu::new(&w).expect("shifted Chebyshev matrix is triangular with nonzero diagonal");
+        let mu = lu.solve(&c0.iter().map(|v| -v).collect::<Vec<_>>());
+        Frame { m, w, mu }
+    }
+
     fn q(&self, curve: &dyn Curve, z: f64) -> Vec<f64> {
         let mut b = vec![0.0; self.m];
         curve.eval(z, &mut b);
@@ -147,6 +172,33 @@ impl Frame {
             .map(|(z, v)| (z, v - shift))
             .collect()
     }
+}
+
+/// Monomial coefficients of T_k(2z − 1), k = 1..m: (rows of z¹…z^m, constant terms).
+pub fn shifted_chebyshev(m: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
+    // T_0 = 1, T_1 = 2z − 1, T_{k+1} = 2(2z − 1)T_k − T_{k−1}, coefficients ascending.
+    let mut polys: Vec<Vec<f64>> = vec![vec![1.0], vec![-1.0, 2.0]];
+    while polys.len() <= m {
+        let k = polys.len();
+        let mut next = vec![0.0; k + 1];
+        for (j, &c) in polys[k - 1].iter().enumerate() {
+            next[j + 1] += 4.0 * c;
+            next[j] -= 2.0 * c;
+        }
+        for (j, &c) in polys[k - 2].iter().enumerate() {
+            next[j] -= c;
+        }
+        polys.push(next);
+    }
+    let w = (1..=m)
+        .map(|k| {
+            (1..=m)
+                .map(|j| polys[k].get(j).copied().unwrap_or(0.0))
+                .collect()
+        })
+        .collect();
+    let c0 = (1..=m).map(|k| polys[k][0]).collect();
+    (w, c0)
 }
 
 /// One row: q-space coefficients, offset, and its working set of constraint points.
@@ -383,11 +435,23 @@ pub fn optimize(
     if opts.restarts == 0 {
         bail!("--restarts must be at least 1");
     }
+    let starts: Vec<usize> = match &opts.only_starts {
+        Some(v) => {
+            if v.is_empty() || v.iter().any(|&k| k >= opts.restarts) {
+                bail!(
+                    "start indices must be non-empty and below --restarts {}, got {v:?}",
+                    opts.restarts
+                );
+            }
+            v.clone()
+        }
+        None => (0..opts.restarts).collect(),
+    };
     let frame = Frame::new(curve)?;
     let init_pts = initial_points(&frame, curve);
-    let runs: Vec<(f64, Vec<Row>, usize)> = (0..opts.restarts)
-        .into_par_iter()
-        .map(|k| {
+    let runs: Vec<(f64, Vec<Row>, usize)> = starts
+        .par_iter()
+        .map(|&k| {
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
                 opts.seed
                     .wrapping_mul(0x9E37_79B9_7F4A_7C15)
@@ -426,10 +490,10 @@ pub fn optimize(
         .collect();
     let mut lps: usize = runs.iter().map(|r| r.2).sum();
     let start_gains: Vec<f64> = runs.iter().map(|r| r.0 + frame_gain(&frame)).collect();
-    let best_start = (0..runs.len())
+    let best = (0..runs.len())
         .max_by(|&i, &j| runs[i].0.total_cmp(&runs[j].0))
         .unwrap();
-    let mut rows = runs[best_start].1.clone();
+    let mut rows = runs[best].1.clone();
     let weights: Vec<f64> = match curve.monomial_exponents() {
         Some(e) => e.iter().map(|&v| v as f64).collect(),
         None => (1..=m).map(|v| v as f64).collect(),
@@ -449,7 +513,8 @@ pub fn optimize(
     Ok(Outcome {
         theta,
         start_gains,
-        best_start,
+        best_start: starts[best],
+        start_indices: starts,
         lps,
     })
 }
@@ -477,4 +542,84 @@ fn frame_gain(frame: &Frame) -> f64 {
     Lu::new(&frame.w)
         .map(|lu| lu.log2_abs_det().0)
         .unwrap_or(f64::NAN)
+}
+
+/// How many starts reached the best basin: starts within `tol_bits` of the best gain.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct Basin {
+    pub best_bits: f64,
+    pub tol_bits: f64,
+    /// Start indices within `tol_bits` of the best, ascending.
+    pub starts: Vec<usize>,
+    /// starts.len() / number of starts run.
+    pub share: f64,
+    /// Best gain of the starts outside the basin (second-best basin), if any.
+    pub runner_up_bits: Option<f64>,
+}
+
+/// Basin statistics of a search ([`Outcome::start_gains`] with their start indices).
+pub fn basin(gains: &[f64], indices: &[usize], tol_bits: f64) -> Basin {
+    let best = gains.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let mut starts: Vec<usize> = gains
+        .iter()
+        .zip(indices)
+        .filter(|(g, _)| **g >= best - tol_bits)
+        .map(|(_, &k)| k)
+        .collect();
+    starts.sort_unstable();
+    let runner_up = gains
+        .iter()
+        .copied()
+        .filter(|g| *g < best - tol_bits)
+        .fold(None, |a: Option<f64>, g| Some(a.map_or(g, |v| v.max(g))));
+    Basin {
+        best_bits: best,
+        tol_bits,
+        share: starts.len() as f64 / gains.len().max(1) as f64,
+        starts,
+        runner_up_bits: runner_up,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    #[test]
+    fn shifted_chebyshev_rows_are_t_k_of_2z_minus_1() {
+        let m = 10;
+        let (w, c0) = shifted_chebyshev(m);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2);
+        for _ in 0..2000 {
+            let z: f64 = rng.gen_range(0.0..=1.0);
+            for k in 1..=m {
+                let mono: f64 = c0[k - 1]
+                    + (1..=m)
+                        .map(|j| w[k - 1][j - 1] * z.powi(j as i32))
+                        .sum::<f64>();
+                let trig = (k as f64 * (2.0 * z - 1.0).clamp(-1.0, 1.0).acos()).cos();
+                assert!((mono - trig).abs() < 1e-9, "k={k} z={z}: {mono} vs {trig}");
+            }
+        }
+        // the frame maps b(z) to q(z) = T_k(2z − 1) through W(b − μ)
+        let curve = super::super::curve::MonomialCurve::power(6).unwrap();
+        let f = Frame::new(&curve).unwrap();
+        for z in [0.0, 0.3, 1.0] {
+            let q = f.q(&curve, z);
+            for (k, v) in q.iter().enumerate() {
+                let t = ((k + 1) as f64 * (2.0 * z - 1.0).acos()).cos();
+                assert!((v - t).abs() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn basin_counts_starts_near_the_best() {
+        let b = basin(&[1.0, 3.0, 2.9995, 2.0], &[4, 5, 6, 7], 1e-3);
+        assert_eq!(b.starts, vec![5, 6]);
+        assert_eq!(b.share, 0.5);
+        assert_eq!(b.runner_up_bits, Some(2.0));
+        assert_eq!(basin(&[1.0], &[0], 1e-3).runner_up_bits, None);
+    }
 }

@@ -8,6 +8,7 @@ use super::theta::Theta;
 use crate::kernel::{filter_separable, front_map, Gaussian};
 use crate::metrics::{fragments_subsampled, Bias, Subsample};
 use crate::stack::DepthStack;
+use crate::technique::hamburger::Hamburger;
 use crate::technique::hamburger4::Hamburger4;
 use crate::technique::hamburger6::Hamburger6;
 use crate::technique::linalg::Precision;
@@ -51,14 +52,24 @@ pub enum Tech {
     Msm4,
     /// Hamburger 6MSM, θ₆.
     Msm6,
+    /// Hamburger MSM with 8 power moments (Algorithm 2, general even m), θ₈.
+    Msm8,
 }
 
 impl Tech {
+    pub const ALL: [Tech; 4] = [Tech::Vsm, Tech::Msm4, Tech::Msm6, Tech::Msm8];
+
+    /// Parse "vsm", "4msm", "6msm", "8msm".
+    pub fn parse(name: &str) -> Option<Tech> {
+        Tech::ALL.into_iter().find(|t| t.name() == name.trim())
+    }
+
     pub fn m(self) -> usize {
         match self {
             Tech::Vsm => 2,
             Tech::Msm4 => 4,
             Tech::Msm6 => 6,
+            Tech::Msm8 => 8,
         }
     }
     pub fn name(self) -> &'static str {
@@ -66,6 +77,7 @@ impl Tech {
             Tech::Vsm => "vsm",
             Tech::Msm4 => "4msm",
             Tech::Msm6 => "6msm",
+            Tech::Msm8 => "8msm",
         }
     }
     /// G(b, z_f) with bias α towards b* = (½, …, ½), double precision arithmetic.
@@ -79,6 +91,7 @@ impl Tech {
             }),
             Tech::Msm4 => Box::new(Hamburger4::new(alpha, [0.5; 4], Precision::F64)),
             Tech::Msm6 => Box::new(Hamburger6::new(alpha, [0.5; 6], Precision::F64)),
+            Tech::Msm8 => Box::new(Hamburger::new(alpha, vec![0.5; 8], Precision::F64)),
         }
     }
 }
