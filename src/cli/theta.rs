@@ -238,6 +238,17 @@ pub fn run(args: Args) -> Result<()> {
         "lps_solved": out.lps,
         "command": command,
     });
+    // canonical storage: every basis function rescaled from its own range to [0,1]
+    let canonical: f64 = (0..m)
+        .map(|j| {
+            let mut e = vec![0.0; m];
+            e[j] = 1.0;
+            let (_, lo, _, hi) = curve::row_min_max(curve.as_ref(), &e);
+            -(hi - lo).log2()
+        })
+        .sum();
+    j["canonical_gain_bits"] = json!(canonical);
+    j["gain_over_canonical_bits"] = json!(gain - canonical);
     if power {
         let bound = volume::volume_bound_bits(m);
         j["volume_bound_bits"] = json!(bound);

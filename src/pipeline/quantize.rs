@@ -32,5 +32,6 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
         stride: plan.quantize_stride,
         alphas: quantize::DEFAULT_ALPHAS.to_string(),
         json: false,
+        merge: None,
     })
 }

@@ -153,7 +153,7 @@ pub struct Config {
 }
 
 /// Error against α for one technique and configuration.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Sweep {
     pub technique: String,
     pub config: String,
