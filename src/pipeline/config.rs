@@ -162,7 +162,7 @@ impl Plan {
             Preset::Full => Plan {
                 resolution: 512,
                 lp_stride: 1,
-                grid_sizes: vec![64, 128, 256, 512, 1024, 2048],
+                grid_sizes: vec![64, 128, 256, 512, 1024, 2048, 4096],
                 speed_inputs: 1_000_000,
                 lp_speed_inputs: 20_000,
                 theta_moments: vec![2, 3, 4],
@@ -181,7 +181,7 @@ impl Plan {
             Preset::Default => Plan {
                 resolution: 512,
                 lp_stride: 16,
-                grid_sizes: vec![64, 128, 256, 512, 1024],
+                grid_sizes: vec![64, 128, 256, 512, 1024, 2048, 4096],
                 speed_inputs: 200_000,
                 lp_speed_inputs: 3000,
                 theta_moments: vec![2, 3, 4],

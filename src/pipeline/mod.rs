@@ -93,9 +93,15 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     let all = techniques::evaluate_all(&stacks, &plan, &p.out.join("evaluate"))?;
     let pictures = techniques::pictures(&stacks, &plan, &p.out.join("pictures"))?;
 
-    step.start("LP grid: refine n until the error settles");
-    let refinement = grid::refine(&stacks, &plan, &p.out.join("grid_refinement.json"))?;
-    let chosen_grid = grid::choose(&refinement, cfg.tolerance / 10.0);
+    step.start("LP grid: the smallest n within tolerance of the finest grid");
+    let grid_tolerance = cfg.tolerance / 10.0;
+    let refinement = grid::refine(
+        &stacks,
+        &plan,
+        &p.out.join("grid_refinement.json"),
+        grid_tolerance,
+    )?;
+    let chosen_grid = grid::choose(&refinement, grid_tolerance);
     grid::chart(
         &refinement,
         &chosen_grid,

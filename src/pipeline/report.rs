@@ -213,22 +213,40 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             })
             .collect(),
     );
+    let grid_tol = r.config.tolerance / 10.0;
     d.paragraph(format!(
         "LP grid: b_MSM evaluated with n = {} grid points (every {}-th fragment); the chosen n \
-         is the first whose error differs from the next finer grid by less than {}.",
+         is the smallest whose error is within {} of the finest grid's (a convergence test: \
+         neighbouring grids can agree on a plateau while a finer one is still better). \
+         docs/evaluation.md explains non-monotone steps.",
         r.refinement
             .iter()
             .map(|x| x.0.to_string())
             .collect::<Vec<_>>()
             .join(", "),
         r.plan.lp_stride * 2,
-        pct(r.config.tolerance / 10.0)
+        pct(grid_tol)
     ));
+    let mut head = vec!["scene".to_string()];
+    head.extend(r.refinement.iter().map(|x| format!("n = {}", x.0)));
+    head.push("chosen n".into());
+    let head: Vec<&str> = head.iter().map(|s| s.as_str()).collect();
     d.table(
-        &["scene", "chosen n"],
+        &head,
         r.chosen_grid
             .iter()
-            .map(|(s, n)| vec![s.clone(), n.to_string()])
+            .map(|(s, n)| {
+                let mut row = vec![s.clone()];
+                for (_, sc) in r.refinement {
+                    row.push(
+                        sc.iter()
+                            .find(|x| &x.0 == s)
+                            .map_or("–".into(), |x| pct(x.1)),
+                    );
+                }
+                row.push(n.to_string());
+                row
+            })
             .collect(),
     );
     d.figure(

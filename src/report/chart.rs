@@ -5,6 +5,27 @@ use anyhow::{anyhow, Result};
 use plotters::prelude::*;
 use std::path::Path;
 
+/// A tick label as a plain number: thousands separated by a space, no trailing ".0"
+/// (10, 100, 1 000, 0.5).
+pub fn plain(v: f64) -> String {
+    if !v.is_finite() {
+        return String::new();
+    }
+    if v.abs() >= 1.0 && (v - v.round()).abs() < 1e-9 * v.abs().max(1.0) {
+        let digits = format!("{}", v.round().abs() as u64);
+        let mut out = String::new();
+        for (i, ch) in digits.chars().enumerate() {
+            if i > 0 && (digits.len() - i) % 3 == 0 {
+                out.push(' ');
+            }
+            out.push(ch);
+        }
+        return if v < 0.0 { format!("-{out}") } else { out };
+    }
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
 fn err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> anyhow::Error + '_ {
     move |e| anyhow!("writing chart {}: {e:?}", path.display())
 }
@@ -119,51 +140,66 @@ pub fn lines_svg(
         y1 = y0 + 1e-9;
     }
     let pad = 0.05 * (y1 - y0);
+    // A log x axis is drawn as a linear axis in log₂ x with a tick at every power of two,
+    // labelled with the plain number (no "1000.0 1000.0" from rounded log-scale ticks).
+    let log = log_x && x0 > 0.0;
+    let tx = |x: f64| if log { x.log2() } else { x };
+    let (lx0, lx1) = (tx(x0), tx(x1));
+    let series: Vec<(String, Vec<(f64, f64)>)> = series
+        .iter()
+        .map(|(n, s)| (n.clone(), s.iter().map(|&(x, y)| (tx(x), y)).collect()))
+        .collect();
     let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
     root.fill(&WHITE).map_err(err(path))?;
-    let mut builder = ChartBuilder::on(&root);
-    builder
+    let mut chart = ChartBuilder::on(&root)
         .caption(title, ("sans-serif", 20))
         .margin(15)
         .x_label_area_size(45)
-        .y_label_area_size(70);
-    macro_rules! draw {
-        ($chart:expr) => {{
-            let mut chart = $chart;
-            chart
-                .configure_mesh()
-                .x_desc(x_desc)
-                .y_desc(y_desc)
-                .draw()
-                .map_err(err(path))?;
-            for (k, (name, s)) in series.iter().enumerate() {
-                let c = Palette99::pick(k).to_rgba();
-                chart
-                    .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
-                    .map_err(err(path))?
-                    .label(name.as_str())
-                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-                chart
-                    .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
-                    .map_err(err(path))?;
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .draw()
-                .map_err(err(path))?;
-        }};
-    }
-    if log_x && x0 > 0.0 {
-        draw!(builder
-            .build_cartesian_2d((x0..x1).log_scale(), y0 - pad..y1 + pad)
-            .map_err(err(path))?);
+        .y_label_area_size(70)
+        .build_cartesian_2d(
+            lx0 - 0.05 * (lx1 - lx0)..lx1 + 0.05 * (lx1 - lx0),
+            y0 - pad..y1 + pad,
+        )
+        .map_err(err(path))?;
+    let ticks = if log {
+        (lx1.floor() - lx0.ceil()) as usize + 1
     } else {
-        draw!(builder
-            .build_cartesian_2d(x0..x1, y0 - pad..y1 + pad)
-            .map_err(err(path))?);
+        10
+    };
+    let fmt_x = |x: &f64| {
+        if !log {
+            plain(*x)
+        } else if (x - x.round()).abs() < 1e-6 {
+            plain(x.round().exp2())
+        } else {
+            String::new()
+        }
+    };
+    chart
+        .configure_mesh()
+        .x_desc(x_desc)
+        .y_desc(y_desc)
+        .x_labels(ticks.clamp(2, 16))
+        .x_label_formatter(&fmt_x)
+        .draw()
+        .map_err(err(path))?;
+    for (k, (name, s)) in series.iter().enumerate() {
+        let c = Palette99::pick(k).to_rgba();
+        chart
+            .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
+            .map_err(err(path))?
+            .label(name.as_str())
+            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+        chart
+            .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            .map_err(err(path))?;
     }
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err(path))?;
     root.present().map_err(err(path))?;
     Ok(())
 }
@@ -171,6 +207,34 @@ pub fn lines_svg(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn plain_numbers() {
+        assert_eq!(plain(10.0), "10");
+        assert_eq!(plain(1000.0), "1 000");
+        assert_eq!(plain(4096.0), "4 096");
+        assert_eq!(plain(1_234_567.0), "1 234 567");
+        assert_eq!(plain(0.5), "0.5");
+        assert_eq!(plain(2.25), "2.25");
+    }
+
+    #[test]
+    fn log_x_line_chart_has_one_label_per_power_of_two() {
+        let dir = std::env::temp_dir().join(format!("momentlab-lines-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("l.svg");
+        let s = vec![(
+            "a".to_string(),
+            vec![(64.0, 0.03), (1024.0, 0.02), (4096.0, 0.019)],
+        )];
+        lines_svg(&p, "t", "n", "e", &s, true).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        for n in ["64", "128", "1 024", "4 096"] {
+            assert_eq!(svg.matches(&format!(">\n{n}\n<")).count(), 1, "{n}");
+        }
+        assert!(!svg.contains("1000.0"));
+        std::fs::remove_dir_all(&dir).ok();
+    }
 
     #[test]
     fn speed_accuracy_chart_is_valid_svg_with_front_labels() {
