@@ -80,19 +80,35 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     println!(
-        "{:<10} {:<22} {:>9} {:>6} {:>9}   {:<22} {:>9}",
-        "scene", "recommended", "error", "bits", "ns/frag", "best", "error"
+        "{:<10} {:<22} {:>9} {:>6} {:>9}   {:<22} {:>9}   {:<22} {:>9} {:>9}",
+        "scene",
+        "recommended",
+        "error",
+        "bits",
+        "ns/frag",
+        "best",
+        "error",
+        "runner-up",
+        "error",
+        "ns/frag"
     );
     for r in &recs {
+        let (ru, ru_err, ru_ns) = r
+            .runner_up
+            .clone()
+            .map_or(("–".to_string(), f64::NAN, f64::NAN), |u| u);
         println!(
-            "{:<10} {:<22} {:>8.3}% {:>6} {:>9.1}   {:<22} {:>8.3}%",
+            "{:<10} {:<22} {:>8.3}% {:>6} {:>9.1}   {:<22} {:>8.3}%   {:<22} {:>8.3}% {:>9.1}",
             r.scene,
             format!("{} ({})", r.name, r.precision),
             100.0 * r.error,
             r.bits_per_texel,
             r.ns_per_fragment,
             r.best_name,
-            100.0 * r.best_error
+            100.0 * r.best_error,
+            ru,
+            100.0 * ru_err,
+            ru_ns
         );
     }
     println!("(tolerance {:.3} % absolute)", 100.0 * args.tolerance);

@@ -12,6 +12,8 @@
 //! The error of a technique is mean_{fragments} |G − PCF| (for a directional light this is the
 //! L¹ error of the irradiance field divided by the total radiant power, Section 3.2).
 
+pub mod windows;
+
 use crate::kernel::{self, Gaussian};
 use crate::stack::DepthStack;
 use crate::technique::{Evaluator, Technique};

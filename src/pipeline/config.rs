@@ -107,7 +107,8 @@ pub struct Plan {
     pub lp_stride: usize,
     /// LP grid sizes n of the refinement step.
     pub grid_sizes: Vec<usize>,
-    /// Random inputs of the speed measurement of closed forms and of LP candidates.
+    /// Fragments (sampled from the stacks) of the speed measurement of closed forms and of LP
+    /// candidates.
     pub speed_inputs: usize,
     pub lp_speed_inputs: usize,
     /// θ_m computed for these m, with this many random starts.

@@ -132,8 +132,9 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     d.paragraph(format!(
         "Error = mean |G − PCF| over all fragments of all layers (9×9 Gaussian PCF, σ = 2.4 \
          texels). Closed forms see every fragment; LP candidates (Algorithm 1, n = 1024 grid) \
-         every {}-th fragment. Speed: nanoseconds per evaluation on one core over random \
-         few-Dirac inputs (momentlab's timing loop, the same as `momentlab bench shadow`).",
+         every {}-th fragment. Speed: mean nanoseconds per evaluation on one core over the filter \
+         windows of fragments sampled from the same depth stacks, for closed forms and LP \
+         candidates alike (momentlab's timing loop, `momentlab bench shadow --corpus stacks`).",
         r.plan.lp_stride
     ));
     let mut sorted: Vec<&Measured> = r.all.iter().collect();
@@ -185,7 +186,8 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     d.paragraph(format!(
         "Recommendation per scene: the cheapest closed-form technique (fewest bits per texel, \
          then fewest ns per fragment) whose error is within {} of the best closed form on that \
-         scene (`momentlab recommend --tolerance`).",
+         scene (`momentlab recommend --tolerance`). Runner-up: the most accurate cheaper \
+         technique (what going faster costs in error), or the next within the tolerance.",
         pct(r.config.tolerance)
     ));
     d.table(
@@ -197,6 +199,8 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             "ns / fragment",
             "best",
             "best error",
+            "runner-up",
+            "its error (ns)",
         ],
         r.recs
             .iter()
@@ -209,6 +213,15 @@ pub fn build(r: ReportInputs) -> Result<Document> {
                     format!("{:.1}", x.ns_per_fragment),
                     x.best_name.clone(),
                     pct(x.best_error),
+                    x.runner_up.as_ref().map_or("–".into(), |u| u.0.clone()),
+                    x.runner_up.as_ref().map_or("–".into(), |u| {
+                        format!(
+                            "{} ({:+.2} pp, {:.1} ns)",
+                            pct(u.1),
+                            100.0 * (u.1 - x.error),
+                            u.2
+                        )
+                    }),
                 ]
             })
             .collect(),

@@ -141,7 +141,8 @@ pub fn evaluate(
     Ok(r)
 }
 
-/// Error against PCF (every `stride`-th fragment) and speed (`speed_inputs` random inputs) of
+/// Error against PCF (every `stride`-th fragment) and speed (mean ns over `speed_inputs`
+/// fragments sampled from the same stacks, `metrics::windows::stacks_corpus`) of
 /// one technique configuration.
 pub fn measured(
     stacks: &[DepthStack],
@@ -152,7 +153,9 @@ pub fn measured(
     speed_inputs: usize,
 ) -> Result<Measured> {
     let r = evaluate(stacks, t, name, stride)?;
-    let ns = timing::measure(t, speed_inputs, 3, 2015);
+    // Speed on the same kind of input as the error: filter windows of real fragments.
+    let corpus = crate::metrics::windows::stacks_corpus(stacks, speed_inputs, 2015)?;
+    let ns = timing::measure(t, &corpus, 3).mean;
     Ok(Measured {
         name: name.to_string(),
         precision: precision.to_string(),

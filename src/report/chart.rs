@@ -30,80 +30,232 @@ fn err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> anyhow::Error + '_ {
     move |e| anyhow!("writing chart {}: {e:?}", path.display())
 }
 
-/// Speed against accuracy: error against PCF (y) over nanoseconds per fragment (x, log scale),
-/// marker area proportional to bits per texel, the Pareto front drawn as a line and its members
-/// labelled.
+/// Speed against accuracy: error against PCF (y) over nanoseconds per fragment (x, log scale,
+/// plain-number ticks). Every point carries a number, placed next to it without overlapping
+/// other numbers or markers (with a leader line when it had to move); the numbered legend on the
+/// right names each point (technique, precision, bits, error, ns) and marks the Pareto front
+/// (★, also drawn as a red line). Colour: LP candidates (Algorithm 1 on a grid, references)
+/// blue, closed forms black; marker: f32 circle, f64 triangle; marker size grows with bits per
+/// texel.
 pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result<()> {
-    let finite: Vec<&Entry> = entries
-        .iter()
-        .filter(|e| e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0)
-        .collect();
+    let ok =
+        |e: &Entry| e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0;
+    let idx: Vec<usize> = (0..entries.len()).filter(|&i| ok(&entries[i])).collect();
     let (mut x0, mut x1) = (f64::INFINITY, 0.0f64);
     let mut y1 = 0.0f64;
-    for e in &finite {
-        x0 = x0.min(e.ns_per_fragment);
-        x1 = x1.max(e.ns_per_fragment);
-        y1 = y1.max(e.error);
+    for &i in &idx {
+        x0 = x0.min(entries[i].ns_per_fragment);
+        x1 = x1.max(entries[i].ns_per_fragment);
+        y1 = y1.max(entries[i].error);
     }
-    if finite.is_empty() {
+    if idx.is_empty() {
         (x0, x1, y1) = (1.0, 10.0, 1.0);
     }
-    let root = SVGBackend::new(path, (900, 600)).into_drawing_area();
+    let (lx0, lx1) = (x0.log10() - 0.15, x1.log10() + 0.15);
+    let legend_w = 380;
+    let height = (120 + 16 * idx.len() as u32).max(600);
+    let root = SVGBackend::new(path, (1000 + legend_w, height)).into_drawing_area();
     root.fill(&WHITE).map_err(err(path))?;
-    let mut chart = ChartBuilder::on(&root)
+    let (plot_area, legend_area) = root.split_horizontally(1000);
+    let mut chart = ChartBuilder::on(&plot_area)
         .caption(title, ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d((x0 / 2.0..x1 * 2.0).log_scale(), 0.0..y1 * 1.15 + 1e-6)
+        .margin(20)
+        .x_label_area_size(50)
+        .y_label_area_size(80)
+        .build_cartesian_2d(lx0..lx1, 0.0..y1 * 1.12 + 1e-6)
         .map_err(err(path))?;
+    let fmt_x = |x: &f64| {
+        if (x - x.round()).abs() < 1e-6 {
+            plain(10f64.powf(x.round()))
+        } else {
+            String::new()
+        }
+    };
+    let fmt_y = |y: &f64| format!("{} %", plain(100.0 * y));
     chart
         .configure_mesh()
         .x_desc("nanoseconds per fragment (one core, log scale)")
         .y_desc("mean |G − PCF|")
+        .x_labels(((lx1.floor() - lx0.ceil()) as usize + 1).clamp(2, 10))
+        .x_label_formatter(&fmt_x)
+        .y_label_formatter(&fmt_y)
         .draw()
         .map_err(err(path))?;
     let front = pareto_front(entries);
     let mut front_pts: Vec<(f64, f64)> = front
         .iter()
-        .map(|&i| (entries[i].ns_per_fragment, entries[i].error))
+        .map(|&i| (entries[i].ns_per_fragment.log10(), entries[i].error))
         .collect();
     front_pts.sort_by(|a, b| a.0.total_cmp(&b.0));
     chart
         .draw_series(LineSeries::new(front_pts, RED.stroke_width(2)))
-        .map_err(err(path))?
-        .label("Pareto front")
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], RED.stroke_width(2)));
-    for (i, e) in entries.iter().enumerate() {
-        if !(e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0) {
-            continue;
+        .map_err(err(path))?;
+    let colour = |e: &Entry| {
+        if e.name.starts_with("lp:") {
+            RGBColor(30, 90, 200)
+        } else {
+            RGBColor(40, 40, 40)
         }
-        let on_front = front.contains(&i);
-        let r = (3.0 + e.bits_per_texel as f64 / 32.0).min(14.0) as i32;
-        let color = if e.name.starts_with("lp:") {
-            BLUE.mix(0.5)
+    };
+    // Markers, and their pixel boxes as obstacles for the numbers.
+    let mut boxes: Vec<(i32, i32, i32, i32)> = Vec::new();
+    let mut pix = Vec::new();
+    for &i in &idx {
+        let e = &entries[i];
+        let r = (3.0 + e.bits_per_texel as f64 / 48.0).min(10.0) as i32;
+        let p = (e.ns_per_fragment.log10(), e.error);
+        let c = colour(e);
+        if e.precision == "f64" {
+            chart
+                .draw_series(std::iter::once(TriangleMarker::new(
+                    p,
+                    r + 1,
+                    c.mix(0.6).filled(),
+                )))
+                .map_err(err(path))?;
         } else {
-            BLACK.mix(0.5)
-        };
-        let label = if on_front {
-            format!("{} ({}, {} bit)", e.name, e.precision, e.bits_per_texel)
-        } else {
-            String::new()
-        };
-        chart
-            .draw_series(std::iter::once(
-                EmptyElement::at((e.ns_per_fragment, e.error))
-                    + Circle::new((0, 0), r, color.filled())
-                    + Text::new(label, (r + 3, -r - 10), ("sans-serif", 11)),
+            chart
+                .draw_series(std::iter::once(Circle::new(p, r, c.mix(0.6).filled())))
+                .map_err(err(path))?;
+        }
+        let (px, py) = chart.backend_coord(&p);
+        boxes.push((px - r, py - r, px + r, py + r));
+        pix.push((px, py, r));
+    }
+    // Numbers: the first free spot on rings of growing radius around the marker.
+    let (pw, ph) = plot_area.dim_in_pixel();
+    let inside = |b: &(i32, i32, i32, i32)| {
+        b.0 >= 85 && b.2 <= pw as i32 - 5 && b.1 >= 40 && b.3 <= ph as i32 - 55
+    };
+    let overlaps = |a: &(i32, i32, i32, i32), b: &(i32, i32, i32, i32)| {
+        a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+    };
+    for (k, &(px, py, r)) in pix.iter().enumerate() {
+        let label = format!("{}", k + 1);
+        let (tw, th) = (7 * label.len() as i32 + 2, 12);
+        let mut placed = None;
+        'search: for ring in 0..12 {
+            let d = r + 3 + ring * 7;
+            for (dx, dy) in [
+                (1, -1),
+                (1, 0),
+                (1, 1),
+                (0, -1),
+                (-1, -1),
+                (-1, 0),
+                (-1, 1),
+                (0, 1),
+            ] {
+                let (cx, cy) = (px + dx * d, py + dy * d);
+                let bx = (
+                    if dx < 0 {
+                        cx - tw
+                    } else if dx == 0 {
+                        cx - tw / 2
+                    } else {
+                        cx
+                    },
+                    if dy < 0 {
+                        cy - th
+                    } else if dy == 0 {
+                        cy - th / 2
+                    } else {
+                        cy
+                    },
+                );
+                let b = (bx.0, bx.1, bx.0 + tw, bx.1 + th);
+                if inside(&b) && !boxes.iter().any(|o| overlaps(o, &b)) {
+                    placed = Some((b, ring > 0));
+                    break 'search;
+                }
+            }
+        }
+        let Some((b, far)) = placed else { continue };
+        boxes.push(b);
+        if far {
+            let (cx, cy) = ((b.0 + b.2) / 2, (b.1 + b.3) / 2);
+            plot_area
+                .draw(&PathElement::new(vec![(px, py), (cx, cy)], BLACK.mix(0.35)))
+                .map_err(err(path))?;
+        }
+        plot_area
+            .draw(&Text::new(
+                label,
+                (b.0 + 1, b.1),
+                ("sans-serif", 12).into_font().color(&BLACK),
             ))
             .map_err(err(path))?;
     }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
+    // Legend: key, then one numbered line per point.
+    let font = ("sans-serif", 12).into_font();
+    let mut y = 30;
+    let line =
+        |area: &DrawingArea<SVGBackend, plotters::coord::Shift>, text: String, y: &mut i32| {
+            let r = area.draw(&Text::new(text, (10, *y), font.clone()));
+            *y += 16;
+            r
+        };
+    line(&legend_area, "Key".into(), &mut y).map_err(err(path))?;
+    legend_area
+        .draw(&Circle::new(
+            (16, y + 6),
+            5,
+            RGBColor(40, 40, 40).mix(0.6).filled(),
+        ))
         .map_err(err(path))?;
+    legend_area
+        .draw(&Text::new(
+            "closed form, f32 (● f32, ▲ f64)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(path))?;
+    y += 16;
+    legend_area
+        .draw(&Circle::new(
+            (16, y + 6),
+            5,
+            RGBColor(30, 90, 200).mix(0.6).filled(),
+        ))
+        .map_err(err(path))?;
+    legend_area
+        .draw(&Text::new(
+            "LP candidate (Algorithm 1, reference)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(path))?;
+    y += 16;
+    legend_area
+        .draw(&PathElement::new(
+            vec![(8, y + 6), (24, y + 6)],
+            RED.stroke_width(2),
+        ))
+        .map_err(err(path))?;
+    legend_area
+        .draw(&Text::new(
+            "Pareto front (★ in the list)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(path))?;
+    y += 16;
+    line(&legend_area, "marker size: bits per texel".into(), &mut y).map_err(err(path))?;
+    y += 8;
+    for (k, &i) in idx.iter().enumerate() {
+        let e = &entries[i];
+        let star = if front.contains(&i) { "★" } else { " " };
+        let text = format!(
+            "{:>2}{star} {} ({}, {} bit): {} %, {} ns",
+            k + 1,
+            e.name,
+            e.precision,
+            e.bits_per_texel,
+            plain((1e4 * e.error).round() / 100.0),
+            plain(e.ns_per_fragment.round())
+        );
+        line(&legend_area, text, &mut y).map_err(err(path))?;
+    }
     root.present().map_err(err(path))?;
     Ok(())
 }
@@ -267,11 +419,14 @@ mod tests {
         speed_accuracy_svg(&p, "t", &v).unwrap();
         let s = std::fs::read_to_string(&p).unwrap();
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
-        assert!(s.contains("hamburger4 (f32, 128 bit)"));
-        assert!(
-            !s.contains("slow-bad (f32"),
-            "dominated entries are not labelled"
-        );
+        // Every point is in the numbered legend; the front is starred, dominated points not.
+        assert!(s.contains("★ hamburger4 (f32, 128 bit)"), "{s}");
+        assert!(s.contains("★ vsm (f32, 64 bit)"));
+        assert!(s.contains("  slow-bad (f32, 128 bit)") || s.contains(" slow-bad (f32, 128 bit)"));
+        assert!(!s.contains("★ slow-bad"));
+        for k in ["1", "2", "3"] {
+            assert!(s.contains(&format!(">\n{k}\n<")), "number {k} drawn");
+        }
         std::fs::remove_dir_all(&dir).ok();
     }
 }

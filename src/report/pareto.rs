@@ -60,6 +60,42 @@ pub fn recommend(entries: &[Entry], tolerance: f64) -> Option<usize> {
         })
 }
 
+/// The alternative to the recommended entry `chosen`: the lowest-error entry that is cheaper
+/// (fewer ns per fragment; what a user gives up in error to go faster), or — when nothing is
+/// cheaper — the next entry within `tolerance` of the best in [`recommend`]'s order.
+pub fn runner_up(entries: &[Entry], chosen: usize, tolerance: f64) -> Option<usize> {
+    let c = &entries[chosen];
+    let finite = |i: &usize| *i != chosen && entries[*i].error.is_finite();
+    let cheaper = (0..entries.len())
+        .filter(finite)
+        .filter(|&i| entries[i].ns_per_fragment < c.ns_per_fragment)
+        .min_by(|&i, &j| {
+            let (a, b) = (&entries[i], &entries[j]);
+            a.error
+                .total_cmp(&b.error)
+                .then(a.ns_per_fragment.total_cmp(&b.ns_per_fragment))
+        });
+    if cheaper.is_some() {
+        return cheaper;
+    }
+    let rest: Vec<usize> = (0..entries.len()).filter(finite).collect();
+    let sub: Vec<Entry> = rest.iter().map(|&i| entries[i].clone()).collect();
+    let best = entries
+        .iter()
+        .map(|e| e.error)
+        .filter(|e| e.is_finite())
+        .fold(f64::INFINITY, f64::min);
+    // Keep the tolerance relative to the overall best, not the best of the rest.
+    let within: Vec<usize> = (0..sub.len())
+        .filter(|&k| sub[k].error <= best + tolerance)
+        .collect();
+    let pick = recommend(
+        &within.iter().map(|&k| sub[k].clone()).collect::<Vec<_>>(),
+        f64::INFINITY,
+    )?;
+    Some(rest[within[pick]])
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -72,6 +108,23 @@ mod tests {
             ns_per_fragment: ns,
             bits_per_texel: bits,
         }
+    }
+
+    #[test]
+    fn runner_up_is_the_most_accurate_cheaper_entry() {
+        let v = vec![
+            e("fast-bad", 0.05, 5.0, 32),
+            e("slow-good", 0.01, 50.0, 128),
+            e("middle", 0.02, 20.0, 64),
+            e("middle-worse", 0.03, 10.0, 64),
+            e("nan", f64::NAN, 1.0, 32),
+        ];
+        // slow-good recommended; cheaper ones: middle (0.02) is the most accurate.
+        assert_eq!(runner_up(&v, 1, 0.001), Some(2));
+        // Nothing cheaper than fast-bad: the next within tolerance of the best (only slow-good).
+        assert_eq!(runner_up(&v, 0, 0.001), Some(1));
+        // With a loose tolerance the next in recommend's order (fewest bits): middle-worse.
+        assert_eq!(runner_up(&v, 0, 1.0), Some(3));
     }
 
     #[test]

@@ -51,6 +51,9 @@ pub struct Recommendation {
     pub best_name: String,
     pub best_error: f64,
     pub tolerance: f64,
+    /// The alternative ([`pareto::runner_up`]): "name (precision)", its error and ns/fragment.
+    #[serde(default)]
+    pub runner_up: Option<(String, f64, f64)>,
 }
 
 /// Per scene: the cheapest closed-form technique within `tolerance` of the best one
@@ -93,6 +96,14 @@ pub fn recommendations(all: &[Measured], tolerance: f64) -> Vec<Recommendation> 
             .filter(|e| e.error.is_finite())
             .min_by(|a, b| a.error.total_cmp(&b.error))
             .expect("recommend found a finite entry");
+        let runner_up = pareto::runner_up(&entries, i, tolerance).map(|k| {
+            let r = &entries[k];
+            (
+                format!("{} ({})", r.name, r.precision),
+                r.error,
+                r.ns_per_fragment,
+            )
+        });
         out.push(Recommendation {
             scene,
             name: entries[i].name.clone(),
@@ -103,6 +114,7 @@ pub fn recommendations(all: &[Measured], tolerance: f64) -> Vec<Recommendation> 
             best_name: format!("{} ({})", best.name, best.precision),
             best_error: best.error,
             tolerance,
+            runner_up,
         });
     }
     out
