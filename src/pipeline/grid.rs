@@ -51,7 +51,13 @@ pub fn refine(
             "z^4".into(),
         ])?;
         let t = LpCandidate::new(basis, crate::Grid::uniform(n)?, "fast")?;
-        let rep = evaluate(stacks, &t, &format!("b_MSM, n = {n}"), plan.lp_stride * 2)?;
+        let rep = evaluate(
+            stacks,
+            &t,
+            &format!("b_MSM, n = {n}"),
+            plan.lp_stride * 2,
+            false,
+        )?;
         let sc: Vec<(String, f64)> = per_scene(&rep)
             .into_iter()
             .map(|(a, e, _)| (a, e))

@@ -33,6 +33,16 @@ pub fn run(
         "Error against PCF vs cost per fragment (marker size: bits per texel)",
         &entries,
     )?;
+    let hists: Vec<(String, Vec<u64>)> = all
+        .iter()
+        .filter(|m| m.precision == "f32" || m.name.starts_with("lp:"))
+        .map(|m| (format!("{} ({})", m.name, m.precision), m.histogram.clone()))
+        .collect();
+    chart::histograms_svg(
+        &out.join("error_histograms.svg"),
+        "Distribution of |G − PCF| over fragments (log counts)",
+        &hists,
+    )?;
     let recs = recommendations(all, tolerance);
     write_json(&out.join("recommend.json"), &recs)?;
     Ok((entries, recs))

@@ -169,8 +169,15 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     d.heading("Speed against accuracy");
     d.figure(
         "speed_accuracy.svg",
-        "Error against PCF over nanoseconds per fragment; marker area grows with bits per texel; \
-         the Pareto front is drawn in red and labelled.",
+        "Error against PCF over nanoseconds per fragment. Every point is numbered (legend on \
+         the right, ★ = Pareto front, also the red line); blue = LP candidates (Algorithm 1 on a \
+         grid, references), black = closed forms; circle = f32, triangle = f64; marker size \
+         grows with bits per texel.",
+    );
+    d.figure(
+        "error_histograms.svg",
+        "Distribution of |G − PCF| over fragments per technique (f32 closed forms and LP \
+         candidates), log₁₀ counts per bin (four bins per decade; the first bin is [0, 1e-4)).",
     );
     let front = pareto::pareto_front(r.entries);
     d.paragraph(format!(

@@ -120,6 +120,7 @@ pub fn evaluate(
     t: &dyn Technique,
     label: &str,
     stride: usize,
+    keep_values: bool,
 ) -> Result<EvalReport> {
     let b = Arc::new(bar(0, label));
     let bb = b.clone();
@@ -130,6 +131,7 @@ pub fn evaluate(
         } else {
             Subsample::All
         },
+        keep_values,
         progress: Some(Arc::new(move |done, total| {
             bb.set_total(total as u64);
             bb.set_done(done as u64);
@@ -152,7 +154,8 @@ pub fn measured(
     stride: usize,
     speed_inputs: usize,
 ) -> Result<Measured> {
-    let r = evaluate(stacks, t, name, stride)?;
+    let r = evaluate(stacks, t, name, stride, true)?;
+    let histogram = crate::report::recommend::histogram_of(&r);
     // Speed on the same kind of input as the error: filter windows of real fragments.
     let corpus = crate::metrics::windows::stacks_corpus(stacks, speed_inputs, 2015)?;
     let ns = timing::measure(t, &corpus, 3).mean;
@@ -172,6 +175,7 @@ pub fn measured(
         non_finite: r.non_finite,
         seconds: r.seconds,
         scenes: per_scene(&r),
+        histogram,
     })
 }
 

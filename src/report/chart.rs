@@ -260,6 +260,35 @@ pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result
     Ok(())
 }
 
+/// Error histograms, one line per technique: x = log₁₀ of the bin's upper edge of |G − PCF|
+/// (`recommend::HIST_EDGES`; the first bin [0, 1e-4) is drawn at −4), y = log₁₀ of the
+/// fragment count (empty bins omitted). The paper's way to see where a technique fails: the
+/// mass in the right-hand bins.
+pub fn histograms_svg(path: &Path, title: &str, hists: &[(String, Vec<u64>)]) -> Result<()> {
+    use super::recommend::HIST_EDGES;
+    let series: Vec<(String, Vec<(f64, f64)>)> = hists
+        .iter()
+        .filter(|h| h.1.len() == HIST_EDGES.len() - 1)
+        .map(|(name, h)| {
+            let pts = h
+                .iter()
+                .enumerate()
+                .filter(|(_, &c)| c > 0)
+                .map(|(k, &c)| (HIST_EDGES[k + 1].log10(), (c as f64).log10()))
+                .collect();
+            (name.clone(), pts)
+        })
+        .collect();
+    lines_svg(
+        path,
+        title,
+        "log₁₀ |G − PCF| (upper edge of the bin)",
+        "log₁₀ fragments",
+        &series,
+        false,
+    )
+}
+
 /// A line chart of several named series (x log-scaled when `log_x`).
 pub fn lines_svg(
     path: &Path,

@@ -19,6 +19,37 @@ pub struct Measured {
     pub seconds: f64,
     /// Per scene: (scene, mean error over its fragments, fragments).
     pub scenes: Vec<(String, f64, usize)>,
+    /// Fragments per bin of |G − PCF| ([`HIST_EDGES`]); empty in artefacts of older runs.
+    #[serde(default)]
+    pub histogram: Vec<u64>,
+}
+
+/// Bin edges of the error histogram: [0, 1e-4) then four bins per decade up to 1 (the last bin
+/// is closed): |G − PCF| at rounding level, then log-spaced.
+pub const HIST_EDGES: [f64; 18] = [
+    0.0, 1e-4, 1.778e-4, 3.162e-4, 5.623e-4, 1e-3, 1.778e-3, 3.162e-3, 5.623e-3, 1e-2, 1.778e-2,
+    3.162e-2, 5.623e-2, 0.1, 0.1778, 0.3162, 0.5623, 1.0,
+];
+
+/// Counts of `errors` in the bins of [`HIST_EDGES`] (values ≥ 1 go to the last bin; NaN and
+/// negative values are not counted).
+pub fn error_histogram(errors: impl Iterator<Item = f64>) -> Vec<u64> {
+    let mut h = vec![0u64; HIST_EDGES.len() - 1];
+    for e in errors.filter(|e| *e >= 0.0) {
+        let k = HIST_EDGES[1..].partition_point(|&edge| edge <= e);
+        let last = h.len() - 1;
+        h[k.min(last)] += 1;
+    }
+    h
+}
+
+/// The error histogram of an evaluation kept with per-fragment values (empty without them).
+pub fn histogram_of(r: &EvalReport) -> Vec<u64> {
+    let values = r.views.iter().flat_map(|v| v.values.iter().flatten());
+    if r.views.iter().all(|v| v.values.is_none()) {
+        return Vec::new();
+    }
+    error_histogram(values.map(|f| (f.g - f.pcf).abs()))
 }
 
 pub fn per_scene(r: &EvalReport) -> Vec<(String, f64, usize)> {
@@ -118,4 +149,20 @@ pub fn recommendations(all: &[Measured], tolerance: f64) -> Vec<Recommendation> 
         });
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn histogram_bins_by_edges() {
+        let h = error_histogram([0.0, 5e-5, 1e-4, 0.5, 0.99, 1.0, 3.0, f64::NAN, -1.0].into_iter());
+        assert_eq!(h.len(), 17);
+        assert_eq!(h[0], 2); // 0 and 5e-5
+        assert_eq!(h[1], 1); // 1e-4
+        assert_eq!(h[15], 1); // 0.5 ∈ [0.3162, 0.5623)
+        assert_eq!(h[16], 3); // 0.99, 1 and 3 (clamped)
+        assert_eq!(h.iter().sum::<u64>(), 7);
+    }
 }
