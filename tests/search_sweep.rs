@@ -2,6 +2,7 @@
 //! exhaustive ranking, interrupted runs resume to the same file, shards merge to the single run,
 //! degenerate and duplicate-span candidates are flagged.
 
+use momentlab::search::race::Elimination;
 use momentlab::search::{
     merge_dirs, read_rows, run_sweep, Dataset, FunctionTable, Hooks, Outcome, Row, Scorer,
     SweepConfig,
@@ -60,8 +61,6 @@ fn config(s: &Scorer, m: usize) -> SweepConfig {
     c.growth = 2;
     c.pilot = 4;
     c.batch = 3;
-    // Exercise the z-test extension of the promotion rule (off by default: max_keep = keep).
-    c.max_keep = 0.5;
     c
 }
 
@@ -94,19 +93,15 @@ fn run(cfg: &SweepConfig, s: &Scorer, dir: &Path) -> Outcome {
     run_sweep(cfg, s, dir, &Hooks::default()).unwrap()
 }
 
+/// The default rule (cap ¼ per stage, 99 % confidence) and the race without a cap.
 #[test]
-fn racing_top_k_equals_exhaustive_ranking() {
-    racing_matches_exhaustive(Some(0.5), 2);
-}
-
-/// The default rule (max_keep = keep: plain quartering, no z-test extension).
-#[test]
-fn default_racing_top_k_equals_exhaustive_ranking() {
+fn racing_finds_the_exhaustive_winner() {
     racing_matches_exhaustive(None, 1);
+    racing_matches_exhaustive(Some(1.0), 1);
 }
 
-/// `max_keep`: None = the default of `SweepConfig::new`.
-fn racing_matches_exhaustive(max_keep: Option<f64>, min_stages: usize) {
+/// `keep`: None = the default of `SweepConfig::new`.
+fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     let f = fixture();
     let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
     assert!(
@@ -115,49 +110,69 @@ fn racing_matches_exhaustive(max_keep: Option<f64>, min_stages: usize) {
         f.data.fragments().len()
     );
     let mut cfg = config(&s, 2);
-    match max_keep {
-        Some(v) => cfg.max_keep = v,
-        None => {
-            cfg.max_keep = SweepConfig::new(2, &s, "synthetic").max_keep;
-            assert_eq!(cfg.max_keep, cfg.keep, "default: plain quartering");
-        }
+    if let Some(k) = keep {
+        cfg.keep = k;
     }
-    let max_keep = cfg.max_keep;
-    let race = tmp(&format!("race{max_keep}"));
+    let race = tmp(&format!("race{}", cfg.keep));
     let Outcome::Complete(sum) = run(&cfg, &s, &race) else {
         panic!()
     };
     assert!(sum.stages.len() >= min_stages, "{sum:?}");
     assert!(sum.sampled_share < 1.0, "{sum:?}");
+    let race_sum = sum.race.clone().unwrap();
     let mut ex_cfg = cfg.clone();
     ex_cfg.exhaustive = true;
-    let ex = tmp(&format!("exhaustive{max_keep}"));
+    let ex = tmp(&format!("exhaustive{}", cfg.keep));
     run(&ex_cfg, &s, &ex);
 
     let ex_rows = rows(&ex);
     let race_rows = rows(&race);
     assert_eq!(ex_rows.len(), 28);
     assert_eq!(race_rows.len(), 28);
+    let exact = |i: u64| {
+        ex_rows
+            .iter()
+            .find(|e| e.index == i)
+            .unwrap()
+            .error
+            .unwrap()
+    };
     let mut ranked: Vec<&Row> = ex_rows.iter().filter(|r| r.error.is_some()).collect();
     ranked.sort_by(|a, b| a.error.unwrap().total_cmp(&b.error.unwrap()));
-    let mut top: Vec<&Row> = race_rows.iter().filter(|r| r.full).collect();
-    top.sort_by(|a, b| a.error.unwrap().total_cmp(&b.error.unwrap()));
-    assert_eq!(top.len(), 4);
-    for (r, e) in top.iter().zip(&ranked) {
-        assert_eq!(
-            r.index, e.index,
-            "racing top K differs from exhaustive ranking"
-        );
-        assert_eq!(r.error, e.error);
-        assert_eq!(r.fragments, f.data.fragments().len() as u64);
+    // The survivors (tied for first) are scored on every fragment: their errors are the
+    // exhaustive ones (pooled over the blocks in another order: equal to rounding).
+    let tied: Vec<&Row> = race_rows.iter().filter(|r| r.tied).collect();
+    assert_eq!(tied.len() as u64, race_sum.tied);
+    assert!(!tied.is_empty());
+    for r in &tied {
+        assert!(r.full && r.fragments == f.data.fragments().len() as u64);
+        assert!((r.error.unwrap() - exact(r.index)).abs() < 1e-12);
+        assert_eq!(r.versus, race_sum.winner);
+        // The paired difference to the winner is the difference of the exhaustive errors.
+        let w = exact(race_sum.winner.unwrap());
+        assert!((r.diff.unwrap() - (exact(r.index) - w)).abs() < 1e-12);
     }
-    // Eliminated candidates carry an estimate with standard error and sample size, and are
-    // (in this easy case) no better than the K-th best.
-    for r in race_rows.iter().filter(|r| !r.full && r.error.is_some()) {
+    // The exhaustive winner is tied for first, and it is the race's winner here.
+    assert!(tied.iter().any(|r| r.index == ranked[0].index));
+    assert_eq!(race_sum.winner, Some(ranked[0].index));
+    // Every candidate eliminated by confidence is worse than its stage reference on the whole
+    // sample (no false elimination in this easy case), and carries its evidence.
+    let mut conf = 0;
+    for r in race_rows.iter().filter(|r| r.eliminated.is_some()) {
         assert!(r.fragments > 0 && r.fragments < f.data.fragments().len() as u64);
-        assert!(r.stderr.unwrap() > 0.0);
-        let exact = ex_rows.iter().find(|e| e.index == r.index).unwrap();
-        assert!(exact.error.unwrap() >= top[3].error.unwrap());
+        assert!(
+            r.stderr.unwrap() > 0.0 && r.diff_se.unwrap() >= 0.0,
+            "{r:?}"
+        );
+        if r.eliminated == Some(Elimination::Confidence) {
+            conf += 1;
+            assert!(r.diff.unwrap() > 0.0 && r.diff_se.unwrap() > 0.0, "{r:?}");
+            assert!(exact(r.index) > exact(r.versus.unwrap()), "{r:?}");
+        }
+    }
+    assert_eq!(conf, race_sum.confidence_eliminated);
+    if cfg.keep == 1.0 {
+        assert_eq!(race_sum.cap_eliminated, 0);
     }
     // The exhaustive error equals an independent computation from per-fragment errors.
     let e0 = &ranked[0];
@@ -312,19 +327,16 @@ fn shards_merge_to_the_single_run() {
         if exhaustive {
             assert_eq!(a, b);
         } else {
-            // Racing: the global top K is scored identically in both.
-            let top = |rs: &[Row]| {
-                let mut t: Vec<Row> = rs.iter().filter(|r| r.full).cloned().collect();
+            // Racing: every shard completes its survivors on every fragment, so the global
+            // winner (the best tied row) is the same with the same error in both.
+            let winner = |rs: &[Row]| {
+                let mut t: Vec<Row> = rs.iter().filter(|r| r.tied).cloned().collect();
                 t.sort_by(|x, y| x.error.unwrap().total_cmp(&y.error.unwrap()));
-                t.truncate(cfg.top);
-                t.into_iter()
-                    .map(|mut r| {
-                        r.stage = 0;
-                        r
-                    })
-                    .collect::<Vec<_>>()
+                (t[0].index, t[0].error.unwrap())
             };
-            assert_eq!(top(&a), top(&b));
+            let (wa, wb) = (winner(&a), winner(&b));
+            assert_eq!(wa.0, wb.0);
+            assert!((wa.1 - wb.1).abs() < 1e-12);
             assert_eq!(
                 a.iter().map(|r| r.index).collect::<Vec<_>>(),
                 b.iter().map(|r| r.index).collect::<Vec<_>>()

@@ -42,12 +42,9 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         format!("wall, {threads} threads")
     );
     let mut rows: Vec<(String, &[Schedule])> = vec![(
-        format!("racing (keep {})", opts.keep),
+        format!("racing (keep {}, at most)", opts.keep),
         plan.racing.as_slice(),
     )];
-    if let Some(r) = &plan.racing_max_keep {
-        rows.push((format!("racing (max-keep {})", opts.max_keep), r.as_slice()));
-    }
     rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
     for (name, per) in &rows {
         let total: u64 = per.iter().map(|s| s.lp_solves).sum();

@@ -74,17 +74,28 @@ pub struct Opts {
     pub first_sample: usize,
     #[arg(long, default_value_t = 4)]
     pub growth: usize,
-    /// Fraction always promoted per stage.
+    /// Budget cap per stage: of the candidates not eliminated by confidence, at most
+    /// max(⌈keep·|C|⌉, top) stay (by the stage mean); the others leave "by the cap" and are
+    /// reported as such (1 = no cap).
     #[arg(long, default_value_t = 0.25)]
     pub keep: f64,
-    /// Largest promoted fraction: above --keep, candidates within z standard errors of the
-    /// leader are promoted too, up to this fraction (default = --keep: plain quartering; the
-    /// full m = 4 sweep gave the same best candidate and top 8 with 0.5 at 2.2× the cost,
-    /// docs/search.md).
-    #[arg(long, default_value_t = 0.25)]
-    pub max_keep: f64,
-    #[arg(long, default_value_t = 2.5)]
-    pub z: f64,
+    /// Confidence of the elimination tests, for all stages and candidates together
+    /// (Bonferroni): a candidate leaves by confidence only when it is worse than the stage
+    /// reference at this level (docs/search.md).
+    #[arg(long, default_value_t = 0.99)]
+    pub confidence: f64,
+    /// Bound of the tests: normal (paired mean ± z·s.e.) or bernstein (empirical Bernstein,
+    /// distribution-free, wider).
+    #[arg(long, default_value = "normal")]
+    pub bound: String,
+    /// Seed of the racing order only (default: --seed); the fragment sample keeps --seed.
+    #[arg(long)]
+    pub race_seed: Option<u64>,
+    /// Compare this racing run with an exhaustive results directory of the same data and print
+    /// the check (certified set contains the exhaustive winner, no confidence-eliminated
+    /// candidate better than it); with --report-only.
+    #[arg(long)]
+    pub validate: Option<PathBuf>,
     /// Candidates tried to pick the stage-0 reference.
     #[arg(long, default_value_t = 32)]
     pub pilot: usize,
@@ -184,8 +195,32 @@ fn load_data(
     Ok((data, name, Some(stacks)))
 }
 
+/// Check the racing flags before any expensive work.
+fn check_race_flags(args: &Opts) -> Result<()> {
+    if !(args.confidence > 0.0 && args.confidence < 1.0) {
+        bail!(
+            "--confidence {}: must be in (0, 1), e.g. 0.99",
+            args.confidence
+        );
+    }
+    if !(args.keep > 0.0 && args.keep <= 1.0) {
+        bail!("--keep {}: must be in (0, 1]", args.keep);
+    }
+    crate::search::race::Bound::parse(&args.bound).context("--bound")?;
+    if let Some(v) = &args.validate {
+        if !args.report_only {
+            bail!("--validate needs --report-only (it checks finished results)");
+        }
+        if !v.join("results.jsonl").exists() {
+            bail!("--validate {}: no results.jsonl there", v.display());
+        }
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<()> {
     let args = *args.opts;
+    check_race_flags(&args)?;
     let grid = Grid::uniform(args.grid)?;
     let bias = Bias::default();
     let table = table_of(&args, &grid)?;
@@ -217,8 +252,10 @@ pub fn run(args: Args) -> Result<()> {
         first_sample: args.first_sample,
         growth: args.growth,
         keep: args.keep,
-        max_keep: args.max_keep,
-        z: args.z,
+        confidence: args.confidence,
+        bound: crate::search::race::Bound::parse(&args.bound)
+            .with_context(|| "--bound".to_string())?,
+        race_seed: args.race_seed,
         pilot: args.pilot,
         batch: args.batch,
         report_dir: (!args.no_report).then(|| args.report.clone()),
@@ -249,7 +286,13 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--report-only and --no-report contradict each other");
         }
         let rows = read_rows(&results)?;
-        let (summary, _) = report_for(&data, stacks.as_deref(), &rows, &opts, &results)?;
+        if let Some(ex) = &args.validate {
+            let v = crate::search::tieset::validate(&rows, &read_rows(ex)?)?;
+            for l in v.lines() {
+                println!("validate: {l}");
+            }
+        }
+        let (summary, _) = report_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
         print_ranking(&summary);
         eprintln!("report: written to {}", args.report.display());
         return Ok(());

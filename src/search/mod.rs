@@ -7,7 +7,10 @@
 //! * candidates ↔ indices: [`crate::basis::candidates`] (colex numbering, as `momentlab candidates`).
 //! * [`dataset`]: the sampled fragments with their depth distributions on the grid.
 //! * [`score`]: Algorithm 1 errors |G − PCF| of one candidate over a list of fragments.
-//! * [`sweep`]: racing / successive halving, resumable results files, shards.
+//! * [`race`]: the racing statistics (paired tests with a stated confidence, the cap, the plan).
+//! * [`sweep`]: racing with elimination by evidence, resumable results files, shards.
+//! * [`tieset`]: the race's answer as sets (winner, tied for first, eliminated) and its check
+//!   against an exhaustive run.
 //! * [`results`]: the results rows, reading/writing them.
 //! * [`merge`]: combining the results of sharded runs.
 //! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown), references.
@@ -16,6 +19,7 @@
 pub mod dataset;
 pub mod merge;
 pub mod plan;
+pub mod race;
 pub mod report;
 pub mod results;
 pub mod run;
@@ -23,13 +27,14 @@ pub mod score;
 pub mod select;
 pub mod span;
 pub mod sweep;
+pub mod tieset;
 
 pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
 pub use merge::merge_dirs;
 pub use results::{read_rows, Row};
 pub use run::{sweep_dataset, sweep_stacks, SweepOptions, SweepResult};
 pub use score::Scorer;
-pub use sweep::{run_sweep, Hooks, Outcome, Progress, SweepConfig, SweepSummary};
+pub use sweep::{run_sweep, Hooks, Outcome, Progress, RaceSummary, SweepConfig, SweepSummary};
 
 use crate::lp::GridTable;
 use crate::Grid;

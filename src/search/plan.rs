@@ -3,11 +3,13 @@
 //! and for the exhaustive mode, per shard), and the core-hours from a short single-threaded
 //! calibration of the LP solver on this machine and data.
 //!
-//! LP solves (as `SweepSummary::lp_solves`): racing stage k with |C_k| candidates on a block of
-//! B_k fragments costs (|C_k| + 1)·B_k (the stage reference included) plus, in stage 0, the
-//! pilot·B_0 solves that pick the reference; |C_{k+1}| = min(max(⌈keep·|C_k|⌉, top), |C_k|);
-//! then `top` candidates on all F kept fragments. Exhaustive: |C|·F. With max_keep > keep the
-//! promotions depend on the data: the plan gives the range from keep to max_keep.
+//! LP solves (as `SweepSummary::lp_solves`): the pilot block P picks the stage-0 reference
+//! (pilot·|P| solves); racing stage k with |C_k| candidates on a block of B_k fragments costs
+//! (|C_k| + 1)·B_k (the stage reference included); |C_{k+1}| ≤ min(max(⌈keep·|C_k|⌉, top), |C_k|)
+//! (the cap; eliminations by confidence only lower it, and racing stops early when one
+//! candidate is left); then the survivors on the fragments they have not seen, (|C| + 1)·|rest|.
+//! The racing schedule is therefore an upper bound, reached when no candidate is eliminated by
+//! confidence. Exhaustive: |C|·F, exact.
 
 use super::select;
 use super::sweep::SweepConfig;
@@ -32,25 +34,39 @@ pub struct Schedule {
 pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64, keep: f64) -> Schedule {
     let top = cfg.top as u64;
     let (mut cur, mut lp, mut stages) = (active, 0u64, Vec::new());
-    if !cfg.exhaustive {
-        let (mut offset, mut size) = (0u64, cfg.first_sample as u64);
-        while cur > top && offset < fragments {
-            let block = size.min(fragments - offset);
-            if stages.is_empty() {
-                lp += (cfg.pilot as u64).clamp(1, cur) * block;
-            }
-            lp += (cur + 1) * block;
-            stages.push((cur, block));
-            cur = ((keep * cur as f64).ceil() as u64).max(top).min(cur);
-            offset += block;
-            size = size.saturating_mul(cfg.growth as u64);
+    if cfg.exhaustive {
+        return Schedule {
+            stages,
+            full: cur,
+            lp_solves: cur * fragments,
+        };
+    }
+    let (pilot, blocks) = super::race::blocks(fragments as usize, cfg.first_sample, cfg.growth);
+    let mut run = 0;
+    for b in &blocks {
+        if cur <= 1 {
+            break;
         }
-        cur = cur.min(top);
+        if stages.is_empty() {
+            lp += (cfg.pilot as u64).clamp(1, cur) * pilot.len() as u64;
+        }
+        lp += (cur + 1) * b.len() as u64;
+        stages.push((cur, b.len() as u64));
+        cur = ((keep * cur as f64).ceil() as u64).max(top).min(cur);
+        run += 1;
+    }
+    let rest: u64 = if run > 0 {
+        pilot.len() as u64 + blocks[run..].iter().map(|b| b.len() as u64).sum::<u64>()
+    } else {
+        fragments
+    };
+    if cur > 0 && rest > 0 {
+        lp += (cur + 1) * rest;
     }
     Schedule {
         stages,
         full: cur,
-        lp_solves: lp + cur * fragments,
+        lp_solves: lp,
     }
 }
 
@@ -87,9 +103,8 @@ pub struct Plan {
     pub duplicates: u64,
     /// Kept non-trivial fragments.
     pub fragments: u64,
-    /// Per shard: racing with `keep`, racing with `max_keep` (None when equal), exhaustive.
+    /// Per shard: racing (an upper bound, see the module docs), exhaustive.
     pub racing: Vec<Schedule>,
-    pub racing_max_keep: Option<Vec<Schedule>>,
     pub exhaustive: Vec<Schedule>,
     pub calibration: Calibration,
 }
@@ -130,7 +145,6 @@ pub fn plan(cfg: &SweepConfig, scorer: &Scorer, calibration: [usize; 2]) -> Resu
         duplicates: flags.iter().filter(|f| f.1.is_some()).count() as u64,
         fragments,
         racing: per(cfg.keep, false),
-        racing_max_keep: (cfg.max_keep > cfg.keep).then(|| per(cfg.max_keep, false)),
         exhaustive: per(cfg.keep, true),
         calibration: calibrate(scorer, &active, &order, calibration)?,
     })

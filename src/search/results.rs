@@ -1,6 +1,7 @@
 //! Results files: one JSON line per candidate, appended and flushed per batch so that a run
 //! killed at any moment (even mid-line) can be resumed ([`merge`](super::merge) combines shards).
 
+use super::race::Elimination;
 use anyhow::Result;
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -44,6 +45,46 @@ pub struct Row {
     pub full: bool,
     /// LPs that failed or were infeasible (counted as G = 0).
     pub lp_failures: u64,
+    /// Racing: why the candidate left (None: it survived, or an exhaustive run).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub eliminated: Option<Elimination>,
+    /// Racing survivor: statistically tied for first (not shown worse than any candidate).
+    #[serde(default)]
+    pub tied: bool,
+    /// The candidate the evidence compares with: the stage reference (eliminated candidates)
+    /// or the winner (survivors).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub versus: Option<u64>,
+    /// Paired difference error − error(versus) on the same fragments (error units: the same
+    /// scale as `error`) and its standard error.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diff: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diff_se: Option<f64>,
+}
+
+impl Row {
+    /// A row with no racing evidence (flags, exhaustive scores).
+    pub fn plain(index: u64, functions: Vec<String>) -> Row {
+        Row {
+            index,
+            functions,
+            error: None,
+            stderr: None,
+            fragments: 0,
+            degenerate: false,
+            duplicate_of: None,
+            seconds: 0.0,
+            stage: 0,
+            full: false,
+            lp_failures: 0,
+            eliminated: None,
+            tied: false,
+            versus: None,
+            diff: None,
+            diff_se: None,
+        }
+    }
 }
 
 /// The result rows of a results directory.

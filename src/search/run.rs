@@ -46,8 +46,11 @@ pub struct SweepOptions {
     pub first_sample: usize,
     pub growth: usize,
     pub keep: f64,
-    pub max_keep: f64,
-    pub z: f64,
+    /// Confidence of the elimination tests (all stages and candidates together).
+    pub confidence: f64,
+    pub bound: super::race::Bound,
+    /// Seed of the racing order (None: `seed`); the fragment sample keeps `seed`.
+    pub race_seed: Option<u64>,
     pub pilot: usize,
     pub batch: usize,
     /// Write the report here after a complete unsharded run (None: no report files; the
@@ -80,8 +83,9 @@ impl Default for SweepOptions {
             first_sample: 1024,
             growth: 4,
             keep: 0.25,
-            max_keep: 0.25,
-            z: 2.5,
+            confidence: 0.99,
+            bound: super::race::Bound::Normal,
+            race_seed: None,
             pilot: 32,
             batch: 64,
             report_dir: None,
@@ -220,7 +224,7 @@ pub fn sweep_dataset(
         references: Vec::new(),
     };
     if out.summary.is_some() && opts.shard[1] == 1 {
-        let (ranking, refs) = report_for(data, stacks, &out.rows, opts, results)?;
+        let (ranking, refs) = report_for(data, table, stacks, &out.rows, opts, results)?;
         out.ranking = Some(ranking);
         out.references = refs;
     }
@@ -231,7 +235,7 @@ pub fn sweep_dataset(
 /// The [`SweepConfig`] of `opts` on `scorer`'s data and catalog.
 pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig> {
     Ok(SweepConfig {
-        seed: opts.seed,
+        seed: opts.race_seed.unwrap_or(opts.seed),
         top: opts.top,
         exhaustive: opts.exhaustive,
         candidates: resolve_candidates(
@@ -244,8 +248,8 @@ pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig>
         first_sample: opts.first_sample,
         growth: opts.growth,
         keep: opts.keep,
-        max_keep: opts.max_keep,
-        z: opts.z,
+        confidence: opts.confidence,
+        bound: opts.bound,
         pilot: opts.pilot,
         batch: opts.batch,
         ..SweepConfig::new(opts.m, scorer, &opts.dataset)
@@ -269,6 +273,7 @@ pub fn plan_dataset(
 /// References, ranking and (if `opts.report_dir`) the report files for existing `rows`.
 pub fn report_for(
     data: &Dataset,
+    table: &FunctionTable,
     stacks: Option<&[DepthStack]>,
     rows: &[Row],
     opts: &SweepOptions,
@@ -277,7 +282,17 @@ pub fn report_for(
     if scored_rows(rows) == 0 {
         bail!("{}: no scored candidates to report", results.display());
     }
-    let mut refs = report::lp_references(data, &opts.solver, opts.chunk)?;
+    // The LP references paired with the winner on every fragment (their difference to it).
+    let winner = super::tieset::winner_of(rows).and_then(|w| {
+        w.functions
+            .iter()
+            .map(|n| table.names().iter().position(|x| x == n))
+            .collect::<Option<Vec<usize>>>()
+    });
+    let mut refs = match &winner {
+        Some(cols) => report::lp_references_paired(data, table, cols, &opts.solver, opts.chunk)?,
+        None => report::lp_references(data, &opts.solver, opts.chunk)?,
+    };
     if opts.closed_forms {
         if let Some(s) = stacks {
             refs.extend(report::closed_form_references(s, &opts.bias)?);
@@ -295,6 +310,13 @@ pub fn report_for(
                 compare: opts.compare.clone(),
                 fig3_points: opts.fig3_points,
                 results_label: results.display().to_string(),
+                race: super::results::read_json::<SweepSummary>(
+                    &results.join(super::results::COMPLETE_FILE),
+                )
+                .ok()
+                .and_then(|s| s.race),
+                confidence: opts.confidence,
+                keep: opts.keep,
             },
         )?,
         None => report::summarize(rows, &refs),
@@ -310,11 +332,24 @@ fn scored_rows(rows: &[Row]) -> usize {
 /// the sweep was stopped before the end.
 pub fn sweep_line(r: &SweepResult) -> Option<String> {
     let s = r.summary.as_ref()?;
-    Some(format!(
+    let mut line = format!(
         "search: sweep done in {:.1} s: {} candidates ({} degenerate, {} duplicates), stages {:?}, {} on all fragments, {} LP solves planned ({:.1} % of exhaustive on the kept fragments, {:.0} solves/s)",
         r.sweep_seconds, s.candidates, s.degenerate, s.duplicates, s.stages, s.full, s.lp_solves,
         s.sampled_share * 100.0, s.lp_solves as f64 / r.sweep_seconds.max(1e-9)
-    ))
+    );
+    if let Some(race) = &s.race {
+        line.push_str(&format!(
+            "\nsearch: race at {:.0} % confidence: {} tied for first, {} eliminated by confidence, {} by the cap; {} of {} fragments used, {}",
+            race.confidence * 100.0,
+            race.tied,
+            race.confidence_eliminated,
+            race.cap_eliminated,
+            race.fragments_used,
+            race.fragment_budget,
+            if race.resolved { "resolved" } else { "the fragment budget bound" }
+        ));
+    }
+    Some(line)
 }
 
 /// Lines naming the best candidate and the ranks of the references.
@@ -322,21 +357,25 @@ pub fn ranking_lines(s: &Summary) -> Vec<String> {
     let mut out = Vec::new();
     if let Some(b) = &s.best {
         out.push(format!(
-            "search: best of {} candidates: ({}) {:.4} % ± {:.4} %",
+            "search: winner of {} candidates: ({}) {:.4} % ± {:.4} %; {} tied for first",
             s.scored,
             b.functions.join(", "),
             b.error * 100.0,
-            b.stderr * 100.0
+            b.stderr * 100.0,
+            s.tied
         ));
     }
     for r in &s.references {
-        if let Some(rank) = r.rank {
+        if let (Some(rank), Some((d, se))) = (r.rank, r.diff) {
             out.push(format!(
-                "search: {} {:.4} % ± {:.4} %, rank {rank} of {}",
+                "search: {} {:.4} % ± {:.4} %, rank {rank} of {}; {:+.4} ± {:.4} pp to the winner ({})",
                 r.label,
                 r.error * 100.0,
                 r.stderr * 100.0,
-                s.scored
+                s.scored,
+                d * 100.0,
+                se * 100.0,
+                if r.paired { "paired" } else { "unpaired" }
             ));
         }
     }

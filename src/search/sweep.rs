@@ -6,23 +6,27 @@
 //! sees a fresh stratified sample shared by all its candidates (paired differences), and the
 //! estimate that promotes a candidate is not the one that selected it earlier.
 //!
-//! **Promotion rule (stage k).** Every candidate c of the stage is scored on the block; the
-//! stage reference R (stage 0: the best of `pilot` evenly spaced candidates; later: the leader
-//! of the previous stage) is scored too and each c records the paired differences
-//! d = e_c − e_R. Let b be the stage leader (smallest mean). The gap ē_c − ē_b has standard
-//! error at most se(d_c) + se(d_b) (Cauchy–Schwarz), exactly se(d_c) when R = b. Candidates are
-//! sorted by mean; the first max(⌈keep·|C|⌉, top) are promoted, and further candidates whose gap
-//! is within `z` such standard errors of the leader ("not significantly worse") are promoted
-//! too, up to ⌈max_keep·|C|⌉ in all. Racing stops when at most `top` candidates remain or the
-//! fragments run out; the `top` best by pooled mean are then scored on every fragment.
+//! **Elimination by evidence (stage k).** The stage reference R_k (stage 0: the best of `pilot`
+//! evenly spaced candidates on a separate pilot block; later: the leader by pooled mean after
+//! the previous stage) is scored on the block with every candidate c, which records the paired
+//! differences d = e_c − e_R. c leaves *by confidence* when μ_c − μ_R > 0 at confidence
+//! 1 − δ, δ = (1 − `confidence`) / (stages · candidates · shards) (Bonferroni over the planned
+//! stages, the stage's candidates and the shards; [`super::race`]). Of the rest, at most
+//! max(⌈keep·|C|⌉, top) stay (by the stage mean): the others leave *by the cap*, the budget,
+//! without evidence, and are marked so. Racing stops when one candidate is left (resolved) or
+//! the fragments run out (the fragment budget bound); the survivors are then completed on the
+//! fragments they have not seen (the pilot block, unused blocks), so they are scored on every
+//! fragment, and form the set *statistically tied for first*. With probability ≥ `confidence`
+//! (normal approximation of block means, or always with the Bernstein bound) no candidate is
+//! eliminated by confidence while it is at least as good as its reference; so the best candidate
+//! is among the tied and the cap-eliminated candidates.
 //!
-//! **Risk.** A candidate that belongs to the true top K is lost when it is outside the kept
-//! fraction *and* looks significantly worse than the leader on a block — a z-standard-error
-//! event per candidate per stage (with 66045 candidates a few such events are expected at
-//! z = 2.5), or when errors are so heavy-tailed that a block of thousands of fragments
-//! misjudges the mean (rare geometry concentrated in few texels). The kept fraction (default
-//! 1/4) is a safety margin on top of the test. Eliminated candidates keep their sampled
-//! estimate, its standard error and sample size in the results.
+//! Every decision uses only the stage's block, which is disjoint from the blocks that chose its
+//! reference, so selection does not bias the test. Eliminated candidates keep their pooled
+//! estimate (over the blocks they saw), the stage evidence (`versus`, `diff`, `diff_se`) and the
+//! reason; survivors carry the paired difference to the winner pooled over all blocks (its
+//! standard error is exact on blocks whose reference is the winner, else bounded by
+//! se(d_c) + se(d_w), Cauchy–Schwarz).
 //!
 //! **Resuming.** `config.json` fixes the run; `stage{k}.jsonl` holds per-candidate sufficient
 //! statistics of racing stage k, `results.jsonl` the final rows; all are appended and flushed
@@ -31,19 +35,23 @@
 //! and resumed run writes the same rows as an uninterrupted one (except `seconds`).
 //!
 //! **Shards.** `shard = [i, N]` keeps the candidates with index ≡ i (mod N); each shard races
-//! its own candidates on the same fragment blocks (same seed) and scores its own top K on
-//! every fragment. Merged shards give exactly the single-run rows in exhaustive mode; with
-//! racing, the global top K (each of which is in its shard's top K when racing does not drop
-//! it) is scored identically, while eliminated candidates may leave at different stages.
+//! its own candidates on the same fragment blocks (same seed) with δ divided by N too, so the
+//! union of the shards' tied sets is a certified set of the whole sweep. Merged shards give
+//! exactly the single-run rows in exhaustive mode; with racing, survivors are scored on every
+//! fragment in every shard, so the global winner has the same error in both.
 
 use super::results::{
     append_jsonl, read_json, read_jsonl, write_json, Row, COMPLETE_FILE, CONFIG_FILE, RESULTS_FILE,
 };
+
+/// Statistics of the survivors on the fragments they had not seen (completion block).
+const FINAL_FILE: &str = "final.jsonl";
+use super::race::{self, Bound, Elimination, Moments, StageStats};
 use super::Scorer;
 use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 
 /// Everything that determines the rows of a run (stored as `config.json`).
@@ -76,12 +84,14 @@ pub struct SweepConfig {
     pub first_sample: usize,
     /// Sample growth factor per stage.
     pub growth: usize,
-    /// Fraction always promoted.
+    /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage.
     pub keep: f64,
-    /// Upper bound of the promoted fraction.
-    pub max_keep: f64,
-    /// Standard errors within which a candidate counts as not worse than the leader.
-    pub z: f64,
+    /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
+    pub confidence: f64,
+    /// One-sided bound of the tests (normal approximation or empirical Bernstein).
+    pub bound: Bound,
+    /// Paired differences to the reference (true) or independent intervals (comparison only).
+    pub paired: bool,
     /// Candidates tried to pick the stage-0 reference.
     pub pilot: usize,
     /// Relative tolerance of the rank / span decisions.
@@ -111,8 +121,9 @@ impl SweepConfig {
             first_sample: 1024,
             growth: 4,
             keep: 0.25,
-            max_keep: 0.25,
-            z: 2.5,
+            confidence: 0.99,
+            bound: Bound::Normal,
+            paired: true,
             pilot: 32,
             tol: 1e-9,
             chunk: scorer.chunk(),
@@ -153,6 +164,48 @@ pub struct SweepSummary {
     pub sampled_share: f64,
     /// Number of merged shards (merge only).
     pub merged_shards: Option<usize>,
+    /// What racing resolved (None: exhaustive or merged).
+    #[serde(default)]
+    pub race: Option<RaceSummary>,
+}
+
+/// What the race decided and whether its budget bound.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RaceSummary {
+    pub confidence: f64,
+    pub bound: Bound,
+    pub paired: bool,
+    /// Fragments of the pilot block (choosing the stage-0 reference).
+    pub pilot_fragments: u64,
+    pub stages: Vec<StageLog>,
+    /// Non-trivial fragments available (the kept sample: the fragment budget).
+    pub fragment_budget: u64,
+    /// Fragments the race used before completing the survivors (pilot and stage blocks).
+    pub fragments_used: u64,
+    /// One candidate left: the winner is certified at the stated confidence.
+    pub resolved: bool,
+    /// The fragments ran out with more than one candidate left.
+    pub budget_bound: bool,
+    /// Candidates left at the end (statistically tied for first), the winner among them.
+    pub tied: u64,
+    pub winner: Option<u64>,
+    pub confidence_eliminated: u64,
+    pub cap_eliminated: u64,
+}
+
+/// One racing stage.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StageLog {
+    pub candidates: u64,
+    pub fragments: u64,
+    pub reference: u64,
+    /// Per-test error probability δ and the matching normal quantile z_{1−δ}.
+    pub delta: f64,
+    pub z: f64,
+    /// Candidates allowed to stay by the cap.
+    pub cap: u64,
+    pub confidence_eliminated: u64,
+    pub cap_eliminated: u64,
 }
 
 impl SweepSummary {
@@ -169,6 +222,7 @@ impl SweepSummary {
             lp_solves: 0,
             sampled_share: 0.0,
             merged_shards: Some(shards),
+            race: None,
         }
     }
 }
@@ -192,6 +246,7 @@ pub struct Hooks<'h> {
 
 /// How [`run_sweep`] ended.
 #[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // one value per run
 pub enum Outcome {
     Complete(SweepSummary),
     /// Stopped by [`Hooks::stop_after_batches`].
@@ -210,6 +265,55 @@ struct StageRow {
     dsumsq: f64,
     failures: u64,
     seconds: f64,
+}
+
+impl StageRow {
+    fn empty(index: u64) -> StageRow {
+        StageRow {
+            index,
+            n: 0,
+            sum: 0.0,
+            sumsq: 0.0,
+            dsum: 0.0,
+            dsumsq: 0.0,
+            failures: 0,
+            seconds: 0.0,
+        }
+    }
+    /// Sums of the errors `e` and of the differences to the reference's errors `e_ref`.
+    fn paired(index: u64, e: &[f64], e_ref: &[f64], failures: u64, seconds: f64) -> StageRow {
+        let mut r = StageRow {
+            failures,
+            seconds,
+            ..StageRow::empty(index)
+        };
+        for (x, xr) in e.iter().zip(e_ref) {
+            let d = x - xr;
+            r.n += 1;
+            r.sum += x;
+            r.sumsq += x * x;
+            r.dsum += d;
+            r.dsumsq += d * d;
+        }
+        r
+    }
+    /// Pool another block (the differences then mix references: only `e` stays meaningful).
+    fn add(&mut self, o: &StageRow) {
+        self.n += o.n;
+        self.sum += o.sum;
+        self.sumsq += o.sumsq;
+        self.dsum += o.dsum;
+        self.dsumsq += o.dsumsq;
+        self.failures += o.failures;
+        self.seconds += o.seconds;
+    }
+    fn stats(&self) -> StageStats {
+        StageStats {
+            index: self.index,
+            e: Moments::new(self.n, self.sum, self.sumsq),
+            d: Moments::new(self.n, self.dsum, self.dsumsq),
+        }
+    }
 }
 
 struct Stopped;
@@ -239,25 +343,21 @@ impl Writer<'_, '_> {
     }
 }
 
+macro_rules! trystv {
+    ($e:expr) => {
+        match $e? {
+            Ok(v) => v,
+            Err(Stopped) => return Ok(Outcome::Stopped),
+        }
+    };
+}
+
 macro_rules! tryst {
     ($e:expr) => {
         if let Err(Stopped) = $e? {
             return Ok(Outcome::Stopped);
         }
     };
-}
-
-fn mean_se(n: u64, sum: f64, sumsq: f64) -> (f64, f64) {
-    if n == 0 {
-        return (0.0, f64::INFINITY);
-    }
-    let nf = n as f64;
-    let mean = sum / nf;
-    if n < 2 {
-        return (mean, f64::INFINITY);
-    }
-    let var = ((sumsq - sum * sum / nf) / (nf - 1.0)).max(0.0);
-    (mean, (var / nf).sqrt())
 }
 
 /// Run (or resume) the sweep described by `cfg` into `dir`.
@@ -284,8 +384,14 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     if cfg.first_sample == 0 || cfg.growth == 0 || cfg.batch == 0 || cfg.top == 0 {
         bail!("first_sample, growth, batch and top must be positive");
     }
-    if !(cfg.keep > 0.0 && cfg.keep <= cfg.max_keep && cfg.max_keep <= 1.0) {
-        bail!("need 0 < keep ≤ max_keep ≤ 1");
+    if !(cfg.keep > 0.0 && cfg.keep <= 1.0) {
+        bail!(
+            "keep (the budget cap per stage) must be in (0, 1], got {}",
+            cfg.keep
+        );
+    }
+    if !(cfg.confidence > 0.0 && cfg.confidence < 1.0) {
+        bail!("confidence must be in (0, 1), got {}", cfg.confidence);
     }
     let data = scorer.data();
     if data.total_count() == 0 {
@@ -336,17 +442,9 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         n_duplicate += duplicate_of.is_some() as u64;
         if !done.contains(i) {
             flag_rows.push(Row {
-                index: *i,
-                functions: names(*i),
-                error: None,
-                stderr: None,
-                fragments: 0,
                 degenerate,
                 duplicate_of,
-                seconds: 0.0,
-                stage: 0,
-                full: false,
-                lp_failures: 0,
+                ..Row::plain(*i, names(*i))
             });
         }
     }
@@ -355,209 +453,28 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         done.extend(batch.iter().map(|r| r.index));
     }
 
-    // --- racing ---------------------------------------------------------------------------------
-    let nontrivial = data.fragments().len() as u64;
-    let to_error = |n: u64, sum: f64, sumsq: f64| data.error_estimate(n, sum, sumsq);
-    let mut lp_solves = 0u64;
-    let mut stages = Vec::new();
-    let mut pooled: BTreeMap<u64, StageRow> = BTreeMap::new();
-    let mut cur = active.clone();
-    let mut stage = 0usize;
-    if !cfg.exhaustive {
-        let order = data.stratified_order(cfg.seed);
-        let mut offset = 0usize;
-        let mut size = cfg.first_sample;
-        let mut leader: Option<u64> = None;
-        while cur.len() > cfg.top && offset < order.len() {
-            let end = (offset + size).min(order.len());
-            let mut block: Vec<u32> = order[offset..end].to_vec();
-            block.sort_unstable();
-            // Stage reference.
-            let reference = match leader {
-                Some(l) => l,
-                None => {
-                    let p = cfg.pilot.clamp(1, cur.len());
-                    let pilots: Vec<u64> = (0..p).map(|k| cur[k * cur.len() / p]).collect();
-                    let subs: Vec<Vec<usize>> = pilots.iter().map(|i| subsets[i].clone()).collect();
-                    let errs = scorer.errors_many(&subs, &block, &|_| {})?;
-                    lp_solves += (p * block.len()) as u64;
-                    let means: Vec<f64> = errs.iter().map(|e| e.errors.iter().sum()).collect();
-                    let best = (0..p)
-                        .min_by(|&a, &b| means[a].total_cmp(&means[b]).then(a.cmp(&b)))
-                        .unwrap();
-                    pilots[best]
-                }
-            };
-            let e_ref = scorer.errors_many(&[subsets[&reference].clone()], &block, &|_| {})?;
-            let e_ref = &e_ref[0].errors;
-            lp_solves += ((cur.len() + 1) * block.len()) as u64;
-            stages.push((cur.len() as u64, block.len() as u64));
-
-            let path = dir.join(format!("stage{stage}.jsonl"));
-            let have: BTreeSet<u64> = read_jsonl::<StageRow>(&path, true)?
-                .into_iter()
-                .map(|r| r.index)
-                .collect();
-            let todo: Vec<u64> = cur.iter().copied().filter(|i| !have.contains(i)).collect();
-            w.progress(Progress::Phase {
-                name: format!(
-                    "stage {stage}: {} candidates × {} fragments",
-                    cur.len(),
-                    block.len()
-                ),
-                units: (todo.len() * block.len()) as u64,
-            });
-            let tick = |u: u64| {
-                if let Some(f) = hooks.progress {
-                    f(Progress::Advance(u))
-                }
-            };
-            for batch in todo.chunks(cfg.batch) {
-                let subs: Vec<Vec<usize>> = batch.iter().map(|i| subsets[i].clone()).collect();
-                let errs = scorer.errors_many(&subs, &block, &tick)?;
-                let rows: Vec<StageRow> = batch
-                    .iter()
-                    .zip(errs)
-                    .map(|(&index, e)| {
-                        let mut r = StageRow {
-                            index,
-                            n: e.errors.len() as u64,
-                            sum: 0.0,
-                            sumsq: 0.0,
-                            dsum: 0.0,
-                            dsumsq: 0.0,
-                            failures: e.failures,
-                            seconds: e.seconds,
-                        };
-                        for (x, xr) in e.errors.iter().zip(e_ref) {
-                            let d = x - xr;
-                            r.sum += x;
-                            r.sumsq += x * x;
-                            r.dsum += d;
-                            r.dsumsq += d * d;
-                        }
-                        r
-                    })
-                    .collect();
-                tryst!(w.append(&path, &rows));
-            }
-            // Decide from the statistics as stored.
-            let stored: HashMap<u64, StageRow> = read_jsonl::<StageRow>(&path, false)?
-                .into_iter()
-                .map(|r| (r.index, r))
-                .collect();
-            let mut ranked: Vec<(f64, f64, u64)> = Vec::with_capacity(cur.len());
-            for i in &cur {
-                let r = stored
-                    .get(i)
-                    .with_context(|| format!("{}: candidate {i} missing", path.display()))?;
-                let (mean, _) = mean_se(r.n, r.sum, r.sumsq);
-                let (_, dse) = mean_se(r.n, r.dsum, r.dsumsq);
-                ranked.push((mean, dse, *i));
-                let p = pooled.entry(*i).or_insert(StageRow {
-                    index: *i,
-                    n: 0,
-                    sum: 0.0,
-                    sumsq: 0.0,
-                    dsum: 0.0,
-                    dsumsq: 0.0,
-                    failures: 0,
-                    seconds: 0.0,
-                });
-                p.n += r.n;
-                p.sum += r.sum;
-                p.sumsq += r.sumsq;
-                p.failures += r.failures;
-                p.seconds += r.seconds;
-            }
-            ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.2.cmp(&b.2)));
-            let (best_mean, best_dse, best) = ranked[0];
-            let len = ranked.len();
-            let q_min = ((cfg.keep * len as f64).ceil() as usize)
-                .max(cfg.top)
-                .min(len);
-            let q_max = ((cfg.max_keep * len as f64).ceil() as usize).max(q_min);
-            let mut promoted: Vec<u64> = ranked[..q_min].iter().map(|r| r.2).collect();
-            for &(mean, dse, i) in &ranked[q_min..] {
-                if promoted.len() >= q_max {
-                    break;
-                }
-                if mean - best_mean <= cfg.z * (dse + best_dse) {
-                    promoted.push(i);
-                }
-            }
-            let keep: BTreeSet<u64> = promoted.iter().copied().collect();
-            let out: Vec<u64> = cur.iter().copied().filter(|i| !keep.contains(i)).collect();
-            tryst!(write_eliminated(
-                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error, nontrivial
-            ));
-            cur = keep.into_iter().collect();
-            leader = Some(best);
-            offset = end;
-            size = size.saturating_mul(cfg.growth);
-            stage += 1;
-        }
-        // Final selection by pooled mean.
-        if cur.len() > cfg.top {
-            let mut r: Vec<(f64, u64)> = cur
-                .iter()
-                .map(|i| {
-                    let p = &pooled[i];
-                    (p.sum / p.n.max(1) as f64, *i)
-                })
-                .collect();
-            r.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let keep: BTreeSet<u64> = r[..cfg.top].iter().map(|x| x.1).collect();
-            let out: Vec<u64> = cur.iter().copied().filter(|i| !keep.contains(i)).collect();
-            tryst!(write_eliminated(
-                &mut w, &results, &mut done, &out, &pooled, stage, &names, &to_error, nontrivial
-            ));
-            cur = keep.into_iter().collect();
-        }
-    }
-
-    // --- final: every fragment ------------------------------------------------------------------
-    let ids: Vec<u32> = (0..nontrivial as u32).collect();
-    lp_solves += cur.len() as u64 * nontrivial;
-    let todo: Vec<u64> = cur.iter().copied().filter(|i| !done.contains(i)).collect();
-    w.progress(Progress::Phase {
-        name: format!("final: {} candidates × {} fragments", cur.len(), nontrivial),
-        units: todo.len() as u64 * nontrivial,
-    });
-    let tick = |u: u64| {
-        if let Some(f) = hooks.progress {
-            f(Progress::Advance(u))
-        }
+    // --- racing / exhaustive scoring ----------------------------------------------------------
+    let ctx = Ctx {
+        scorer,
+        subsets: &subsets,
+        hooks,
+        batch: cfg.batch,
     };
-    for batch in todo.chunks(cfg.batch) {
-        let subs: Vec<Vec<usize>> = batch.iter().map(|i| subsets[i].clone()).collect();
-        let errs = scorer.errors_many(&subs, &ids, &tick)?;
-        let rows: Vec<Row> = batch
-            .iter()
-            .zip(errs)
-            .map(|(&index, e)| {
-                let sum: f64 = e.errors.iter().sum();
-                let sumsq: f64 = e.errors.iter().map(|x| x * x).sum();
-                let (error, se) = to_error(nontrivial, sum, sumsq);
-                let se = if nontrivial == 0 { 0.0 } else { se };
-                Row {
-                    index,
-                    functions: names(index),
-                    error: Some(error),
-                    stderr: Some(se),
-                    fragments: nontrivial,
-                    degenerate: false,
-                    duplicate_of: None,
-                    seconds: e.seconds,
-                    stage,
-                    full: true,
-                    lp_failures: e.failures,
-                }
-            })
-            .collect();
-        tryst!(w.append(&results, &rows));
-        done.extend(batch);
-    }
+    let nontrivial = data.fragments().len() as u64;
+    let (lp_solves, full, stages, race_summary) = if cfg.exhaustive {
+        tryst!(exhaustive(
+            &ctx, &mut w, &results, &mut done, &active, &names
+        ));
+        (
+            active.len() as u64 * nontrivial,
+            active.len() as u64,
+            Vec::new(),
+            None,
+        )
+    } else {
+        let r = trystv!(race_all(&ctx, cfg, &mut w, dir, &mut done, &active, &names));
+        (r.lp_solves, r.summary.tied, r.stage_sizes, Some(r.summary))
+    };
 
     let scored = active.len() as u64;
     let summary = SweepSummary {
@@ -565,7 +482,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         degenerate: n_degenerate,
         duplicates: n_duplicate,
         stages,
-        full: cur.len() as u64,
+        full,
         nontrivial_fragments: nontrivial,
         all_fragments: data.total_count(),
         nontrivial_population: data.nontrivial_population(),
@@ -576,9 +493,390 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
             lp_solves as f64 / (scored * nontrivial) as f64
         },
         merged_shards: None,
+        race: race_summary,
     };
     write_json(&dir.join(COMPLETE_FILE), &summary)?;
     Ok(Outcome::Complete(summary))
+}
+
+/// What the scoring helpers share.
+struct Ctx<'a, 'h> {
+    scorer: &'a Scorer<'a>,
+    subsets: &'a HashMap<u64, Vec<usize>>,
+    hooks: &'a Hooks<'h>,
+    batch: usize,
+}
+
+impl Ctx<'_, '_> {
+    fn tick(&self) -> impl Fn(u64) + Sync + '_ {
+        move |u| {
+            if let Some(f) = self.hooks.progress {
+                f(Progress::Advance(u))
+            }
+        }
+    }
+    fn subs(&self, ids: &[u64]) -> Vec<Vec<usize>> {
+        ids.iter().map(|i| self.subsets[i].clone()).collect()
+    }
+}
+
+/// Every candidate on every fragment (`--exhaustive`).
+fn exhaustive(
+    ctx: &Ctx,
+    w: &mut Writer,
+    results: &Path,
+    done: &mut BTreeSet<u64>,
+    active: &[u64],
+    names: &dyn Fn(u64) -> Vec<String>,
+) -> Result<Result<(), Stopped>> {
+    let data = ctx.scorer.data();
+    let nontrivial = data.fragments().len() as u64;
+    let ids: Vec<u32> = (0..nontrivial as u32).collect();
+    let todo: Vec<u64> = active
+        .iter()
+        .copied()
+        .filter(|i| !done.contains(i))
+        .collect();
+    w.progress(Progress::Phase {
+        name: format!(
+            "exhaustive: {} candidates × {} fragments",
+            active.len(),
+            nontrivial
+        ),
+        units: todo.len() as u64 * nontrivial,
+    });
+    let tick = ctx.tick();
+    for batch in todo.chunks(ctx.batch) {
+        let errs = ctx.scorer.errors_many(&ctx.subs(batch), &ids, &tick)?;
+        let rows: Vec<Row> = batch
+            .iter()
+            .zip(errs)
+            .map(|(&index, e)| {
+                let m = Moments::of(&e.errors);
+                let (error, se) = data.error_estimate(m.n, m.sum, m.sumsq);
+                Row {
+                    error: Some(error),
+                    stderr: Some(if nontrivial == 0 { 0.0 } else { se }),
+                    fragments: nontrivial,
+                    seconds: e.seconds,
+                    full: true,
+                    lp_failures: e.failures,
+                    ..Row::plain(index, names(index))
+                }
+            })
+            .collect();
+        if let Err(Stopped) = w.append(results, &rows)? {
+            return Ok(Err(Stopped));
+        }
+        done.extend(batch);
+    }
+    Ok(Ok(()))
+}
+
+/// The outcome of [`race_all`].
+struct Raced {
+    lp_solves: u64,
+    stage_sizes: Vec<(u64, u64)>,
+    summary: RaceSummary,
+}
+
+/// Racing with elimination by evidence (module docs), then the survivors on every fragment.
+#[allow(clippy::too_many_arguments)]
+fn race_all(
+    ctx: &Ctx,
+    cfg: &SweepConfig,
+    w: &mut Writer,
+    dir: &Path,
+    done: &mut BTreeSet<u64>,
+    active: &[u64],
+    names: &dyn Fn(u64) -> Vec<String>,
+) -> Result<Result<Raced, Stopped>> {
+    let data = ctx.scorer.data();
+    let results = dir.join(RESULTS_FILE);
+    let nontrivial = data.fragments().len() as u64;
+    let scale = if data.total_count() == 0 {
+        0.0
+    } else {
+        data.nontrivial_population() as f64 / data.total_count() as f64
+    };
+    let order = data.stratified_order(cfg.seed);
+    let (pilot_range, plan) = race::blocks(order.len(), cfg.first_sample, cfg.growth);
+    let sorted = |ids: &[u32]| {
+        let mut b = ids.to_vec();
+        b.sort_unstable();
+        b
+    };
+    let alpha = 1.0 - cfg.confidence;
+    let mut cur: Vec<u64> = active.to_vec();
+    let mut lp_solves = 0u64;
+    let mut stage_sizes = Vec::new();
+    let mut logs: Vec<StageLog> = Vec::new();
+    let mut pooled: HashMap<u64, StageRow> = HashMap::new();
+    // Per block seen by the survivors: its reference and every candidate's statistics.
+    let mut history: Vec<(u64, HashMap<u64, StageRow>)> = Vec::new();
+    let mut leader: Option<u64> = None;
+    let mut used = 0u64;
+    let mut run = 0usize;
+    let (mut n_conf, mut n_cap) = (0u64, 0u64);
+    for (k, range) in plan.iter().enumerate() {
+        if cur.len() <= 1 {
+            break;
+        }
+        let block = sorted(&order[range.clone()]);
+        let reference = match leader {
+            Some(l) => l,
+            None => {
+                let pilot_block = sorted(&order[pilot_range.clone()]);
+                used += pilot_block.len() as u64;
+                let p = cfg.pilot.clamp(1, cur.len());
+                lp_solves += (p * pilot_block.len()) as u64;
+                pilot_best(ctx, &cur, p, &pilot_block)?
+            }
+        };
+        let path = dir.join(format!("stage{k}.jsonl"));
+        let label = format!(
+            "stage {k}: {} candidates × {} fragments",
+            cur.len(),
+            block.len()
+        );
+        let stored = match score_block(ctx, w, &path, &cur, reference, &block, label)? {
+            Ok(s) => s,
+            Err(Stopped) => return Ok(Err(Stopped)),
+        };
+        lp_solves += ((cur.len() + 1) * block.len()) as u64;
+        stage_sizes.push((cur.len() as u64, block.len() as u64));
+        used += block.len() as u64;
+        let stats: Vec<StageStats> = cur
+            .iter()
+            .map(|i| {
+                stored
+                    .get(i)
+                    .map(StageRow::stats)
+                    .with_context(|| format!("{}: candidate {i} missing", path.display()))
+            })
+            .collect::<Result<_>>()?;
+        let delta = race::stage_delta(alpha, plan.len(), cur.len(), cfg.shard[1]);
+        let rule = race::Rule {
+            delta,
+            bound: cfg.bound,
+            paired: cfg.paired,
+            keep: cfg.keep,
+            top: cfg.top,
+        };
+        let decisions = race::decide(&stats, reference, &rule);
+        let mut out = Vec::new();
+        let mut next = Vec::new();
+        let (mut conf, mut cap) = (0u64, 0u64);
+        for (s, d) in stats.iter().zip(&decisions) {
+            pooled
+                .entry(s.index)
+                .or_insert_with(|| StageRow::empty(s.index))
+                .add(&stored[&s.index]);
+            match d {
+                None => next.push(s.index),
+                Some(e) => {
+                    conf += (*e == Elimination::Confidence) as u64;
+                    cap += (*e == Elimination::Cap) as u64;
+                    if !done.contains(&s.index) {
+                        let mut row = pooled_row(&pooled[&s.index], data, names, nontrivial);
+                        row.stage = k;
+                        row.eliminated = Some(*e);
+                        row.versus = Some(reference);
+                        row.diff = Some(s.d.mean() * scale);
+                        row.diff_se = Some(s.d.se() * scale);
+                        out.push(row);
+                    }
+                }
+            }
+        }
+        for batch in out.chunks(1000) {
+            if let Err(Stopped) = w.append(&results, batch)? {
+                return Ok(Err(Stopped));
+            }
+            done.extend(batch.iter().map(|r| r.index));
+        }
+        logs.push(StageLog {
+            candidates: cur.len() as u64,
+            fragments: block.len() as u64,
+            reference,
+            delta,
+            z: race::normal_quantile(1.0 - delta),
+            cap: ((cfg.keep * cur.len() as f64).ceil() as u64).max(cfg.top as u64),
+            confidence_eliminated: conf,
+            cap_eliminated: cap,
+        });
+        n_conf += conf;
+        n_cap += cap;
+        history.push((reference, stored));
+        cur = next;
+        leader = best_of(&cur, &pooled);
+        run = k + 1;
+    }
+
+    // --- survivors: complete on every fragment they have not seen ---------------------------------
+    let mut rest: Vec<u32> = Vec::new();
+    if run > 0 {
+        rest.extend_from_slice(&order[pilot_range.clone()]);
+        for r in &plan[run..] {
+            rest.extend_from_slice(&order[r.clone()]);
+        }
+    } else {
+        rest.extend_from_slice(&order);
+    }
+    let rest = sorted(&rest);
+    if let (Some(reference), false) = (leader.or(cur.first().copied()), rest.is_empty()) {
+        let path = dir.join(FINAL_FILE);
+        let label = format!("final: {} candidates × {} fragments", cur.len(), rest.len());
+        let stored = match score_block(ctx, w, &path, &cur, reference, &rest, label)? {
+            Ok(s) => s,
+            Err(Stopped) => return Ok(Err(Stopped)),
+        };
+        lp_solves += ((cur.len() + 1) * rest.len()) as u64;
+        for i in &cur {
+            let r = stored
+                .get(i)
+                .with_context(|| format!("{}: candidate {i} missing", path.display()))?;
+            pooled
+                .entry(*i)
+                .or_insert_with(|| StageRow::empty(*i))
+                .add(r);
+        }
+        history.push((reference, stored));
+    }
+    let winner = best_of(&cur, &pooled);
+    let mut rows = Vec::new();
+    for &i in cur.iter().filter(|i| !done.contains(i)) {
+        let mut row = pooled_row(&pooled[&i], data, names, nontrivial);
+        let w_ = winner.expect("survivors have a winner");
+        let parts: Vec<(u64, f64, f64)> = history
+            .iter()
+            .map(|(_, m)| {
+                let (c, b) = (m[&i].stats().d, m[&w_].stats().d);
+                (c.n, c.mean() - b.mean(), c.se() + b.se())
+            })
+            .collect();
+        let (d, se) = race::pooled(&parts);
+        row.stage = run;
+        row.tied = true;
+        row.versus = Some(w_);
+        row.diff = Some(d * scale);
+        row.diff_se = Some(if i == w_ { 0.0 } else { se * scale });
+        rows.push(row);
+    }
+    for batch in rows.chunks(1000) {
+        if let Err(Stopped) = w.append(&results, batch)? {
+            return Ok(Err(Stopped));
+        }
+        done.extend(batch.iter().map(|r| r.index));
+    }
+    let resolved = cur.len() == 1;
+    Ok(Ok(Raced {
+        lp_solves,
+        stage_sizes,
+        summary: RaceSummary {
+            confidence: cfg.confidence,
+            bound: cfg.bound,
+            paired: cfg.paired,
+            pilot_fragments: if run > 0 { pilot_range.len() as u64 } else { 0 },
+            stages: logs,
+            fragment_budget: nontrivial,
+            fragments_used: if run > 0 { used } else { nontrivial },
+            resolved,
+            budget_bound: cur.len() > 1,
+            tied: cur.len() as u64,
+            winner,
+            confidence_eliminated: n_conf,
+            cap_eliminated: n_cap,
+        },
+    }))
+}
+
+/// The best of `p` evenly spaced candidates of `cur` on the pilot block (stage-0 reference).
+fn pilot_best(ctx: &Ctx, cur: &[u64], p: usize, block: &[u32]) -> Result<u64> {
+    let pilots: Vec<u64> = (0..p).map(|k| cur[k * cur.len() / p]).collect();
+    let errs = ctx.scorer.errors_many(&ctx.subs(&pilots), block, &|_| {})?;
+    let sums: Vec<f64> = errs.iter().map(|e| e.errors.iter().sum()).collect();
+    let best = (0..p)
+        .min_by(|&a, &b| sums[a].total_cmp(&sums[b]).then(a.cmp(&b)))
+        .expect("p ≥ 1");
+    Ok(pilots[best])
+}
+
+/// The candidate of `cur` with the smallest pooled mean (ties: smallest index).
+fn best_of(cur: &[u64], pooled: &HashMap<u64, StageRow>) -> Option<u64> {
+    cur.iter().copied().min_by(|a, b| {
+        let (ma, mb) = (pooled[a].stats().e.mean(), pooled[b].stats().e.mean());
+        ma.total_cmp(&mb).then(a.cmp(b))
+    })
+}
+
+/// Score `cands` on `block` with paired differences to `reference`, resumably into `path`
+/// (one [`StageRow`] per candidate); returns the statistics as stored.
+#[allow(clippy::too_many_arguments)]
+fn score_block(
+    ctx: &Ctx,
+    w: &mut Writer,
+    path: &Path,
+    cands: &[u64],
+    reference: u64,
+    block: &[u32],
+    label: String,
+) -> Result<Result<HashMap<u64, StageRow>, Stopped>> {
+    let have: BTreeSet<u64> = read_jsonl::<StageRow>(path, true)?
+        .into_iter()
+        .map(|r| r.index)
+        .collect();
+    let todo: Vec<u64> = cands
+        .iter()
+        .copied()
+        .filter(|i| !have.contains(i))
+        .collect();
+    w.progress(Progress::Phase {
+        name: label,
+        units: (todo.len() * block.len()) as u64,
+    });
+    if !todo.is_empty() {
+        let e_ref = ctx
+            .scorer
+            .errors_many(&ctx.subs(&[reference]), block, &|_| {})?;
+        let e_ref = &e_ref[0].errors;
+        let tick = ctx.tick();
+        for batch in todo.chunks(ctx.batch) {
+            let errs = ctx.scorer.errors_many(&ctx.subs(batch), block, &tick)?;
+            let rows: Vec<StageRow> = batch
+                .iter()
+                .zip(errs)
+                .map(|(&index, e)| StageRow::paired(index, &e.errors, e_ref, e.failures, e.seconds))
+                .collect();
+            if let Err(Stopped) = w.append(path, &rows)? {
+                return Ok(Err(Stopped));
+            }
+        }
+    }
+    Ok(Ok(read_jsonl::<StageRow>(path, false)?
+        .into_iter()
+        .map(|r| (r.index, r))
+        .collect()))
+}
+
+/// A result row from pooled statistics (error over the fragments seen, no racing fields).
+fn pooled_row(
+    p: &StageRow,
+    data: &super::Dataset,
+    names: &dyn Fn(u64) -> Vec<String>,
+    nontrivial: u64,
+) -> Row {
+    let (error, se) = data.error_estimate(p.n, p.sum, p.sumsq);
+    Row {
+        error: Some(error),
+        stderr: Some(se),
+        fragments: p.n,
+        seconds: p.seconds,
+        // The blocks may have covered every fragment.
+        full: p.n == nontrivial,
+        lp_failures: p.failures,
+        ..Row::plain(p.index, names(p.index))
+    }
 }
 
 /// All `(index, subset)` pairs of m-subsets of 0..n in the catalog's colex order
@@ -597,47 +895,4 @@ pub fn all_subsets(n: usize, m: usize) -> Vec<(u64, Vec<usize>)> {
             return out;
         }
     }
-}
-
-#[allow(clippy::too_many_arguments)]
-fn write_eliminated(
-    w: &mut Writer,
-    results: &Path,
-    done: &mut BTreeSet<u64>,
-    out: &[u64],
-    pooled: &BTreeMap<u64, StageRow>,
-    stage: usize,
-    names: &dyn Fn(u64) -> Vec<String>,
-    to_error: &dyn Fn(u64, f64, f64) -> (f64, f64),
-    nontrivial: u64,
-) -> Result<Result<(), Stopped>> {
-    let rows: Vec<Row> = out
-        .iter()
-        .filter(|i| !done.contains(i))
-        .map(|&i| {
-            let p = &pooled[&i];
-            let (error, se) = to_error(p.n, p.sum, p.sumsq);
-            Row {
-                index: i,
-                functions: names(i),
-                error: Some(error),
-                stderr: Some(se),
-                fragments: p.n,
-                degenerate: false,
-                duplicate_of: None,
-                seconds: p.seconds,
-                stage,
-                // The disjoint stage blocks may have covered every fragment.
-                full: p.n == nontrivial,
-                lp_failures: p.failures,
-            }
-        })
-        .collect();
-    for batch in rows.chunks(1000) {
-        if let Err(Stopped) = w.append(results, batch)? {
-            return Ok(Err(Stopped));
-        }
-        done.extend(batch.iter().map(|r| r.index));
-    }
-    Ok(Ok(()))
 }

@@ -1,0 +1,419 @@
+//! Racing statistics (pure functions, no IO): when a candidate is worse than the stage reference
+//! with a stated confidence, how α is split over stages and candidates, the budget cap, the
+//! block plan, and paired differences pooled over blocks.
+//!
+//! **Test.** On stage k's block (fresh fragments, disjoint from the blocks that chose the
+//! reference R_k) candidate c is eliminated *by confidence* when the lower confidence bound of
+//! μ_c − μ_R at level 1 − δ is above 0: d̄ − h(d, δ) > 0 with d = e_c − e_R per fragment
+//! (paired), h the one-sided half-width ([`half_width`]). R_k is a real candidate, so then c is
+//! not the best.
+//!
+//! **Correction.** δ = α / (K · |C_k| · S) for K planned stages, |C_k| candidates of the stage and
+//! S shards (Bonferroni over stages, candidates and shards): with probability ≥ 1 − α no
+//! candidate anywhere is eliminated by confidence while it is at least as good as its stage
+//! reference, so the best candidate is among the survivors and the candidates removed by the
+//! cap (the *certified set*).
+//!
+//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C_k|⌉, top) stay
+//! (ordered by the stage mean); the others leave *by the cap*, without evidence against them.
+
+/// Count, Σx and Σx² of a sample.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Moments {
+    pub n: u64,
+    pub sum: f64,
+    pub sumsq: f64,
+}
+
+impl Moments {
+    pub fn new(n: u64, sum: f64, sumsq: f64) -> Moments {
+        Moments { n, sum, sumsq }
+    }
+    /// The sums of `xs`.
+    pub fn of(xs: &[f64]) -> Moments {
+        let mut m = Moments::default();
+        for &x in xs {
+            m.push(x);
+        }
+        m
+    }
+    pub fn push(&mut self, x: f64) {
+        self.n += 1;
+        self.sum += x;
+        self.sumsq += x * x;
+    }
+    pub fn add(&mut self, o: &Moments) {
+        self.n += o.n;
+        self.sum += o.sum;
+        self.sumsq += o.sumsq;
+    }
+    /// x̄ (0 for an empty sample).
+    pub fn mean(&self) -> f64 {
+        if self.n == 0 {
+            0.0
+        } else {
+            self.sum / self.n as f64
+        }
+    }
+    /// Sample variance s² = (Σx² − (Σx)²/n)/(n − 1) (∞ for n < 2).
+    pub fn var(&self) -> f64 {
+        if self.n < 2 {
+            return f64::INFINITY;
+        }
+        let n = self.n as f64;
+        ((self.sumsq - self.sum * self.sum / n) / (n - 1.0)).max(0.0)
+    }
+    /// Standard error s/√n of the mean.
+    pub fn se(&self) -> f64 {
+        (self.var() / self.n as f64).sqrt()
+    }
+}
+
+/// The one-sided confidence bound used by the test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Bound {
+    /// Normal approximation of the mean (CLT): h = z_{1−δ} · s/√n.
+    Normal,
+    /// Empirical Bernstein (Maurer & Pontil 2009, Thm. 4) for values in a range of width R:
+    /// h = √(2 s² ln(2/δ) / n) + 7 R ln(2/δ) / (3 (n − 1)); valid for any distribution.
+    Bernstein,
+}
+
+impl Bound {
+    pub fn parse(s: &str) -> anyhow::Result<Bound> {
+        match s {
+            "normal" => Ok(Bound::Normal),
+            "bernstein" => Ok(Bound::Bernstein),
+            _ => anyhow::bail!("unknown bound '{s}' (normal or bernstein)"),
+        }
+    }
+    pub fn name(&self) -> &'static str {
+        match self {
+            Bound::Normal => "normal",
+            Bound::Bernstein => "bernstein",
+        }
+    }
+}
+
+/// Half-width h with P(x̄ − μ > h) ≤ δ for a sample of values in a range of width `range`
+/// (∞ when n < 2).
+pub fn half_width(m: &Moments, delta: f64, bound: Bound, range: f64) -> f64 {
+    if m.n < 2 {
+        return f64::INFINITY;
+    }
+    let n = m.n as f64;
+    match bound {
+        Bound::Normal => normal_quantile(1.0 - delta) * m.se(),
+        Bound::Bernstein => {
+            let l = (2.0 / delta).ln();
+            (2.0 * m.var() * l / n).sqrt() + 7.0 * range * l / (3.0 * (n - 1.0))
+        }
+    }
+}
+
+/// Φ⁻¹(p), the standard normal quantile (Acklam's rational approximation, relative error
+/// < 1.2e-9).
+pub fn normal_quantile(p: f64) -> f64 {
+    if p <= 0.0 {
+        return f64::NEG_INFINITY;
+    }
+    if p >= 1.0 {
+        return f64::INFINITY;
+    }
+    const A: [f64; 6] = [
+        -3.969683028665376e1,
+        2.209460984245205e2,
+        -2.759285104469687e2,
+        1.383_577_518_672_69e2,
+        -3.066479806614716e1,
+        2.506628277459239,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e1,
+        1.615858368580409e2,
+        -1.556989798598866e2,
+        6.680131188771972e1,
+        -1.328068155288572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-3,
+        -3.223964580411365e-1,
+        -2.400758277161838,
+        -2.549732539343734,
+        4.374664141464968,
+        2.938163982698783,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-3,
+        3.224671290700398e-1,
+        2.445134137142996,
+        3.754408661907416,
+    ];
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p < 0.02425 {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p > 1.0 - 0.02425 {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}
+
+/// δ per test: α split evenly over `stages` planned stages, the `candidates` tested in the stage
+/// and `shards` shards (Bonferroni).
+pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) -> f64 {
+    alpha / (stages.max(1) * candidates.max(1) * shards.max(1)) as f64
+}
+
+/// Why a candidate left the race.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Elimination {
+    /// Worse than the stage reference with the stated confidence.
+    Confidence,
+    /// Removed by the budget cap (the kept fraction), not by evidence.
+    Cap,
+}
+
+/// One candidate's statistics on a stage block.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StageStats {
+    pub index: u64,
+    /// Errors e on the block.
+    pub e: Moments,
+    /// Paired differences d = e − e_R to the stage reference on the same fragments.
+    pub d: Moments,
+}
+
+/// The stage's decision rule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Rule {
+    /// Per-test error probability (see [`stage_delta`]).
+    pub delta: f64,
+    pub bound: Bound,
+    /// Paired differences (true) or independent intervals: c is worse when its lower bound is
+    /// above the reference's upper bound, each at δ/2 (for comparison only).
+    pub paired: bool,
+    /// Cap: at most max(⌈keep·|C|⌉, top) candidates stay.
+    pub keep: f64,
+    pub top: usize,
+}
+
+/// Lower confidence bound of μ_c − μ_R (in per-fragment error units) under `rule`.
+pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
+    if rule.paired {
+        c.d.mean() - half_width(&c.d, rule.delta, rule.bound, 2.0)
+    } else {
+        let h = |m: &Moments| half_width(m, rule.delta / 2.0, rule.bound, 1.0);
+        (c.e.mean() - h(&c.e)) - (r.e.mean() + h(&r.e))
+    }
+}
+
+/// Decisions for every candidate of a stage (None: stays), `reference` = index of R (it is
+/// never eliminated by confidence). Panics if `reference` is not among `stats`.
+pub fn decide(stats: &[StageStats], reference: u64, rule: &Rule) -> Vec<Option<Elimination>> {
+    let r = stats
+        .iter()
+        .find(|s| s.index == reference)
+        .expect("the stage reference is scored in its stage");
+    let mut out: Vec<Option<Elimination>> = stats
+        .iter()
+        .map(|c| {
+            (c.index != reference && gap_lower_bound(c, r, rule) > 0.0)
+                .then_some(Elimination::Confidence)
+        })
+        .collect();
+    let mut alive: Vec<usize> = (0..stats.len()).filter(|&i| out[i].is_none()).collect();
+    let cap = ((rule.keep * stats.len() as f64).ceil() as usize).max(rule.top);
+    if alive.len() > cap {
+        alive.sort_by(|&a, &b| {
+            stats[a]
+                .e
+                .mean()
+                .total_cmp(&stats[b].e.mean())
+                .then(stats[a].index.cmp(&stats[b].index))
+        });
+        for &i in &alive[cap..] {
+            out[i] = Some(Elimination::Cap);
+        }
+    }
+    out
+}
+
+/// The block plan over `total` fragments of the stratified order: a pilot block (picks the
+/// stage-0 reference) of min(first, total/4) fragments, then stage blocks of first·growᵏ
+/// fragments, the last one taking what remains.
+pub fn blocks(
+    total: usize,
+    first: usize,
+    growth: usize,
+) -> (std::ops::Range<usize>, Vec<std::ops::Range<usize>>) {
+    let pilot = 0..first.min(total / 4).max(1).min(total);
+    let mut out = Vec::new();
+    let (mut start, mut size) = (pilot.end, first.max(1));
+    while start < total {
+        let end = start.saturating_add(size).min(total);
+        out.push(start..end);
+        start = end;
+        size = size.saturating_mul(growth.max(1));
+    }
+    (pilot, out)
+}
+
+/// Mean and standard error of a difference pooled over blocks: `parts` are
+/// (n_b, mean_b, se_b); mean = Σ n_b mean_b / N, se = √Σ (n_b/N)² se_b².
+pub fn pooled(parts: &[(u64, f64, f64)]) -> (f64, f64) {
+    let n: u64 = parts.iter().map(|p| p.0).sum();
+    if n == 0 {
+        return (0.0, f64::INFINITY);
+    }
+    let nf = n as f64;
+    let mean = parts.iter().map(|p| p.0 as f64 * p.1).sum::<f64>() / nf;
+    let var = parts
+        .iter()
+        .map(|p| (p.0 as f64 / nf).powi(2) * p.2 * p.2)
+        .sum::<f64>();
+    (mean, var.sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_quantile_matches_tables() {
+        // Φ⁻¹ values from standard tables (R: qnorm).
+        for (p, z) in [
+            (0.5, 0.0),
+            (0.975, 1.959963984540054),
+            (0.995, 2.5758293035489),
+            (0.999, 3.090232306167813),
+            (1.0 - 1e-6, 4.753424308822899),
+            (1.0 - 1e-9, 5.997807015007686),
+            (0.01, -2.326347874040841),
+            (1e-12, -7.034483825673621),
+        ] {
+            let q = normal_quantile(p);
+            assert!((q - z).abs() < 1e-6 * z.abs().max(1.0), "p {p}: {q} vs {z}");
+        }
+        // Monotone and antisymmetric on a fine grid.
+        let mut last = f64::NEG_INFINITY;
+        for k in 1..2000 {
+            let p = k as f64 / 2000.0;
+            let q = normal_quantile(p);
+            assert!(q > last);
+            assert!((q + normal_quantile(1.0 - p)).abs() < 1e-7);
+            last = q;
+        }
+    }
+
+    #[test]
+    fn moments_and_pooling() {
+        let xs = [1.0, 2.0, 4.0, 7.0];
+        let m = Moments::of(&xs);
+        assert_eq!(m.mean(), 3.5);
+        assert!((m.var() - 7.0).abs() < 1e-12);
+        assert!((m.se() - (7.0f64 / 4.0).sqrt()).abs() < 1e-12);
+        assert!(Moments::of(&[1.0]).se().is_infinite());
+        let (mean, se) = pooled(&[(1, 1.0, 0.3), (3, 2.0, 0.4)]);
+        assert!((mean - 1.75).abs() < 1e-12);
+        assert!((se - (0.0625f64 * 0.09 + 0.5625 * 0.16).sqrt()).abs() < 1e-12);
+    }
+
+    #[test]
+    fn block_plan_covers_the_order_once() {
+        for (total, first, growth) in [(131_071, 1024, 4), (180, 40, 2), (3, 1024, 4), (1, 5, 2)] {
+            let (p, b) = blocks(total, first, growth);
+            let mut next = p.end;
+            assert!(!p.is_empty());
+            for r in &b {
+                assert_eq!(r.start, next);
+                assert!(r.end > r.start);
+                next = r.end;
+            }
+            assert_eq!(next, total, "{total} {first} {growth}");
+        }
+        let (p, b) = blocks(131_071, 1024, 4);
+        assert_eq!(p, 0..1024);
+        let sizes: Vec<usize> = b.iter().map(|r| r.len()).collect();
+        assert_eq!(sizes, vec![1024, 4096, 16384, 65536, 44031 - 1024]);
+    }
+
+    fn stats(index: u64, e: &[f64], r: &[f64]) -> StageStats {
+        let d: Vec<f64> = e.iter().zip(r).map(|(a, b)| a - b).collect();
+        StageStats {
+            index,
+            e: Moments::of(e),
+            d: Moments::of(&d),
+        }
+    }
+
+    /// A shared fragment effect dominates the errors: pairing sees a small constant gap that
+    /// independent intervals cannot; the cap removes the worst survivors by mean; the reference
+    /// itself is never eliminated by confidence.
+    #[test]
+    fn paired_test_sees_what_independent_intervals_miss() {
+        let n = 400;
+        let r: Vec<f64> = (0..n)
+            .map(|k| 0.5 + 0.4 * ((k * 37 % 101) as f64 / 101.0 - 0.5))
+            .collect();
+        let worse: Vec<f64> = r
+            .iter()
+            .enumerate()
+            .map(|(k, x)| x + 0.01 + 0.002 * ((k % 7) as f64 - 3.0))
+            .collect();
+        let tied: Vec<f64> = r
+            .iter()
+            .enumerate()
+            .map(|(k, x)| x + 0.003 * ((k % 5) as f64 - 2.0))
+            .collect();
+        let s = vec![stats(0, &r, &r), stats(1, &worse, &r), stats(2, &tied, &r)];
+        let rule = Rule {
+            delta: 1e-6,
+            bound: Bound::Normal,
+            paired: true,
+            keep: 1.0,
+            top: 1,
+        };
+        assert_eq!(
+            decide(&s, 0, &rule),
+            vec![None, Some(Elimination::Confidence), None]
+        );
+        let indep = Rule {
+            paired: false,
+            ..rule
+        };
+        assert_eq!(decide(&s, 0, &indep), vec![None, None, None]);
+        // Bernstein is valid for any distribution, hence wider: at n = 400 its range term
+        // 7·2·ln(2/δ)/(3·399) ≈ 0.17 is far above the gap 0.01, so nothing is eliminated.
+        let eb = Rule {
+            bound: Bound::Bernstein,
+            ..rule
+        };
+        let h_eb = half_width(&s[1].d, 1e-6, Bound::Bernstein, 2.0);
+        let h_n = half_width(&s[1].d, 1e-6, Bound::Normal, 2.0);
+        assert!(h_eb > h_n);
+        assert_eq!(decide(&s, 0, &eb)[1], None);
+        let far: Vec<f64> = r.iter().map(|x| x + 0.3).collect();
+        let s2 = vec![stats(0, &r, &r), stats(1, &far, &r)];
+        assert_eq!(decide(&s2, 0, &eb)[1], Some(Elimination::Confidence));
+        // Cap: keep one of three; the survivors by mean are the reference and `tied`.
+        let cap = Rule { keep: 0.2, ..indep };
+        let d = decide(&s, 0, &cap);
+        assert_eq!(d.iter().filter(|x| x.is_none()).count(), 1);
+        assert_eq!(d[1], Some(Elimination::Cap));
+    }
+
+    #[test]
+    fn stage_delta_splits_alpha() {
+        assert!((stage_delta(0.01, 5, 1000, 2) - 1e-6).abs() < 1e-18);
+        assert_eq!(stage_delta(0.01, 0, 0, 0), 0.01);
+    }
+}
