@@ -91,9 +91,10 @@ pub struct Opts {
     /// Seed of the racing order only (default: --seed); the fragment sample keeps --seed.
     #[arg(long)]
     pub race_seed: Option<u64>,
-    /// Compare this racing run with an exhaustive results directory of the same data and print
-    /// the check (certified set contains the exhaustive winner, no confidence-eliminated
-    /// candidate better than it); with --report-only.
+    /// Only compare the finished race in --results with this exhaustive results directory of
+    /// the same candidates and fragments, print the check (is the exhaustive winner tied /
+    /// certified, confidence-eliminated candidates better than the race winner, false
+    /// eliminations) and exit.
     #[arg(long)]
     pub validate: Option<PathBuf>,
     /// Candidates tried to pick the stage-0 reference.
@@ -208,9 +209,6 @@ fn check_race_flags(args: &Opts) -> Result<()> {
     }
     crate::search::race::Bound::parse(&args.bound).context("--bound")?;
     if let Some(v) = &args.validate {
-        if !args.report_only {
-            bail!("--validate needs --report-only (it checks finished results)");
-        }
         if !v.join("results.jsonl").exists() {
             bail!("--validate {}: no results.jsonl there", v.display());
         }
@@ -218,9 +216,27 @@ fn check_race_flags(args: &Opts) -> Result<()> {
     Ok(())
 }
 
+/// `--validate DIR`: the finished race in `results` against the exhaustive run in DIR.
+fn validate(args: &Opts, exhaustive: &std::path::Path) -> Result<()> {
+    let results = args
+        .results
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
+    let rows = read_rows(&results)
+        .with_context(|| format!("--validate: reading the race in {}", results.display()))?;
+    let v = crate::search::tieset::validate(&rows, &read_rows(exhaustive)?)?;
+    for l in v.lines() {
+        println!("validate: {l}");
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<()> {
     let args = *args.opts;
     check_race_flags(&args)?;
+    if let Some(ex) = &args.validate {
+        return validate(&args, ex);
+    }
     let grid = Grid::uniform(args.grid)?;
     let bias = Bias::default();
     let table = table_of(&args, &grid)?;
@@ -286,12 +302,6 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--report-only and --no-report contradict each other");
         }
         let rows = read_rows(&results)?;
-        if let Some(ex) = &args.validate {
-            let v = crate::search::tieset::validate(&rows, &read_rows(ex)?)?;
-            for l in v.lines() {
-                println!("validate: {l}");
-            }
-        }
         let (summary, _) = report_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
         print_ranking(&summary);
         eprintln!("report: written to {}", args.report.display());
