@@ -286,10 +286,11 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
     );
     // Progress in batch logs: plain lines with done/total, rate and time; no carriage returns.
     assert!(!log.contains('\r'), "{log}");
-    let done = "search final: 167 candidates × 1032 fragments: 172 344/172 344 (100.0 %), ";
+    // The stage label ("search exhaustive:", "search final:") depends on the sweep mode.
+    let done = " 167 candidates × 1032 fragments: 172 344/172 344 (100.0 %), ";
     assert!(
         log.lines()
-            .any(|l| l.starts_with(done) && l.contains("/s, elapsed ")),
+            .any(|l| l.starts_with("search ") && l.contains(done) && l.contains("/s, elapsed ")),
         "{log}"
     );
 
