@@ -1,7 +1,3 @@
 fn main() {
-    if let Err(e) = momentlab::cli::main() {
-        // One line, naming what went wrong and where (the error chain joined by ": ").
-        eprintln!("error: {e:#}");
-        std::process::exit(1);
-    }
+    std::process::exit(momentlab::cli::main());
 }

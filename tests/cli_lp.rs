@@ -385,10 +385,7 @@ fn candidates_subcommands() {
     );
     for (args, want) in [
         (vec!["candidates", "index", "66045"], "out of range"),
-        (
-            vec!["candidates", "count", "--m", "9"],
-            "out of range 1..=8",
-        ),
+        // Usage errors (exit 2) are tested in tests/cli_bad_input.rs.
         (
             vec!["candidates", "subset", "z,blorp"],
             "'blorp' is not a catalog function name",

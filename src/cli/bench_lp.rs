@@ -2,30 +2,32 @@
 //! moment vectors (9×9 Gaussian kernels over depth maps with 1–3 clusters), their ratio measured
 //! in the same run. The timing loop lives in [`crate::lp::bench`].
 
+use super::common::usize_in;
 use crate::lp::bench::{run_one, BenchConfig, BenchRow};
 use crate::progress::Bar;
 use anyhow::{bail, Result};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Grid sizes n (comma-separated).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![256usize, 1024, 4096])]
+    /// Grid sizes n (comma-separated; each 2..=100000).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![256usize, 1024, 4096], value_parser = usize_in(2, 100_000))]
     pub n: Vec<usize>,
-    /// LPs per grid size for the fast solver.
-    #[arg(long, default_value_t = 2000)]
+    /// LPs per grid size for the fast solver (1..=1000000).
+    #[arg(long, default_value_t = 2000, value_parser = usize_in(1, 1_000_000))]
     pub problems: usize,
     /// LPs per grid size for the reference solver (a prefix of the same problems; it takes
-    /// milliseconds per LP).
-    #[arg(long, default_value_t = 30)]
+    /// milliseconds per LP; 1..=100000).
+    #[arg(long, default_value_t = 30, value_parser = usize_in(1, 100_000))]
     pub reference_problems: usize,
-    /// Number of basis functions: the power basis z, …, z^m (4 = MSM).
-    #[arg(long, default_value_t = 4)]
+    /// Number of basis functions: the power basis z, …, z^m (4 = MSM; 1..=8).
+    #[arg(long, default_value_t = 4, value_parser = usize_in(1, 8))]
     pub m: usize,
+    /// Seed of the random depth maps the moment vectors come from.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Timed repeats of the fast solvers' problem sequence; each problem's minimum time is
-    /// kept (filters preemption on a shared machine).
-    #[arg(long, default_value_t = 3)]
+    /// kept (filters preemption on a shared machine; 1..=1000).
+    #[arg(long, default_value_t = 3, value_parser = usize_in(1, 1000))]
     pub repeats: usize,
     /// Print JSON instead of a table.
     #[arg(long)]

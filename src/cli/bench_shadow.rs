@@ -7,6 +7,7 @@
 //! with their biased depth and the filtered moments of their 9×9 kernel window. Every result is
 //! accumulated and passed through `black_box`.
 
+use super::common::{usize_in, MAX_INPUTS};
 use crate::metrics::windows::stacks_corpus;
 use crate::technique::registry::{build, Params, Precision};
 use crate::technique::timing::{self, Corpus, Speed};
@@ -29,10 +30,10 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = CorpusKind::Random)]
     pub corpus: CorpusKind,
     /// Number of (moments, z_f) inputs per technique and precision.
-    #[arg(long, default_value_t = 200_000)]
+    #[arg(long, default_value_t = 200_000, value_parser = usize_in(1, MAX_INPUTS))]
     pub inputs: usize,
-    /// Timed passes over the inputs.
-    #[arg(long, default_value_t = 3)]
+    /// Timed passes over the inputs (1..=1000).
+    #[arg(long, default_value_t = 3, value_parser = usize_in(1, 1000))]
     pub reps: usize,
     /// `--corpus stacks`: a folder of .exr depth stacks (default: render the embedded dataset).
     #[arg(long)]

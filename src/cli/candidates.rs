@@ -10,6 +10,8 @@
 //! `--json` prints JSON instead (objects with "index", "functions", "positions", and with
 //! `--grid` "degenerate", "sigma_ratio", "span_key"); `--catalog FILE` uses a user catalog.
 
+use super::common::{usize_in, MAX_GRID};
+use crate::basis::candidates::MAX_M;
 use crate::basis::candidates::{
     analyze, check_m, checked_count, index_to_subset, next_subset, subset_to_index, DEFAULT_M,
 };
@@ -35,12 +37,14 @@ pub struct Args {
 pub enum Action {
     /// Number of candidates C(N, m).
     Count {
-        #[arg(long, default_value_t = DEFAULT_M)]
+        /// Functions per candidate (1..=8).
+        #[arg(long, default_value_t = DEFAULT_M, value_parser = usize_in(1, MAX_M as u64))]
         m: usize,
     },
     /// Candidates in index order.
     List {
-        #[arg(long, default_value_t = DEFAULT_M)]
+        /// Functions per candidate (1..=8).
+        #[arg(long, default_value_t = DEFAULT_M, value_parser = usize_in(1, MAX_M as u64))]
         m: usize,
         /// First index.
         #[arg(long, default_value_t = 0)]
@@ -48,18 +52,23 @@ pub enum Action {
         /// Number of candidates (default: all from `--from`).
         #[arg(long)]
         count: Option<u64>,
-        /// Also report degeneracy and span key on this many uniform grid points.
-        #[arg(long)]
+        /// Also report degeneracy and span key on this many uniform grid points (2..=1048576).
+        #[arg(long, value_parser = usize_in(2, MAX_GRID))]
         grid: Option<usize>,
     },
     /// The functions of candidate number i.
     Index {
+        /// Candidate index (0 ≤ i < C(N, m)).
         i: u64,
-        #[arg(long, default_value_t = DEFAULT_M)]
+        /// Functions per candidate (1..=8).
+        #[arg(long, default_value_t = DEFAULT_M, value_parser = usize_in(1, MAX_M as u64))]
         m: usize,
     },
     /// The index of a comma-separated list of catalog names.
-    Subset { names: String },
+    Subset {
+        /// Comma-separated catalog function names, e.g. "z,z^2,z^3,z^4" (m = their number).
+        names: String,
+    },
 }
 
 fn names_of(catalog: &Catalog, subset: &[usize]) -> Vec<String> {

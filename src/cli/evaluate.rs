@@ -1,6 +1,9 @@
 //! `momentlab evaluate`: error of a technique against PCF over all fragments of the depth
 //! stacks (mean |G − PCF|, Peters & Klein 2015, Section 3.2), a table per view, JSON, pictures.
 
+use super::common::{
+    fraction, non_negative, require_fragments, stacks_or_default, usize_in, MAX_RESOLUTION,
+};
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::progress::Bar;
 use crate::report::pictures;
@@ -16,11 +19,12 @@ pub struct Args {
     /// F_Z(z_f − ε′): the error floor set by the technique bias).
     #[arg(long)]
     pub technique: String,
-    /// Directory of depth-stack files; default: render the embedded default dataset.
+    /// Directory of depth-stack files; default: render the embedded default dataset (said so
+    /// on stderr).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
-    /// Shadow-map resolution when rendering the default dataset.
-    #[arg(long, default_value_t = 512)]
+    /// Shadow-map resolution when rendering the default dataset (16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
     pub resolution: usize,
     /// Write one five-panel PNG per view into this directory (see docs/evaluation.md).
     #[arg(long)]
@@ -28,11 +32,11 @@ pub struct Args {
     /// Print the full report as JSON on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
-    /// Evaluate every k-th fragment only (quick runs).
-    #[arg(long, conflicts_with = "sample")]
+    /// Evaluate every k-th fragment only (quick runs; k ≥ 1).
+    #[arg(long, conflicts_with = "sample", value_parser = usize_in(1, u32::MAX as u64))]
     pub stride: Option<usize>,
-    /// Evaluate a seeded random fraction of the fragments, e.g. 0.05 (quick runs).
-    #[arg(long)]
+    /// Evaluate a seeded random fraction of the fragments, e.g. 0.05 (quick runs; in (0, 1]).
+    #[arg(long, value_parser = fraction, allow_negative_numbers = true)]
     pub sample: Option<f64>,
     /// Seed of --sample.
     #[arg(long, default_value_t = 1)]
@@ -40,41 +44,18 @@ pub struct Args {
     /// Only views whose "scene/view" name contains this string.
     #[arg(long)]
     pub only: Option<String>,
-    /// PCF bias ε.
-    #[arg(long, default_value_t = Bias::default().pcf_epsilon)]
+    /// PCF bias ε (finite, ≥ 0).
+    #[arg(long, default_value_t = Bias::default().pcf_epsilon, value_parser = non_negative, allow_negative_numbers = true)]
     pub pcf_epsilon: f64,
-    /// PCF receiver-plane slope scale s.
-    #[arg(long, default_value_t = Bias::default().slope_scale)]
+    /// PCF receiver-plane slope scale s (finite, ≥ 0).
+    #[arg(long, default_value_t = Bias::default().slope_scale, value_parser = non_negative, allow_negative_numbers = true)]
     pub slope_scale: f64,
-    /// Constant part of the technique bias ε′.
-    #[arg(long, default_value_t = Bias::default().technique_epsilon)]
+    /// Constant part of the technique bias ε′ (finite, ≥ 0).
+    #[arg(long, default_value_t = Bias::default().technique_epsilon, value_parser = non_negative, allow_negative_numbers = true)]
     pub technique_epsilon: f64,
-    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|).
-    #[arg(long, default_value_t = Bias::default().technique_slope_scale)]
+    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|; finite, ≥ 0).
+    #[arg(long, default_value_t = Bias::default().technique_slope_scale, value_parser = non_negative, allow_negative_numbers = true)]
     pub technique_slope_scale: f64,
-}
-
-fn load_stacks(args: &Args) -> Result<Vec<DepthStack>> {
-    match &args.stacks {
-        Some(dir) => crate::stack::load_dir(dir),
-        None => {
-            if args.resolution == 0 || args.resolution > 8192 {
-                bail!("--resolution must be in 1..=8192, got {}", args.resolution);
-            }
-            eprintln!(
-                "rendering the default dataset at {0}×{0} …",
-                args.resolution
-            );
-            let t = std::time::Instant::now();
-            let stacks = crate::render::default_dataset(args.resolution)?;
-            eprintln!(
-                "rendered {} views in {:.1} s",
-                stacks.len(),
-                t.elapsed().as_secs_f64()
-            );
-            Ok(stacks)
-        }
-    }
 }
 
 fn sanitize(s: &str) -> String {
@@ -114,15 +95,13 @@ pub fn run(args: Args) -> Result<()> {
         },
         (None, None) => Subsample::All,
     };
-    let mut stacks = load_stacks(&args)?;
+    let mut stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "evaluate")?;
     if let Some(only) = &args.only {
         stacks.retain(|s| format!("{}/{}", s.meta.scene, s.meta.view).contains(only.as_str()));
         if stacks.is_empty() {
             bail!("--only '{only}': no view matches");
         }
-    }
-    if stacks.is_empty() {
-        bail!("no depth stacks to evaluate");
+        require_fragments(&stacks, args.stacks.as_deref())?;
     }
 
     let bar = Arc::new(Bar::new("evaluate fragments", 0));
@@ -138,6 +117,9 @@ pub fn run(args: Args) -> Result<()> {
     };
     let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
     bar.finish();
+    if report.fragments == 0 {
+        bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
+    }
 
     if let Some(dir) = &args.pictures {
         write_pictures(dir, &stacks, subject, &bias)?;

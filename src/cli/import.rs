@@ -3,21 +3,62 @@
 
 use crate::stack;
 use anyhow::{bail, Context, Result};
-use std::path::PathBuf;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// `.exr` stack files (sidecar `.json` next to each) or directories of them.
     #[arg(required = true)]
     pub inputs: Vec<PathBuf>,
-    /// Copy the validated stacks here (same file names). Without it: validate only.
+    /// Copy the validated stacks here (same file names; two inputs with the same name are
+    /// refused). Without it: validate only.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace files that already exist in --out (otherwise refused).
+    #[arg(long, requires = "out")]
+    pub overwrite: bool,
+    /// Print the validated stacks as JSON instead of lines.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Refuse, before reading anything, two inputs that would land on the same file in `out`, and
+/// (without `overwrite`) files that exist there already (unless it is the input itself).
+fn check_destinations(files: &[PathBuf], out: &Path, overwrite: bool) -> Result<()> {
+    let mut seen: HashMap<&std::ffi::OsStr, &Path> = HashMap::new();
+    for f in files {
+        let name = f
+            .file_name()
+            .with_context(|| format!("{}: no file name", f.display()))?;
+        if let Some(other) = seen.insert(name, f) {
+            bail!(
+                "{} and {} would both be written to {}; import them into different --out folders",
+                other.display(),
+                f.display(),
+                out.join(name).display()
+            );
+        }
+        let dest = out.join(name);
+        let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
+        for d in [dest.clone(), stack::sidecar_path(&dest)] {
+            if d.exists() && !overwrite && !same(&d, &stack::sidecar_path(f)) && !same(&d, f) {
+                bail!(
+                    "{} exists already; pass --overwrite to replace it",
+                    d.display()
+                );
+            }
+        }
+    }
+    Ok(())
 }
 
 pub fn run(args: Args) -> Result<()> {
     let mut files = Vec::new();
     for p in &args.inputs {
+        if p.as_os_str() == "-" {
+            bail!("'-': a depth stack is an .exr file with a .json sidecar and cannot come from stdin; give its path");
+        }
         if p.is_dir() {
             let found = stack::exr_files(p)?;
             if found.is_empty() {
@@ -37,6 +78,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(out) = &args.out {
+        check_destinations(&files, out, args.overwrite)?;
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }
     // read (= validate) everything before writing anything
@@ -44,8 +86,20 @@ pub fn run(args: Args) -> Result<()> {
         .iter()
         .map(|f| stack::read(f))
         .collect::<Result<Vec<_>>>()?;
+    let mut rows = Vec::new();
     for (f, st) in files.iter().zip(&stacks) {
         let m = &st.meta;
+        rows.push(serde_json::json!({
+            "file": f, "scene": m.scene, "view": m.view, "width": m.width, "height": m.height,
+            "layers": m.layers, "fragments": st.fragment_count(),
+        }));
+        if let Some(out) = &args.out {
+            let name = f.file_name().context("input has no file name")?;
+            stack::write(&out.join(name), st)?;
+        }
+        if args.json {
+            continue;
+        }
         println!(
             "ok {}: {}/{} {}x{} {} layers {} fragments",
             f.display(),
@@ -56,10 +110,13 @@ pub fn run(args: Args) -> Result<()> {
             m.layers,
             st.fragment_count()
         );
-        if let Some(out) = &args.out {
-            let name = f.file_name().context("input has no file name")?;
-            stack::write(&out.join(name), st)?;
-        }
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({ "stacks": rows, "out": args.out }))?
+        );
+        return Ok(());
     }
     match &args.out {
         Some(out) => println!("imported {} stacks into {}", stacks.len(), out.display()),

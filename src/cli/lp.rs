@@ -13,12 +13,11 @@ use crate::Grid;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
 use serde::Deserialize;
-use std::io::Read;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// JSON batch file (stdin when omitted).
+    /// JSON batch file (stdin when omitted or `-`).
     pub file: Option<PathBuf>,
     /// Catalog used to resolve basis names (default: the embedded catalog).
     #[arg(long)]
@@ -26,6 +25,9 @@ pub struct Args {
     /// Pretty-print the output JSON.
     #[arg(long)]
     pub pretty: bool,
+    /// Print JSON (the only output format of this command; accepted for uniformity).
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Deserialize)]
@@ -181,20 +183,9 @@ pub fn run(args: Args) -> Result<()> {
         Some(p) => Catalog::load(p)?,
         None => Catalog::embedded(),
     };
-    let (text, source) = match &args.file {
-        Some(p) => (
-            std::fs::read_to_string(p).with_context(|| format!("cannot read {}", p.display()))?,
-            p.display().to_string(),
-        ),
-        None => {
-            let mut s = String::new();
-            std::io::stdin()
-                .read_to_string(&mut s)
-                .context("cannot read stdin")?;
-            (s, "stdin".to_string())
-        }
-    };
+    let (text, source) = super::common::read_input(args.file.as_deref())?;
     let out = solve_batch(&text, &catalog, args.pretty).with_context(|| format!("lp {source}"))?;
-    println!("{out}");
+    use std::io::Write;
+    writeln!(std::io::stdout().lock(), "{out}").context("writing stdout")?;
     Ok(())
 }

@@ -14,10 +14,20 @@ pub struct Args {
     /// Merge even if shards are missing or unfinished.
     #[arg(long)]
     pub allow_partial: bool,
+    /// Print {"rows", "shards", "out"} as JSON instead of a line.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
     let n = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial)?;
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({"rows": n, "shards": args.dirs.len(), "out": args.out})
+        );
+        return Ok(());
+    }
     eprintln!(
         "merge: {n} rows from {} shards into {}",
         args.dirs.len(),

@@ -5,6 +5,7 @@ pub mod bench;
 pub mod bench_lp;
 pub mod bench_shadow;
 pub mod candidates;
+pub mod common;
 pub mod evaluate;
 pub mod import;
 pub mod lp;
@@ -45,7 +46,7 @@ pub enum Command {
     Evaluate(evaluate::Args),
     /// Closed-form shadow techniques for a JSON batch of (moments, z_f).
     Shadow(shadow::Args),
-    /// Stress-test every technique where it fails; writes reports/stability/.
+    /// Stress-test every technique where it fails; writes results/stability/ (or --out).
     Stability(stability::Args),
     /// Benchmarks (LP solvers, closed-form techniques).
     Bench(bench::Args),
@@ -63,9 +64,27 @@ pub enum Command {
     Reproduce(reproduce::Args),
 }
 
-/// Entry point of the binary.
-pub fn main() -> Result<()> {
-    let cli = Cli::parse();
+/// Entry point of the binary: parse, run, and map the outcome to an exit code — 0 on success
+/// (and when stdout is closed early, e.g. `| head`), 2 for a usage error, 1 for any other
+/// error; every error is one line on stderr.
+pub fn main() -> i32 {
+    quiet_broken_pipe();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => return usage_error(&e),
+    };
+    match dispatch(cli) {
+        Ok(()) => 0,
+        Err(e) if is_broken_pipe(&e) => 0,
+        Err(e) => {
+            // One line, naming what went wrong and where (the error chain joined by ": ").
+            eprintln!("error: {}", one_line(&format!("{e:#}")));
+            1
+        }
+    }
+}
+
+fn dispatch(cli: Cli) -> Result<()> {
     threads::init_from_env()?;
     match cli.command {
         Command::Lp(a) => lp::run(a),
@@ -82,5 +101,99 @@ pub fn main() -> Result<()> {
         Command::Merge(a) => merge::run(a),
         Command::Recommend(a) => recommend::run(a),
         Command::Reproduce(a) => reproduce::run(a),
+    }
+}
+
+/// Help and version go to stdout (exit 0); a usage error becomes one line on stderr (exit 2).
+fn usage_error(e: &clap::Error) -> i32 {
+    use clap::error::ErrorKind;
+    match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            let _ = e.print();
+            0
+        }
+        _ => {
+            // clap's message: "error: …" (possibly continued on indented lines), a blank
+            // line, then tips and usage. Keep the message, on one line.
+            let text = e.to_string();
+            let msg: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
+                .map(str::trim)
+                .collect();
+            eprintln!("{}", one_line(&msg.join(" ")));
+            2
+        }
+    }
+}
+
+/// Collapse line breaks so that every error is exactly one line.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>()
+            .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+    })
+}
+
+/// `println!` panics when stdout is a closed pipe (Rust ignores SIGPIPE): end quietly with
+/// exit 0 instead, like a classic Unix filter; other panics keep the default report.
+fn quiet_broken_pipe() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        if msg.contains("Broken pipe") || msg.contains("os error 32") {
+            std::process::exit(0);
+        }
+        default(info);
+    }));
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    fn walk(cmd: &clap::Command, path: &str, missing: &mut Vec<String>) {
+        for a in cmd.get_arguments() {
+            let id = a.get_id().as_str();
+            if id == "help" || id == "version" {
+                continue;
+            }
+            let help = a.get_help().map(|h| h.to_string()).unwrap_or_default();
+            if help.trim().is_empty() {
+                missing.push(format!("{path} {id}"));
+            }
+        }
+        for sc in cmd.get_subcommands() {
+            if sc
+                .get_about()
+                .is_none_or(|h| h.to_string().trim().is_empty())
+            {
+                missing.push(format!("{path} {} (about)", sc.get_name()));
+            }
+            walk(sc, &format!("{path} {}", sc.get_name()), missing);
+        }
+    }
+
+    #[test]
+    fn every_argument_and_subcommand_has_help() {
+        let mut missing = Vec::new();
+        walk(&Cli::command(), "momentlab", &mut missing);
+        assert!(missing.is_empty(), "no help text: {missing:?}");
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn errors_are_one_line() {
+        assert_eq!(one_line("a\n  b\tc"), "a b c");
     }
 }

@@ -225,6 +225,7 @@ pub fn run(args: Args) -> Result<()> {
     if stacks.is_empty() {
         bail!("no depth stacks to evaluate");
     }
+    crate::metrics::require_fragments(&stacks)?;
     let sub = if args.stride > 1 {
         Subsample::Stride(args.stride)
     } else {

@@ -2,6 +2,9 @@
 //! texel, then fewest ns per fragment) whose error against PCF is within `--tolerance` of the
 //! best one on that scene.
 
+use super::common::{
+    non_negative, split_techniques, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION,
+};
 use crate::report::recommend::{recommendations, Measured};
 use crate::technique::linalg::Precision;
 use crate::technique::registry::{build, Params};
@@ -10,14 +13,15 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Absolute error above the best technique that is acceptable (0.002 = 0.2 points).
-    #[arg(long, default_value_t = 0.002)]
+    /// Absolute error above the best technique that is acceptable (0.002 = 0.2 points;
+    /// finite, ≥ 0).
+    #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
     pub tolerance: f64,
-    /// Depth stacks (default: render the embedded scenes).
+    /// Depth stacks (default: render the embedded scenes, said so on stderr).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
-    /// Resolution when rendering the embedded scenes.
-    #[arg(long, default_value_t = 512)]
+    /// Resolution when rendering the embedded scenes (16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
     pub resolution: usize,
     /// Comma-separated closed-form techniques to consider (each at f32 and f64 storage).
     #[arg(
@@ -25,8 +29,8 @@ pub struct Args {
         default_value = "vsm,esm,evsm,csm,hamburger4,hausdorff4,hamburger6,tmsm"
     )]
     pub techniques: String,
-    /// Random inputs for the speed measurement.
-    #[arg(long, default_value_t = 200_000)]
+    /// Random inputs for the speed measurement (1..=10000000).
+    #[arg(long, default_value_t = 200_000, value_parser = usize_in(1, MAX_INPUTS))]
     pub speed_inputs: usize,
     /// Print JSON instead of a table.
     #[arg(long)]
@@ -34,45 +38,36 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !(args.tolerance.is_finite() && args.tolerance >= 0.0) {
-        bail!(
-            "--tolerance must be a finite number ≥ 0, got {}",
-            args.tolerance
-        );
+    let names = split_techniques(&args.techniques);
+    if names.is_empty() {
+        bail!("--techniques: empty list");
     }
-    if args.speed_inputs == 0 {
-        bail!("--speed-inputs must be at least 1");
-    }
-    let stacks = match &args.stacks {
-        Some(d) => {
-            crate::stack::load_dir(d).with_context(|| format!("--stacks {}", d.display()))?
+    // Build every technique before any work, so that a bad name fails at once.
+    let mut jobs = Vec::new();
+    for name in &names {
+        if name.starts_with("lp:") {
+            bail!(
+                "--techniques: '{name}': recommend compares closed-form techniques only; \
+                 evaluate an LP candidate with `momentlab evaluate --technique '{name}'`"
+            );
         }
-        None => {
-            if args.resolution < 16 {
-                bail!("--resolution must be at least 16, got {}", args.resolution);
-            }
-            crate::render::default_dataset(args.resolution)?
-        }
-    };
-    let mut all: Vec<Measured> = Vec::new();
-    for name in args
-        .techniques
-        .split(',')
-        .map(str::trim)
-        .filter(|s| !s.is_empty())
-    {
         for prec in [Precision::F32, Precision::F64] {
             let t = build(name, &Params::with(prec, None))
                 .with_context(|| format!("--techniques: '{name}'"))?;
-            all.push(crate::pipeline::techniques::measured(
-                &stacks,
-                t.as_ref(),
-                name,
-                prec.name(),
-                1,
-                args.speed_inputs,
-            )?);
+            jobs.push((name.clone(), prec.name(), t));
         }
+    }
+    let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "recommend")?;
+    let mut all: Vec<Measured> = Vec::new();
+    for (name, prec, t) in &jobs {
+        all.push(crate::pipeline::techniques::measured(
+            &stacks,
+            t.as_ref(),
+            name,
+            prec,
+            1,
+            args.speed_inputs,
+        )?);
     }
     let recs = recommendations(&all, args.tolerance);
     if args.json {

@@ -1,6 +1,7 @@
 //! `momentlab render`: ray-cast depth stacks of the scenes (embedded default dataset unless
 //! `--scenes DIR`) and write one `<scene>_<view>.exr` + `.json` per view.
 
+use super::common::{usize_in, MAX_RESOLUTION};
 use crate::progress::Bar;
 use crate::render::{self, Scene};
 use crate::stack;
@@ -16,8 +17,8 @@ pub struct Args {
     /// Output directory for the depth stacks.
     #[arg(long, default_value = "stacks/default")]
     pub out: PathBuf,
-    /// Shadow-map resolution (square).
-    #[arg(long, default_value_t = 512)]
+    /// Shadow-map resolution (square; 1..=4096).
+    #[arg(long, default_value_t = 512, value_parser = usize_in(1, MAX_RESOLUTION))]
     pub resolution: usize,
     /// Render only the scene with this name.
     #[arg(long)]
@@ -25,6 +26,9 @@ pub struct Args {
     /// Also write `<scene>_<view>.preview.png`: front depth (left) and layer count (right).
     #[arg(long)]
     pub preview: bool,
+    /// Print one JSON object per run (views, files, fragments, layers) instead of the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Grey-scale preview: front depth (black = near, white = far/background) | layer count
@@ -50,9 +54,6 @@ fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Resul
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if !(1..=16384).contains(&args.resolution) {
-        bail!("--resolution {} outside [1, 16384]", args.resolution);
-    }
     let mut scenes: Vec<Scene> = match &args.scenes {
         Some(dir) => render::load_scenes(dir)?,
         None => render::embedded_scenes()?,
@@ -70,6 +71,7 @@ pub fn run(args: Args) -> Result<()> {
     let bar = Bar::new("render rows", (views * args.resolution) as u64);
     let start = Instant::now();
     let mut lines = Vec::new();
+    let mut rows = Vec::new();
     let (mut total_frags, mut max_layers) = (0usize, 0usize);
     for s in &scenes {
         for (i, light) in s.lights.iter().enumerate() {
@@ -86,6 +88,10 @@ pub fn run(args: Args) -> Result<()> {
                 )?;
             }
             let frags = st.fragment_count();
+            rows.push(serde_json::json!({
+                "scene": s.name, "view": light.name, "file": path,
+                "fragments": frags, "layers": st.meta.layers, "seconds": dt,
+            }));
             let covered = (0..st.texel_count())
                 .filter(|&t| st.depth[0][t].is_finite())
                 .count();
@@ -104,6 +110,17 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     bar.finish();
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({
+                "resolution": args.resolution, "out": args.out, "views": rows,
+                "fragments": total_frags, "max_layers": max_layers,
+                "seconds": start.elapsed().as_secs_f64(),
+            }))?
+        );
+        return Ok(());
+    }
     for l in &lines {
         println!("{l}");
     }

@@ -2,6 +2,7 @@
 //! a thin caller of [`crate::pipeline::run`] (steps, artefacts and resuming are described
 //! there).
 
+use super::common::{non_negative, usize_in, MAX_RESOLUTION};
 use crate::pipeline::{self, Config, Preset};
 use anyhow::Result;
 use std::path::PathBuf;
@@ -18,11 +19,12 @@ pub struct Args {
     /// A tiny configuration for tests and smoke runs (64² stacks, small samples).
     #[arg(long, conflicts_with = "full")]
     pub tiny: bool,
-    /// Shadow-map resolution of the rendered views (default 512, --tiny 64).
-    #[arg(long)]
+    /// Shadow-map resolution of the rendered views (default 512, --tiny 64; 16..=4096).
+    #[arg(long, value_parser = usize_in(16, MAX_RESOLUTION))]
     pub resolution: Option<usize>,
-    /// Recommendation tolerance: absolute error above the best technique that is acceptable.
-    #[arg(long, default_value_t = 0.002)]
+    /// Recommendation tolerance: absolute error above the best technique that is acceptable
+    /// (finite, ≥ 0).
+    #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
     pub tolerance: f64,
     /// Folder of reports.
     #[arg(long, default_value = "reports")]
@@ -36,13 +38,16 @@ pub struct Args {
     /// Start over: delete the run's previous artefacts.
     #[arg(long)]
     pub fresh: bool,
+    /// Print {"report", "seconds", "recommendations"} as JSON on stdout at the end.
+    #[arg(long)]
+    pub json: bool,
 }
 
 impl Args {
     /// The typed configuration of the run.
-    pub fn config(self) -> Config {
+    pub fn config(&self) -> Config {
         Config {
-            run: self.run,
+            run: self.run.clone(),
             preset: if self.tiny {
                 Preset::Tiny
             } else if self.full {
@@ -52,8 +57,8 @@ impl Args {
             },
             resolution: self.resolution,
             tolerance: self.tolerance,
-            reports: self.reports,
-            results: self.results,
+            reports: self.reports.clone(),
+            results: self.results.clone(),
             skip_search: self.skip_search,
             fresh: self.fresh,
         }
@@ -63,5 +68,14 @@ impl Args {
 pub fn run(args: Args) -> Result<()> {
     let outcome = pipeline::run(&args.config())?;
     eprintln!("report: {}", outcome.report.display());
+    if args.json {
+        println!(
+            "{}",
+            serde_json::to_string_pretty(&serde_json::json!({
+                "report": outcome.report, "seconds": outcome.seconds,
+                "recommendations": outcome.recommendations,
+            }))?
+        );
+    }
     Ok(())
 }

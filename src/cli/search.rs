@@ -1,5 +1,7 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
+use super::common::{fraction, stacks_or_default, usize_in, MAX_GRID, MAX_RESOLUTION};
+use crate::basis::candidates::MAX_M;
 use crate::metrics::Bias;
 use crate::search::run::{load_table, ranking_lines, report_for, sweep_line};
 use crate::search::{
@@ -20,8 +22,8 @@ pub struct Args {
 
 #[derive(clap::Args, Debug)]
 pub struct Opts {
-    /// Functions per candidate (2, 3 or 4 in the paper's study).
-    #[arg(long, default_value_t = 4)]
+    /// Functions per candidate (2, 3 or 4 in the paper's study; 1..=8, at most the catalog size).
+    #[arg(long, default_value_t = 4, value_parser = usize_in(1, MAX_M as u64))]
     pub m: usize,
     /// Catalog file (default: the embedded basis_functions/catalog.json).
     #[arg(long)]
@@ -29,17 +31,19 @@ pub struct Opts {
     /// Use the 9 paper bases (z..z^4, sin/cos 2πz, 4πz, exp(80(z-1))) as catalog (demos).
     #[arg(long, conflicts_with = "catalog")]
     pub builtin_catalog: bool,
-    /// Directory of depth stacks (default: render the embedded default dataset).
+    /// Directory of depth stacks (default: render the embedded default dataset, said so on
+    /// stderr).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
-    /// Shadow-map resolution when rendering the default dataset.
-    #[arg(long, default_value_t = 512)]
+    /// Shadow-map resolution when rendering the default dataset (16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
     pub resolution: usize,
     /// Keep at most this many non-trivial fragments (stratified by view and layer; 0 = all).
     #[arg(long, default_value_t = crate::search::DEFAULT_MAX_FRAGMENTS)]
     pub max_fragments: usize,
-    /// Synthetic dataset with this many texels per view (tests and demos, no stacks needed).
-    #[arg(long, conflicts_with = "stacks")]
+    /// Synthetic dataset with this many texels per view (tests and demos, no stacks needed;
+    /// 1..=1000000).
+    #[arg(long, conflicts_with = "stacks", value_parser = usize_in(1, 1_000_000))]
     pub synthetic: Option<usize>,
     /// Seed of the stratified fragment sample (and of the synthetic data).
     #[arg(long, default_value_t = 1)]
@@ -47,8 +51,8 @@ pub struct Opts {
     /// Results directory (default results/search-m<m>).
     #[arg(long)]
     pub results: Option<PathBuf>,
-    /// Candidates scored on every fragment at the end of racing.
-    #[arg(long, default_value_t = 50)]
+    /// Candidates scored on every fragment at the end of racing (≥ 1).
+    #[arg(long, default_value_t = 50, value_parser = usize_in(1, u32::MAX as u64))]
     pub top: usize,
     /// Every selected candidate on every fragment, no racing.
     #[arg(long)]
@@ -62,22 +66,23 @@ pub struct Opts {
     /// Score the shard i of N (candidates with index % N == i), e.g. 3/16.
     #[arg(long)]
     pub shard: Option<String>,
-    /// LP grid size n (uniform on [0,1]).
-    #[arg(long, default_value_t = 1024)]
+    /// LP grid size n (uniform on [0,1]; 2..=1048576).
+    #[arg(long, default_value_t = 1024, value_parser = usize_in(2, MAX_GRID))]
     pub grid: usize,
     /// LP solver: fast-strict (default: unsettled LPs count as failures, G = 0, reported per
     /// candidate), fast (unsettled LPs go to the reference solver, slow) or reference.
     #[arg(long, default_value = "fast-strict")]
     pub solver: String,
-    /// Fragments in racing stage 0 (each next stage: × growth).
-    #[arg(long, default_value_t = 1024)]
+    /// Fragments in racing stage 0 (each next stage: × growth; ≥ 1).
+    #[arg(long, default_value_t = 1024, value_parser = usize_in(1, u32::MAX as u64))]
     pub first_sample: usize,
-    #[arg(long, default_value_t = 4)]
+    /// Factor by which each racing stage's fragment block grows (2..=64).
+    #[arg(long, default_value_t = 4, value_parser = usize_in(2, 64))]
     pub growth: usize,
     /// Budget cap per stage: of the candidates not eliminated by confidence, at most
     /// max(⌈keep·|C|⌉, top) stay (by the stage mean); the others leave "by the cap" and are
     /// reported as such (1 = no cap).
-    #[arg(long, default_value_t = 0.25)]
+    #[arg(long, default_value_t = 0.25, value_parser = fraction, allow_negative_numbers = true)]
     pub keep: f64,
     /// Confidence of the elimination tests, for all stages and candidates together
     /// (Bonferroni): a candidate leaves by confidence only when it is worse than the stage
@@ -97,18 +102,19 @@ pub struct Opts {
     /// eliminations) and exit.
     #[arg(long)]
     pub validate: Option<PathBuf>,
-    /// Candidates tried to pick the stage-0 reference.
-    #[arg(long, default_value_t = 32)]
+    /// Candidates tried to pick the stage-0 reference (≥ 1).
+    #[arg(long, default_value_t = 32, value_parser = usize_in(1, u32::MAX as u64))]
     pub pilot: usize,
-    /// Fragments per solver (warm-start chain).
-    #[arg(long, default_value_t = 4096)]
+    /// Fragments per solver (warm-start chain; ≥ 1).
+    #[arg(long, default_value_t = 4096, value_parser = usize_in(1, u32::MAX as u64))]
     pub chunk: usize,
-    /// Candidates per flushed batch.
-    #[arg(long, default_value_t = 64)]
+    /// Candidates per flushed batch (≥ 1).
+    #[arg(long, default_value_t = 64, value_parser = usize_in(1, u32::MAX as u64))]
     pub batch: usize,
-    /// Report directory.
-    #[arg(long, default_value = "reports/search")]
-    pub report: PathBuf,
+    /// Report directory (default: <results>/report, never the tracked reports/ folder unless
+    /// given).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
     /// Do not write the report.
     #[arg(long)]
     pub no_report: bool,
@@ -122,12 +128,15 @@ pub struct Opts {
     /// Other results directories (e.g. the m = 2 and m = 3 sweeps) for the side-by-side plot.
     #[arg(long, value_delimiter = ',')]
     pub compare: Vec<PathBuf>,
-    /// Depths at which the Fig. 3 curves are solved.
-    #[arg(long, default_value_t = 96)]
+    /// Depths at which the Fig. 3 curves are solved (2..=10000).
+    #[arg(long, default_value_t = 96, value_parser = usize_in(2, 10_000))]
     pub fig3_points: usize,
     /// Do not evaluate the closed forms (hamburger4, tmsm, vsm, esm) for the report.
     #[arg(long)]
     pub no_closed_forms: bool,
+    /// Print the ranking (best candidate, references and their ranks) as JSON on stdout.
+    #[arg(long)]
+    pub json: bool,
 }
 
 fn parse_shard(s: &str) -> Result<[usize; 2]> {
@@ -171,22 +180,10 @@ fn load_data(
             None,
         ));
     }
-    let (stacks, name) = match &args.stacks {
-        Some(d) => (
-            crate::stack::load_dir(d)
-                .with_context(|| format!("loading depth stacks from {}", d.display()))?,
-            format!("stacks:{}", d.display()),
-        ),
-        None => {
-            eprintln!(
-                "search: rendering the default dataset at {0}×{0} …",
-                args.resolution
-            );
-            (
-                crate::render::default_dataset(args.resolution)?,
-                format!("default dataset {}", args.resolution),
-            )
-        }
+    let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "search")?;
+    let name = match &args.stacks {
+        Some(d) => format!("stacks:{}", d.display()),
+        None => format!("default dataset {}", args.resolution),
     };
     let plan = SamplePlan {
         max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
@@ -240,12 +237,18 @@ pub fn run(args: Args) -> Result<()> {
     let grid = Grid::uniform(args.grid)?;
     let bias = Bias::default();
     let table = table_of(&args, &grid)?;
+    // Before any rendering or sampling.
+    crate::basis::candidates::check_m(table.len(), args.m)?;
     let t_data = std::time::Instant::now();
     let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
     let results = args
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
+    let report_dir = args
+        .report
+        .clone()
+        .unwrap_or_else(|| results.join("report"));
     let shard = match &args.shard {
         Some(s) => parse_shard(s)?,
         None => [0, 1],
@@ -274,7 +277,7 @@ pub fn run(args: Args) -> Result<()> {
         race_seed: args.race_seed,
         pilot: args.pilot,
         batch: args.batch,
-        report_dir: (!args.no_report).then(|| args.report.clone()),
+        report_dir: (!args.no_report).then(|| report_dir.clone()),
         closed_forms: !args.no_closed_forms,
         compare: args.compare.clone(),
         fig3_points: args.fig3_points,
@@ -303,8 +306,8 @@ pub fn run(args: Args) -> Result<()> {
         }
         let rows = read_rows(&results)?;
         let (summary, _) = report_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
-        print_ranking(&summary);
-        eprintln!("report: written to {}", args.report.display());
+        print_ranking(&summary, args.json)?;
+        eprintln!("report: written to {}", report_dir.display());
         return Ok(());
     }
     let bar = crate::progress::Bar::new("search", 0);
@@ -329,16 +332,20 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     if let Some(summary) = &r.ranking {
-        print_ranking(summary);
+        print_ranking(summary, args.json)?;
         if !args.no_report {
-            eprintln!("report: written to {}", args.report.display());
+            eprintln!("report: written to {}", report_dir.display());
         }
     }
     Ok(())
 }
 
-fn print_ranking(s: &report::Summary) {
+fn print_ranking(s: &report::Summary, json: bool) -> Result<()> {
     for line in ranking_lines(s) {
         eprintln!("{line}");
     }
+    if json {
+        println!("{}", serde_json::to_string_pretty(s)?);
+    }
+    Ok(())
 }

@@ -2,6 +2,7 @@
 //! [`crate::report::stability`], documented in docs/stability.md); writes a Markdown table,
 //! JSON and SVG heat maps to the output directory.
 
+use super::common::{split_techniques, usize_in};
 use crate::progress::Bar;
 use crate::report::stability::{self, Options};
 use anyhow::Result;
@@ -11,21 +12,25 @@ use crate::report::stability::DEFAULT_TECHNIQUES;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Output directory.
-    #[arg(long, default_value = "reports/stability")]
+    /// Output directory (the tracked reports/stability only when given explicitly).
+    #[arg(long, default_value = "results/stability")]
     pub out: PathBuf,
-    /// Number of inputs (cycled over the scenarios).
-    #[arg(long, default_value_t = 3000)]
+    /// Number of inputs, cycled over the scenarios (1..=1000000).
+    #[arg(long, default_value_t = 3000, value_parser = usize_in(1, 1_000_000))]
     pub samples: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Uniform grid points of the oracle (Algorithm 1) on [0,1].
-    #[arg(long, default_value_t = 256)]
+    /// Uniform grid points of the oracle (Algorithm 1) on [0,1] (2..=65536).
+    #[arg(long, default_value_t = 256, value_parser = usize_in(2, 65_536))]
     pub grid: usize,
-    /// Comma-separated technique names; names not available in this build are skipped.
+    /// Comma-separated technique names (`lp:` specs keep their commas); names not available
+    /// in this build are skipped.
     #[arg(long, default_value = DEFAULT_TECHNIQUES)]
     pub techniques: String,
+    /// Print the summary (inputs, techniques, skipped, seconds, output folder) as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -34,13 +39,23 @@ pub fn run(args: Args) -> Result<()> {
         samples: args.samples,
         seed: args.seed,
         grid: args.grid,
-        techniques: args.techniques.split(',').map(str::to_string).collect(),
+        techniques: split_techniques(&args.techniques),
     };
     let pb = Bar::new("stability inputs", 0);
     let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;
     pb.finish();
     for s in &o.skipped {
         eprintln!("skipping technique {s}");
+    }
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "inputs": o.inputs, "techniques": o.techniques, "skipped": o.skipped,
+                "seconds": o.seconds, "out": opts.out,
+            })
+        );
+        return Ok(());
     }
     println!(
         "stability: {} inputs × {} techniques in {:.1} s → {}",

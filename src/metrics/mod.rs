@@ -569,11 +569,24 @@ struct Partial {
 }
 
 /// [`evaluate`] for a technique or PCF itself.
+/// Error unless the stacks hold at least one fragment: an empty input has no error to
+/// report (never a 0 % result).
+pub fn require_fragments(stacks: &[DepthStack]) -> Result<()> {
+    if stacks.iter().all(|s| s.fragment_count() == 0) {
+        bail!(
+            "the depth stacks hold 0 fragments ({} views, every texel empty); nothing to evaluate",
+            stacks.len()
+        );
+    }
+    Ok(())
+}
+
 pub fn evaluate_subject(
     stacks: &[DepthStack],
     subject: Subject<'_>,
     opts: &EvalOptions,
 ) -> Result<EvalReport> {
+    require_fragments(stacks)?;
     opts.bias.validate()?;
     opts.subsample.validate()?;
     if let Subject::Technique(t) = subject {

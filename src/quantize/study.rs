@@ -179,6 +179,7 @@ pub fn sweep(
     bias: &Bias,
     sub: &Subsample,
 ) -> Result<Vec<Sweep>> {
+    crate::metrics::require_fragments(stacks)?;
     for s in stacks {
         crate::metrics::check_stack(s)?;
     }

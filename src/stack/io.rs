@@ -72,6 +72,8 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
     };
     let meta: StackMeta = serde_json::from_str(&text)
         .with_context(|| format!("malformed sidecar {}", side.display()))?;
+    check_size(&meta).with_context(|| format!("sidecar {}", side.display()))?;
+    check_header(path, &meta)?;
 
     let image = exr::prelude::read()
         .no_deep_data()
@@ -154,6 +156,81 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
     };
     validate(&stack)?;
     Ok(stack)
+}
+
+/// Largest width or height of a stack.
+pub const MAX_SIDE: usize = 16384;
+/// Largest layer count of a stack.
+pub const MAX_LAYERS: usize = 4096;
+/// Largest in-memory size of one stack (3 f32 channels per layer and texel).
+pub const MAX_STACK_BYTES: u64 = 4 << 30;
+
+/// The sidecar's size fields within the limits, checked before anything is allocated.
+fn check_size(m: &StackMeta) -> Result<()> {
+    if m.width == 0 || m.height == 0 || m.width > MAX_SIDE || m.height > MAX_SIDE {
+        bail!(
+            "{}x{} texels: width and height must be in 1..={MAX_SIDE}",
+            m.width,
+            m.height
+        );
+    }
+    if m.layers == 0 || m.layers > MAX_LAYERS {
+        bail!("layers = {}: must be in 1..={MAX_LAYERS}", m.layers);
+    }
+    let bytes = (m.width * m.height) as u64 * m.layers as u64 * 12;
+    if bytes > MAX_STACK_BYTES {
+        bail!(
+            "{}x{} texels × {} layers need {:.1} GiB, more than the {} GiB limit per stack",
+            m.width,
+            m.height,
+            m.layers,
+            bytes as f64 / (1u64 << 30) as f64,
+            MAX_STACK_BYTES >> 30
+        );
+    }
+    Ok(())
+}
+
+/// From the EXR header alone (before decoding pixels): a single part of the sidecar's size,
+/// stored with a lossless compression (docs/stacks.md: depths must survive bit-exactly).
+fn check_header(path: &Path, meta: &StackMeta) -> Result<()> {
+    let md = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| anyhow!("not a readable OpenEXR file: {e}"))?;
+    if md.headers.len() != 1 {
+        bail!(
+            "expected a single-part EXR, found {} parts",
+            md.headers.len()
+        );
+    }
+    let h = &md.headers[0];
+    if h.compression.may_loose_data() {
+        bail!(
+            "EXR compression {:?} is lossy; depth stacks need a lossless one (ZIP, ZIPS, PIZ, RLE or none)",
+            h.compression
+        );
+    }
+    // Channel names and layers (the pixels of a channel are only decoded when it is expected).
+    for ch in &h.channels.list {
+        let name = ch.name.to_string();
+        let (l, _) = parse_channel(&name).ok_or_else(|| {
+            anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
+        })?;
+        if l >= meta.layers {
+            bail!(
+                "channel '{name}' is beyond the sidecar's layer count {}",
+                meta.layers
+            );
+        }
+    }
+    let (w, hh) = (h.layer_size.width(), h.layer_size.height());
+    if (w, hh) != (meta.width, meta.height) {
+        bail!(
+            "EXR is {w}x{hh} but the sidecar says {}x{}",
+            meta.width,
+            meta.height
+        );
+    }
+    Ok(())
 }
 
 enum Quantity {

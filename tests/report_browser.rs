@@ -1,0 +1,220 @@
+//! The HTML report in a real browser: headless Chromium (Debian's `chromium`) loads
+//! reports/<run>/index.html of a `reproduce --tiny` run; every image must load and no error may
+//! reach the console (script errors, console.error, failed resource loads). A screenshot is
+//! kept under the target directory and its path printed. A control page with a missing image
+//! must be reported as broken (the check can fail).
+//!
+//! Without chromium the test is skipped loudly — unless MOMENTLAB_REQUIRE_BROWSER=1 (set by
+//! .ci/run when it installed chromium), where a missing browser is a failure.
+
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn browser() -> Option<PathBuf> {
+    let path = std::env::var_os("PATH")?;
+    ["chromium", "chromium-browser"].iter().find_map(|name| {
+        std::env::split_paths(&path)
+            .map(|d| d.join(name))
+            .find(|p| p.is_file())
+    })
+}
+
+/// Run `cmd` with a hard limit; returns (exit code, stdout, stderr).
+fn run_limited(cmd: &mut Command, limit: Duration) -> (Option<i32>, String, String) {
+    let mut child = cmd
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let t_out = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = out.read_to_string(&mut s);
+        s
+    });
+    let t_err = std::thread::spawn(move || {
+        let mut s = String::new();
+        let _ = err.read_to_string(&mut s);
+        s
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{cmd:?}: still running after {limit:?} (killed)");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    (status.code(), t_out.join().unwrap(), t_err.join().unwrap())
+}
+
+/// Installed first in <head>: records console.error calls, script errors, failed resource
+/// loads (capture-phase error events) and unhandled rejections; after `load` it writes
+/// {"images", "broken", "errors"} into <pre id="momentlab-check">.
+const CHECKER: &str = r#"<script>
+window.__momentlabErrors = [];
+(function () {
+  var errs = window.__momentlabErrors;
+  var oe = console.error;
+  console.error = function () {
+    errs.push('console.error: ' + Array.prototype.join.call(arguments, ' '));
+    return oe.apply(console, arguments);
+  };
+  window.addEventListener('error', function (e) {
+    var t = e.target;
+    if (t && t !== window && (t.src || t.href)) errs.push('failed to load ' + (t.src || t.href));
+    else errs.push('script error: ' + e.message);
+  }, true);
+  window.addEventListener('unhandledrejection', function (e) { errs.push('unhandled rejection: ' + e.reason); });
+  window.addEventListener('load', function () {
+    var imgs = document.images, broken = [];
+    for (var i = 0; i < imgs.length; i++) {
+      if (!(imgs[i].complete && imgs[i].naturalWidth > 0)) broken.push(imgs[i].getAttribute('src'));
+    }
+    var r = document.createElement('pre');
+    r.id = 'momentlab-check';
+    r.textContent = JSON.stringify({ images: imgs.length, broken: broken, errors: errs });
+    document.body.appendChild(r);
+  });
+})();
+</script>"#;
+
+fn chromium(bin: &Path, profile: &Path) -> Command {
+    let mut c = Command::new(bin);
+    c.args([
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--disable-quic",
+        "--no-first-run",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--hide-scrollbars",
+    ])
+    .arg(format!("--user-data-dir={}", profile.display()));
+    c
+}
+
+/// Load `page` (next to the report, so relative links resolve) and return the checker's result.
+fn check_page(bin: &Path, profile: &Path, page: &Path) -> serde_json::Value {
+    let url = format!("file://{}", page.display());
+    let (code, out, err) = run_limited(
+        chromium(bin, profile)
+            .arg("--virtual-time-budget=5000")
+            .arg("--dump-dom")
+            .arg(&url),
+        Duration::from_secs(90),
+    );
+    assert_eq!(code, Some(0), "chromium --dump-dom failed: {err}");
+    let start = out
+        .find("<pre id=\"momentlab-check\">")
+        .unwrap_or_else(|| panic!("{url}: the checker did not report (no load event?)\n{err}"));
+    let body = &out[start + "<pre id=\"momentlab-check\">".len()..];
+    let body = &body[..body.find("</pre>").unwrap()];
+    let json = body
+        .replace("&lt;", "<")
+        .replace("&gt;", ">")
+        .replace("&quot;", "\"")
+        .replace("&amp;", "&");
+    serde_json::from_str(&json).unwrap_or_else(|e| panic!("{json}: {e}"))
+}
+
+fn with_checker(html: &str, extra_body: &str) -> String {
+    let head = html.find("<head>").map(|i| i + "<head>".len()).unwrap_or(0);
+    let mut s = format!("{}{CHECKER}{}", &html[..head], &html[head..]);
+    if let Some(i) = s.rfind("</body>") {
+        s.insert_str(i, extra_body);
+    }
+    s
+}
+
+#[test]
+fn report_loads_in_headless_chromium() {
+    let Some(bin) = browser() else {
+        if std::env::var("MOMENTLAB_REQUIRE_BROWSER").as_deref() == Ok("1") {
+            panic!("MOMENTLAB_REQUIRE_BROWSER=1 but no chromium on PATH");
+        }
+        eprintln!("SKIPPED report_loads_in_headless_chromium: chromium not installed (apt-get install chromium)");
+        return;
+    };
+    let root = std::env::temp_dir().join(format!("momentlab-browser-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
+        .args(["reproduce", "--tiny", "--run", "b"])
+        .arg("--reports")
+        .arg(root.join("reports"))
+        .arg("--results")
+        .arg(root.join("results"))
+        .env("CI", "1")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let run = root.join("reports/b");
+    let html = std::fs::read_to_string(run.join("index.html")).unwrap();
+    let img_tags = html.matches("<img").count();
+    assert!(img_tags >= 5, "only {img_tags} images in the report");
+    let profile = root.join("profile");
+
+    // The report: every image loads, nothing reaches the console.
+    let page = run.join("index.check.html");
+    std::fs::write(&page, with_checker(&html, "")).unwrap();
+    let v = check_page(&bin, &profile, &page);
+    assert_eq!(v["images"].as_u64(), Some(img_tags as u64), "{v}");
+    assert_eq!(v["broken"], serde_json::json!([]), "broken images: {v}");
+    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+
+    // Control: a missing image and a console error are caught.
+    let control = run.join("index.control.html");
+    std::fs::write(
+        &control,
+        with_checker(
+            &html,
+            "<img src=\"no-such-figure.svg\"><script>console.error('planted')</script>",
+        ),
+    )
+    .unwrap();
+    let c = check_page(&bin, &profile, &control);
+    assert_eq!(
+        c["broken"],
+        serde_json::json!(["no-such-figure.svg"]),
+        "{c}"
+    );
+    let errs = c["errors"].to_string();
+    assert!(
+        errs.contains("no-such-figure.svg") && errs.contains("planted"),
+        "{c}"
+    );
+
+    // Screenshot of the report as it renders, kept as an artefact.
+    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("browser");
+    std::fs::create_dir_all(&shots).unwrap();
+    let shot = shots.join("report_tiny.png");
+    let _ = std::fs::remove_file(&shot);
+    let (code, _, err) = run_limited(
+        chromium(&bin, &profile)
+            .arg("--window-size=1280,2400")
+            .arg(format!("--screenshot={}", shot.display()))
+            .arg(format!("file://{}", run.join("index.html").display())),
+        Duration::from_secs(90),
+    );
+    assert_eq!(code, Some(0), "chromium --screenshot failed: {err}");
+    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
+    let info = dec.read_info().unwrap().info().clone();
+    assert_eq!((info.width, info.height), (1280, 2400));
+    println!("screenshot: {}", shot.display());
+    eprintln!("screenshot: {}", shot.display());
+    std::fs::remove_dir_all(&root).ok();
+}
