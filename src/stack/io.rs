@@ -107,15 +107,7 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
     let mut dzdv = depth.clone();
     for ch in layer.channel_data.list {
         let name = ch.name.to_string();
-        let (l, q) = parse_channel(&name).ok_or_else(|| {
-            anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
-        })?;
-        if l >= meta.layers {
-            bail!(
-                "channel '{name}' is beyond the sidecar's layer count {}",
-                meta.layers
-            );
-        }
+        let (l, q) = layer_channel(&name, meta.layers)?;
         let values = match ch.sample_data {
             FlatSamples::F32(v) => v,
             FlatSamples::F16(_) => bail!("channel '{name}' is half (f16); 32-bit float required"),
@@ -212,15 +204,7 @@ fn check_header(path: &Path, meta: &StackMeta) -> Result<()> {
     // Channel names and layers (the pixels of a channel are only decoded when it is expected).
     for ch in &h.channels.list {
         let name = ch.name.to_string();
-        let (l, _) = parse_channel(&name).ok_or_else(|| {
-            anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
-        })?;
-        if l >= meta.layers {
-            bail!(
-                "channel '{name}' is beyond the sidecar's layer count {}",
-                meta.layers
-            );
-        }
+        layer_channel(&name, meta.layers)?;
     }
     let (w, hh) = (h.layer_size.width(), h.layer_size.height());
     if (w, hh) != (meta.width, meta.height) {
@@ -237,6 +221,17 @@ enum Quantity {
     Z,
     Dzdu,
     Dzdv,
+}
+
+/// The layer and quantity of channel `name`, checked against the sidecar's layer count.
+fn layer_channel(name: &str, layers: usize) -> Result<(usize, Quantity)> {
+    let (l, q) = parse_channel(name).ok_or_else(|| {
+        anyhow!("unexpected channel '{name}' (expected layerNNN.Z / .dzdu / .dzdv)")
+    })?;
+    if l >= layers {
+        bail!("channel '{name}' is beyond the sidecar's layer count {layers}");
+    }
+    Ok((l, q))
 }
 
 fn parse_channel(name: &str) -> Option<(usize, Quantity)> {
