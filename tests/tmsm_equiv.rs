@@ -134,11 +134,13 @@ fn f64_equals_previous_implementation_on_100000_random_inputs() {
     let mut rng = ChaCha8Rng::seed_from_u64(2015);
     let mut worst = 0.0f64;
     let mut cases = std::collections::BTreeMap::<String, usize>::new();
+    let mut fast = cases.clone();
     for _ in 0..100_000 {
         let (b, zf) = random_input(&mut rng);
         let old = tmsm_old::solve(b, zf);
         let new = tmsm::solve(b, zf);
-        let g = tmsm::sharp_bound(b, zf);
+        let (g, fast_case) = tmsm::sharp_bound_case(b, zf);
+        *fast.entry(format!("{fast_case:?}")).or_default() += 1;
         assert!(
             same(old.g, g, 1e-9) && same(old.g, new.g, 1e-9),
             "b={b:?} zf={zf}: old {old:?}, new {new:?}, G-only {g}"
@@ -146,7 +148,7 @@ fn f64_equals_previous_implementation_on_100000_random_inputs() {
         worst = worst.max((old.g - g).abs());
         *cases.entry(format!("{:?}", new.case)).or_default() += 1;
     }
-    eprintln!("max |G_new − G_old| = {worst:.1e}; branches {cases:?}");
+    eprintln!("max |G_new − G_old| = {worst:.1e}; branches {cases:?}, G-only path {fast:?}");
     for c in [
         "OneDirac",
         "LitArc",
@@ -156,6 +158,7 @@ fn f64_equals_previous_implementation_on_100000_random_inputs() {
         "Quartic",
     ] {
         assert!(cases.get(c).copied().unwrap_or(0) > 100, "{c}: {cases:?}");
+        assert!(fast.get(c).copied().unwrap_or(0) > 100, "{c}: {fast:?}");
     }
 }
 
@@ -192,34 +195,48 @@ fn f64_equals_previous_implementation_on_adversarial_inputs() {
     assert_eq!(tmsm::sharp_bound([0.0; 4], 1.0), 1.0);
 }
 
+/// f32 against the f64 answer on the same (f32-rounded) input, for the new and the previous
+/// implementation: the certified path computes weights from the Christoffel function (a sum of
+/// positive terms) instead of Lagrange quotients, so it differs from the previous f32 results
+/// (by more than 1e-4 on ~1 % of these inputs) but must be at least as close to the f64 bound.
 #[test]
-fn f32_agrees_with_previous_implementation() {
+fn f32_is_at_least_as_accurate_as_previous_implementation() {
     let mut rng = ChaCha8Rng::seed_from_u64(32);
-    let (mut worst, mut off) = (0.0f64, 0usize);
     let n = 50_000;
+    let (mut sum_new, mut sum_old) = (0.0f64, 0.0f64);
+    let (mut far_new, mut far_old, mut differ, mut new_closer) = (0usize, 0usize, 0usize, 0usize);
     for i in 0..n {
         let (b, zf) = if i % 2 == 0 {
             random_input(&mut rng)
         } else {
             adversarial_input(&mut rng, i / 2)
         };
-        let b32 = b.map(|v| v as f32);
-        let old = tmsm_old::sharp_bound(b32, zf as f32) as f64;
-        let g = tmsm::sharp_bound(b32, zf as f32) as f64;
-        assert!(old.is_nan() == g.is_nan());
-        let d = (old - g).abs();
-        if d > 1e-4 {
-            off += 1;
-        } else {
-            worst = worst.max(d);
+        let (b32, zf32) = (b.map(|v| v as f32), zf as f32);
+        let reference = tmsm_old::sharp_bound(b32.map(f64::from), f64::from(zf32));
+        let old = f64::from(tmsm_old::sharp_bound(b32, zf32));
+        let new = f64::from(tmsm::sharp_bound(b32, zf32));
+        assert_eq!(old.is_nan(), new.is_nan(), "b={b32:?} zf={zf32}");
+        if new.is_nan() {
+            continue;
+        }
+        let (en, eo) = ((new - reference).abs(), (old - reference).abs());
+        sum_new += en;
+        sum_old += eo;
+        far_new += usize::from(en > 1e-3);
+        far_old += usize::from(eo > 1e-3);
+        if (new - old).abs() > 1e-4 {
+            differ += 1;
+            new_closer += usize::from(en < eo);
         }
     }
     eprintln!(
-        "f32: max |G_new − G_old| = {worst:.1e} on {} inputs, {off} beyond 1e-4",
-        n - off
+        "f32 vs f64: mean error new {:.2e} old {:.2e}; beyond 1e-3: new {far_new} old {far_old}; \
+         new and old differ by > 1e-4 on {differ} of {n}, new closer on {new_closer}",
+        sum_new / n as f64,
+        sum_old / n as f64
     );
-    assert!(
-        off * 1000 <= n,
-        "{off} of {n} f32 inputs differ by more than 1e-4"
-    );
+    assert!(far_new <= far_old, "{far_new} > {far_old} inputs off by > 1e-3");
+    assert!(differ * 50 <= n, "{differ} of {n} differ by > 1e-4");
+    assert!(new_closer * 3 >= differ * 2, "new closer on {new_closer} of {differ}");
+    assert!(sum_new <= sum_old * 1.01, "mean error {sum_new} vs {sum_old}");
 }
