@@ -235,8 +235,17 @@ fn f32_is_at_least_as_accurate_as_previous_implementation() {
         sum_new / n as f64,
         sum_old / n as f64
     );
-    assert!(far_new <= far_old, "{far_new} > {far_old} inputs off by > 1e-3");
+    assert!(
+        far_new <= far_old,
+        "{far_new} > {far_old} inputs off by > 1e-3"
+    );
     assert!(differ * 50 <= n, "{differ} of {n} differ by > 1e-4");
-    assert!(new_closer * 3 >= differ * 2, "new closer on {new_closer} of {differ}");
-    assert!(sum_new <= sum_old * 1.01, "mean error {sum_new} vs {sum_old}");
+    assert!(
+        new_closer * 3 >= differ * 2,
+        "new closer on {new_closer} of {differ}"
+    );
+    assert!(
+        sum_new <= sum_old * 1.01,
+        "mean error {sum_new} vs {sum_old}"
+    );
 }

@@ -24,12 +24,6 @@
 use super::{min, Case, Cx, Tol};
 use crate::technique::linalg::Real;
 
-/// cot(δ/2) for w = e^{iδ}, δ ≠ 0: sin δ / (1 − cos δ).
-#[inline(always)]
-fn cot_half<T: Real>(w: Cx<T>) -> T {
-    w.im / (T::ONE - w.re)
-}
-
 /// The monic orthogonal polynomials Φ₁ = z − c₁, Φ₂ = z² + αz + β and their squared norms.
 #[derive(Clone, Copy)]
 struct Szego<T> {
@@ -64,11 +58,20 @@ impl<T: Real> Szego<T> {
     fn phi2(&self, z: Cx<T>) -> Cx<T> {
         (z + self.alpha) * z + self.beta
     }
-    /// The Gauss–Szegő weight of a node z: 1/K₂(z).
+    /// The Christoffel function K₂(z); the Gauss–Szegő weight of a node z is 1/K₂(z).
     #[inline(always)]
-    fn weight(&self, z: Cx<T>) -> T {
-        let k = T::ONE + (z - self.c1).norm2() * self.inv_d1 + self.phi2(z).norm2() * self.inv_d2;
-        T::ONE / k
+    fn christoffel(&self, z: Cx<T>) -> T {
+        T::ONE + (z - self.c1).norm2() * self.inv_d1 + self.phi2(z).norm2() * self.inv_d2
+    }
+    /// The same polynomials for the conjugate moments (the problem mirrored by s → −s).
+    #[inline(always)]
+    fn mirrored(&self) -> Self {
+        Szego {
+            c1: self.c1.conj(),
+            alpha: self.alpha.conj(),
+            beta: self.beta.conj(),
+            ..*self
+        }
     }
     /// The other two nodes of the canonical representation through ζ (|ζ| = 1): with
     /// t = ζ̄·(Φ₂(ζ)/|Φ₂(ζ)|)², their product is tζ̄ = u², u = ζ̄Φ₂(ζ)/|Φ₂(ζ)|, and their sum is
@@ -77,7 +80,7 @@ impl<T: Real> Szego<T> {
     fn canonical(&self, zeta: Cx<T>) -> Option<(Cx<T>, Cx<T>)> {
         let f = self.phi2(zeta);
         let n2 = f.norm2();
-        if !(n2 > T::ZERO) {
+        if n2.is_nan() || n2 <= T::ZERO {
             return None;
         }
         let v = f.scale(T::ONE / n2.sqrt());
@@ -127,7 +130,7 @@ pub(super) fn bound<T: Real>(
         _ => {}
     }
     let sz = Szego::new(c1, c2);
-    if !(sz.d2 >= tol.certify_det) {
+    if sz.d2.is_nan() || sz.d2 < tol.certify_det {
         return Verdict::Unknown;
     }
     match through(&sz, ea, least) {
@@ -136,7 +139,7 @@ pub(super) fn bound<T: Real>(
         Some(None) => {}
     }
     // (II) is (I) in the mirrored problem s → −s (conjugate moments); the seam becomes e^{ia}.
-    match through(&Szego::new(c1.conj(), c2.conj()), ea, least) {
+    match through(&sz.mirrored(), ea, least) {
         Some(Some(g)) => Verdict::Optimal(g, Case::ThroughZero),
         None => Verdict::Unknown,
         Some(None) => Verdict::Quartic,
@@ -153,7 +156,7 @@ fn symmetric<T: Real>(c1: Cx<T>, c2: Cx<T>, ea: Cx<T>, h0: T, h1: Cx<T>) -> Opti
     let zero = T::ZERO;
     let one = T::ONE;
     let two = T::of(2.0);
-    if !(h0 > zero) {
+    if h0.is_nan() || h0 <= zero {
         return None;
     }
     let (ca, sa) = (ea.re, ea.im);
@@ -168,7 +171,7 @@ fn symmetric<T: Real>(c1: Cx<T>, c2: Cx<T>, ea: Cx<T>, h0: T, h1: Cx<T>) -> Opti
     let dd = (c2.im - two * ca * c1.im) / (two * sd * gap);
     let least = min((one - g) - da.abs(), g - dd.abs()) * T::of(0.5);
     // NaN (sin d = 0 with coincident nodes) is no candidate.
-    (least == least).then_some((g, least))
+    (!least.is_nan()).then_some((g, least))
 }
 
 /// The canonical representation through the end ζ = e^{ia} (case I): `Some(Some(G))` if
@@ -176,12 +179,15 @@ fn symmetric<T: Real>(c1: Cx<T>, c2: Cx<T>, ea: Cx<T>, h0: T, h1: Cx<T>) -> Opti
 /// below `least` or the nodes are degenerate.
 #[inline(always)]
 fn through<T: Real>(sz: &Szego<T>, ea: Cx<T>, least: T) -> Option<Option<T>> {
+    let one = T::ONE;
     let ca = ea.re;
     let zeta = ea;
     let (z2, z3) = sz.canonical(zeta)?;
     let (in2, in3) = (z2.re > ca, z3.re > ca);
-    let w = [zeta, z2, z3].map(|z| sz.weight(z));
-    if !(min(w[0], min(w[1], w[2])) >= least) {
+    let k = [sz.christoffel(zeta), sz.christoffel(z2), sz.christoffel(z3)];
+    // Every weight 1/K ≥ least (K > 0; NaN fails).
+    let kmax = one / least;
+    if !(k[0] <= kmax && k[1] <= kmax && k[2] <= kmax) {
         return None;
     }
     match (in2, in3) {
@@ -189,18 +195,21 @@ fn through<T: Real>(sz: &Szego<T>, ea: Cx<T>, least: T) -> Option<Option<T>> {
             // Nodes {ζ, x₁, x₂}: p = 1 − f/f(ζ) with f(s) = |e^{is} − x₁|²|e^{is} − x₂|²,
             // feasible ⇔ f ≥ f(ζ) at the other end e^{−ia} of the lit arc.
             let f = |z: Cx<T>| (z - z2).norm2() * (z - z3).norm2();
-            Some((f(ea.conj()) >= f(zeta)).then(|| T::ONE - w[0]))
+            Some((f(ea.conj()) >= f(zeta)).then(|| one - one / k[0]))
         }
         (true, false) | (false, true) => {
-            let (x, y, wx) = if in2 { (z2, z3, w[1]) } else { (z3, z2, w[2]) };
+            let (x, y, kx) = if in2 { (z2, z3, k[1]) } else { (z3, z2, k[2]) };
             // Tangency at x: cot((x − r)/2) = −cot((x − a)/2) − 2 cot((x − y)/2); r ∈ [−a, x)
-            // ⇔ that is ≥ cot((x + a)/2).
-            let lhs = -cot_half(x * ea.conj()) - T::of(2.0) * cot_half(x * y.conj());
-            let rhs = cot_half(x * ea);
-            if lhs.is_nan() || rhs.is_nan() {
+            // ⇔ that is ≥ cot((x + a)/2). With cot(δ/2) = sin δ/(1 − cos δ) and the
+            // denominators (> 0 for distinct points) multiplied out:
+            let (u, v, w) = (x * ea.conj(), x * y.conj(), x * ea);
+            let (du, dv, dw) = (one - u.re, one - v.re, one - w.re);
+            if !(du > T::ZERO && dv > T::ZERO && dw > T::ZERO) {
                 return None;
             }
-            Some((lhs >= rhs).then_some(wx))
+            let lhs = -(u.im * dv + T::of(2.0) * v.im * du) * dw;
+            let rhs = w.im * du * dv;
+            Some((lhs >= rhs).then(|| one / kx))
         }
         // Both other nodes lit: G would be 0, which the lit-arc test rules out.
         (false, false) => None,
@@ -231,7 +240,7 @@ mod tests {
             let zeta = Cx::unit(phi);
             let (z2, z3) = sz.canonical(zeta).unwrap();
             let nodes = [zeta, z2, z3];
-            let w = nodes.map(|z| sz.weight(z));
+            let w = nodes.map(|z| 1.0 / sz.christoffel(z));
             let (mut m0, mut m1, mut m2) = (0.0, Cx::real(0.0), Cx::real(0.0));
             for (z, wi) in nodes.iter().zip(w) {
                 assert!(wi > 0.0 && (z.abs() - 1.0).abs() < 1e-12);

@@ -12,10 +12,13 @@
 //!   (I)/(II) the canonical 3-Dirac representations through z_f and through 0 (a quadratic);
 //!   (III-s) Diracs at 0, z_f and symmetric ±d (closed form);
 //!   (III-q) Diracs at 0, z_f, x ∈ A, y ∉ A with x from a quartic in tan(x/2).
+//!   The G-only path ([`sharp_bound`]) stops at the first of (III-s), (I), (II) whose optimality
+//!   a dual polynomial certifies and solves the quartic only when none is (`certified`,
+//!   docs/tmsm.md §4.6); [`solve`] enumerates every candidate.
 //!
 //! Points of the circle are kept as unit complex numbers (one sin/cos pair per evaluation for
 //! e^{ia}; a point is in A ⇔ its real part exceeds cos a), angles are formed only for the
-//! reported support and the singular cases. [`sharp_bound`] allocates nothing.
+//! reported support. [`sharp_bound`] allocates nothing.
 
 use super::linalg::Real;
 use super::{ClosedForm, Evaluator, Stateless, Technique};
@@ -173,7 +176,7 @@ impl<T: Real> Tol<T> {
                 double: T::of(1e-4),
                 weight: T::of(1e-4),
                 angle: T::of(1e-5),
-                certify_weight: T::of(1e-4),
+                certify_weight: T::ZERO,
                 certify_det: T::ZERO,
             }
         } else {
@@ -182,7 +185,7 @@ impl<T: Real> Tol<T> {
                 double: T::of(2.2e-11),
                 weight: T::of(2.2e-8),
                 angle: T::of(2.2e-10),
-                certify_weight: T::of(2.2e-5),
+                certify_weight: T::of(1e-6),
                 certify_det: T::of(1e-6),
             }
         }
