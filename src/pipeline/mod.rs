@@ -89,10 +89,6 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     let fragments: usize = stacks.iter().map(|s| s.fragment_count()).sum();
     eprintln!("  {} views, {fragments} fragments", stacks.len());
 
-    step.start("closed forms, baselines and LP candidates against PCF");
-    let all = techniques::evaluate_all(&stacks, &plan, &p.out.join("evaluate"))?;
-    let pictures = techniques::pictures(&stacks, &plan, &p.out.join("pictures"))?;
-
     step.start("LP grid: the smallest n within tolerance of the finest grid");
     let grid_tolerance = cfg.tolerance / 10.0;
     let refinement = grid::refine(
@@ -107,6 +103,18 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         &chosen_grid,
         &p.out.join("grid_refinement.svg"),
     )?;
+
+    // The LP candidates run on the finest grid any scene needs.
+    let lp_grid = chosen_grid
+        .iter()
+        .map(|x| x.1)
+        .max()
+        .unwrap_or(crate::technique::lp_candidate::DEFAULT_GRID_POINTS);
+    step.start(&format!(
+        "closed forms, baselines and LP candidates (n = {lp_grid}) against PCF"
+    ));
+    let all = techniques::evaluate_all(&stacks, &plan, &p.out.join("evaluate"), lp_grid)?;
+    let pictures = techniques::pictures(&stacks, &plan, &p.out.join("pictures"))?;
 
     step.start("candidate sweep (racing)");
     let search_report = p.out.join("search");

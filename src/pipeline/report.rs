@@ -129,12 +129,19 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     d.table(&["quantity", "paper", "momentlab (this run)"], rows);
 
     d.heading("Techniques against PCF on the same fragments");
+    let lp_grid = r.chosen_grid.iter().map(|x| x.1).max().unwrap_or(0);
     d.paragraph(format!(
         "Error = mean |G − PCF| over all fragments of all layers (9×9 Gaussian PCF, σ = 2.4 \
-         texels). Closed forms see every fragment; LP candidates (Algorithm 1, n = 1024 grid) \
-         every {}-th fragment. Speed: mean nanoseconds per evaluation on one core over the filter \
+         texels). Closed forms see every fragment; LP candidates (Algorithm 1 on n = {lp_grid} \
+         uniform grid points, the largest n the grid convergence test below chose: {}) every \
+         {}-th fragment. Speed: mean nanoseconds per evaluation on one core over the filter \
          windows of fragments sampled from the same depth stacks, for closed forms and LP \
          candidates alike (momentlab's timing loop, `momentlab bench shadow --corpus stacks`).",
+        r.chosen_grid
+            .iter()
+            .map(|(s, n)| format!("{s} {n}"))
+            .collect::<Vec<_>>()
+            .join(", "),
         r.plan.lp_stride
     ));
     let mut sorted: Vec<&Measured> = r.all.iter().collect();
@@ -177,7 +184,9 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     d.figure(
         "error_histograms.svg",
         "Distribution of |G − PCF| over fragments per technique (f32 closed forms and LP \
-         candidates), log₁₀ counts per bin (four bins per decade; the first bin is [0, 1e-4)).",
+         candidates), log₁₀ counts per bin (four bins per decade; the first bin is [0, 1e-4)). \
+         Every bin is drawn: an empty bin at a count of 0.5 (log₁₀ = −0.3) on the dashed \
+         baseline; the legend is right of the plot.",
     );
     let front = pareto::pareto_front(r.entries);
     d.paragraph(format!(

@@ -9,6 +9,7 @@ use crate::report::pictures;
 use crate::report::recommend::{per_scene, Measured};
 use crate::stack::DepthStack;
 use crate::technique::linalg::Precision;
+use crate::technique::lp_candidate::LpCandidate;
 use crate::technique::{self, registry, timing, Technique};
 use anyhow::Result;
 use std::path::Path;
@@ -41,8 +42,9 @@ pub struct Job {
     pub speed_inputs: usize,
 }
 
-/// The jobs of a plan: closed forms at f32 and f64, the LP candidates at f64.
-pub fn jobs(plan: &Plan) -> Result<Vec<Job>> {
+/// The jobs of a plan: closed forms at f32 and f64, the LP candidates at f64 on `lp_grid`
+/// uniform points.
+pub fn jobs(plan: &Plan, lp_grid: usize) -> Result<Vec<Job>> {
     let mut jobs = Vec::new();
     for name in closed_forms() {
         for prec in [Precision::F32, Precision::F64] {
@@ -60,10 +62,11 @@ pub fn jobs(plan: &Plan) -> Result<Vec<Job>> {
         }
     }
     for &(spec, _) in LP_CANDIDATES {
+        let list = spec.strip_prefix("lp:").unwrap_or(spec);
         jobs.push(Job {
             name: spec.into(),
             precision: "f64".into(),
-            technique: technique::by_name(spec)?,
+            technique: Box::new(LpCandidate::from_spec_on(list, lp_grid)?),
             stride: plan.lp_stride,
             speed_inputs: plan.lp_speed_inputs,
         });
@@ -82,10 +85,22 @@ pub fn artefact_name(name: &str, precision: &str) -> String {
 }
 
 /// Every job, read back from `dir` when its artefact exists, otherwise measured and written.
-pub fn evaluate_all(stacks: &[DepthStack], plan: &Plan, dir: &Path) -> Result<Vec<Measured>> {
+/// LP candidates run on `lp_grid` points (their artefact names carry it, so a different grid
+/// is measured afresh).
+pub fn evaluate_all(
+    stacks: &[DepthStack],
+    plan: &Plan,
+    dir: &Path,
+    lp_grid: usize,
+) -> Result<Vec<Measured>> {
     let mut all = Vec::new();
-    for j in jobs(plan)? {
-        let file = dir.join(artefact_name(&j.name, &j.precision));
+    for j in jobs(plan, lp_grid)? {
+        let stem = if j.name.starts_with("lp:") {
+            format!("{} n{lp_grid}", j.name)
+        } else {
+            j.name.clone()
+        };
+        let file = dir.join(artefact_name(&stem, &j.precision));
         let m = match read_json::<Measured>(&file) {
             Ok(m) => m,
             Err(_) => {

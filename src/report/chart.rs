@@ -260,33 +260,99 @@ pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result
     Ok(())
 }
 
-/// Error histograms, one line per technique: x = log₁₀ of the bin's upper edge of |G − PCF|
-/// (`recommend::HIST_EDGES`; the first bin [0, 1e-4) is drawn at −4), y = log₁₀ of the
-/// fragment count (empty bins omitted). The paper's way to see where a technique fails: the
-/// mass in the right-hand bins.
-pub fn histograms_svg(path: &Path, title: &str, hists: &[(String, Vec<u64>)]) -> Result<()> {
+/// Where an empty bin is drawn on the log₁₀ count axis: a count of 0.5 (log₁₀ = −0.30), on a
+/// dashed baseline, so a line goes down to it instead of jumping over the bin.
+pub const EMPTY_BIN_COUNT: f64 = 0.5;
+
+/// The points of one histogram: x = log₁₀ of each bin's upper edge (`recommend::HIST_EDGES`;
+/// the first bin [0, 1e-4) is at −4), y = log₁₀ of its count, [`EMPTY_BIN_COUNT`] for empty
+/// bins. Empty when the histogram does not have one count per bin.
+pub fn histogram_points(h: &[u64]) -> Vec<(f64, f64)> {
     use super::recommend::HIST_EDGES;
+    if h.len() != HIST_EDGES.len() - 1 {
+        return Vec::new();
+    }
+    h.iter()
+        .enumerate()
+        .map(|(k, &c)| {
+            let count = if c == 0 { EMPTY_BIN_COUNT } else { c as f64 };
+            (HIST_EDGES[k + 1].log10(), count.log10())
+        })
+        .collect()
+}
+
+/// Error histograms, one line per technique ([`histogram_points`]; every bin drawn, empty bins
+/// at the dashed baseline [`EMPTY_BIN_COUNT`]), the legend in a margin right of the plot so it
+/// covers no line. The paper's way to see where a technique fails: the mass in the right-hand
+/// bins.
+pub fn histograms_svg(path: &Path, title: &str, hists: &[(String, Vec<u64>)]) -> Result<()> {
     let series: Vec<(String, Vec<(f64, f64)>)> = hists
         .iter()
-        .filter(|h| h.1.len() == HIST_EDGES.len() - 1)
-        .map(|(name, h)| {
-            let pts = h
-                .iter()
-                .enumerate()
-                .filter(|(_, &c)| c > 0)
-                .map(|(k, &c)| (HIST_EDGES[k + 1].log10(), (c as f64).log10()))
-                .collect();
-            (name.clone(), pts)
-        })
+        .map(|(name, h)| (name.clone(), histogram_points(h)))
+        .filter(|s| !s.1.is_empty())
         .collect();
-    lines_svg(
-        path,
-        title,
-        "log₁₀ |G − PCF| (upper edge of the bin)",
-        "log₁₀ fragments",
-        &series,
-        false,
-    )
+    let floor = EMPTY_BIN_COUNT.log10();
+    let top = series
+        .iter()
+        .flat_map(|s| s.1.iter().map(|p| p.1))
+        .fold(1.0f64, f64::max);
+    let (x0, x1) = (-4.0, 0.0);
+    let legend_w = 330;
+    let root = SVGBackend::new(path, (800 + legend_w, 520)).into_drawing_area();
+    root.fill(&WHITE).map_err(err(path))?;
+    let (plot_area, legend_area) = root.split_horizontally(800);
+    let mut chart = ChartBuilder::on(&plot_area)
+        .caption(title, ("sans-serif", 20))
+        .margin(15)
+        .x_label_area_size(45)
+        .y_label_area_size(70)
+        .build_cartesian_2d(x0 - 0.1..x1 + 0.1, floor - 0.3..top.ceil() + 0.2)
+        .map_err(err(path))?;
+    chart
+        .configure_mesh()
+        .x_desc("log₁₀ |G − PCF| (upper edge of the bin)")
+        .y_desc("log₁₀ fragments (empty bin: 0.5)")
+        .draw()
+        .map_err(err(path))?;
+    chart
+        .draw_series(DashedLineSeries::new(
+            vec![(x0 - 0.1, floor), (x1 + 0.1, floor)],
+            6,
+            4,
+            BLACK.stroke_width(1),
+        ))
+        .map_err(err(path))?;
+    let font = ("sans-serif", 13).into_font();
+    let mut y = 20;
+    legend_area
+        .draw(&Text::new(
+            "- - - empty bins (count 0 drawn as 0.5)",
+            (8, y),
+            font.clone(),
+        ))
+        .map_err(err(path))?;
+    y += 24;
+    for (k, (name, s)) in series.iter().enumerate() {
+        let c = Palette99::pick(k).to_rgba();
+        chart
+            .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
+            .map_err(err(path))?;
+        chart
+            .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
+            .map_err(err(path))?;
+        legend_area
+            .draw(&PathElement::new(
+                vec![(8, y + 6), (32, y + 6)],
+                c.stroke_width(2),
+            ))
+            .map_err(err(path))?;
+        legend_area
+            .draw(&Text::new(name.clone(), (38, y), font.clone()))
+            .map_err(err(path))?;
+        y += 18;
+    }
+    root.present().map_err(err(path))?;
+    Ok(())
 }
 
 /// A line chart of several named series (x log-scaled when `log_x`).
@@ -397,6 +463,38 @@ mod tests {
         assert_eq!(plain(1_234_567.0), "1 234 567");
         assert_eq!(plain(0.5), "0.5");
         assert_eq!(plain(2.25), "2.25");
+    }
+
+    #[test]
+    fn histogram_draws_empty_bins_at_the_floor_and_keeps_the_legend_outside() {
+        use crate::report::recommend::HIST_EDGES;
+        let mut h = vec![0u64; HIST_EDGES.len() - 1];
+        h[0] = 1000;
+        h[5] = 10;
+        let pts = histogram_points(&h);
+        assert_eq!(pts.len(), h.len());
+        assert!((pts[0].1 - 3.0).abs() < 1e-12 && (pts[5].1 - 1.0).abs() < 1e-12);
+        assert!((pts[1].1 - EMPTY_BIN_COUNT.log10()).abs() < 1e-12);
+        assert!(histogram_points(&h[1..]).is_empty());
+        let dir = std::env::temp_dir().join(format!("momentlab-hist-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("h.svg");
+        histograms_svg(&p, "t", &[("tech-a".into(), h)]).unwrap();
+        let svg = std::fs::read_to_string(&p).unwrap();
+        // The legend text starts right of the 800-px plot area.
+        let at = svg.find(">\ntech-a\n<").expect("legend entry");
+        let tag = &svg[svg[..at].rfind("<text").unwrap()..at];
+        let x: f64 = tag
+            .split("x=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(x > 800.0, "{tag}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]

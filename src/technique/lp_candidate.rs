@@ -41,6 +41,11 @@ impl LpCandidate {
     /// [`DEFAULT_GRID_POINTS`] uniform points, with the "fast" solver, or "reference" when
     /// the fast solver cannot be built.
     pub fn from_spec(list: &str) -> Result<LpCandidate> {
+        Self::from_spec_on(list, DEFAULT_GRID_POINTS)
+    }
+
+    /// [`LpCandidate::from_spec`] on `n` uniform points.
+    pub fn from_spec_on(list: &str, n: usize) -> Result<LpCandidate> {
         let names = split_list(list);
         if names.iter().any(|n| n.is_empty()) {
             bail!("LP candidate 'lp:{list}': empty function name");
@@ -48,7 +53,7 @@ impl LpCandidate {
         let basis = Catalog::embedded()
             .basis(&names)
             .with_context(|| format!("LP candidate 'lp:{list}'"))?;
-        let grid = Grid::uniform(DEFAULT_GRID_POINTS)?;
+        let grid = Grid::uniform(n)?;
         match LpCandidate::new(basis.clone(), grid.clone(), "fast") {
             Ok(c) => Ok(c),
             Err(_) => LpCandidate::new(basis, grid, "reference"),
