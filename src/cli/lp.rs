@@ -4,8 +4,9 @@
 //!          "solver": "fast" | "reference", "problems": [{"moments": [..], "zf": 0.4}, …]}
 //! ("grid" defaults to 1024 uniform points, "solver" to "fast").
 //! Output: {"results": [{"status": "optimal", "g": 0.25, "support": [[z, w], …]},
-//!          {"status": "infeasible"}, …]}
-//! Everything is validated before any LP is solved; an infeasible problem does not abort.
+//!          {"status": "infeasible"}, {"status": "failed", "reason": "…"}, …]}
+//! Everything is validated before any LP is solved; a problem that is infeasible or that the
+//! solver cannot settle gets its own status, the rest of the batch is answered.
 
 use crate::basis::Catalog;
 use crate::lp::{make_solver, GridTable, Status};
@@ -99,6 +100,18 @@ struct Output {
     g: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     support: Option<Vec<[f64; 2]>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    reason: Option<String>,
+}
+
+fn output(sol: crate::lp::Solution) -> Output {
+    let optimal = sol.status == Status::Optimal;
+    Output {
+        status: sol.status,
+        g: optimal.then_some(sol.g),
+        support: optimal.then(|| sol.support.iter().map(|&(z, w)| [z, w]).collect()),
+        reason: sol.reason,
+    }
 }
 
 #[derive(serde::Serialize)]
@@ -147,21 +160,11 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
             let mut s = make_solver(&solver, table.clone())?;
             let mut out = Vec::with_capacity(chunk.len());
             for (k, p) in chunk.iter().enumerate() {
-                let sol = s
-                    .solve(&p.moments, p.zf)
-                    .with_context(|| format!("problem {}", c * CHUNK + k))?;
-                out.push(match sol.status {
-                    Status::Optimal => Output {
-                        status: sol.status,
-                        g: Some(sol.g),
-                        support: Some(sol.support.iter().map(|&(z, w)| [z, w]).collect()),
-                    },
-                    Status::Infeasible => Output {
-                        status: sol.status,
-                        g: None,
-                        support: None,
-                    },
+                let sol = s.solve(&p.moments, p.zf).unwrap_or_else(|e| {
+                    let k = c * CHUNK + k;
+                    crate::lp::Solution::failed(format!("problem {k}: {e:#}"))
                 });
+                out.push(output(sol));
                 bar.inc(1);
             }
             Ok(out)

@@ -37,8 +37,10 @@
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
+use super::certify::{Certified, Certifier};
 use super::pricing::ColumnTable;
 use super::reference::ReferenceSolver;
+use super::scaled::{Found, ScaledSimplex};
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
 
@@ -58,12 +60,14 @@ const TOL_RANK: f64 = 1e-10;
 const TOL_DEP: f64 = 1e-8;
 /// Largest condition number (Frobenius) of a basis accepted at refactorisation.
 const MAX_COND: f64 = 1e12;
+/// Weights at or below this are left out of an uncertified support (as in the reference).
+const SUPPORT_MIN: f64 = 1e-12;
+/// Accurate pivots ([`Certifier::improve`]) tried on a basis that does not certify.
+const IMPROVE_STEPS: usize = 20;
 /// Pivots between refactorisations of the basis inverse.
 const REFACTOR_EVERY: usize = 16;
 /// Consecutive degenerate pivots after which Bland's rule takes over.
 const DEGENERATE_LIMIT: usize = 20;
-/// Weights at or below this are left out of the returned support (as in the reference).
-const SUPPORT_MIN: f64 = 1e-12;
 
 /// Counters over the lifetime of a [`FastSolver`] (for benchmarks and tests).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -91,8 +95,18 @@ pub struct FastStats {
     pub loose: u64,
     /// Cold restarts after an iteration cap, a singular basis or a failed verification.
     pub restarts: u64,
-    /// Problems handed to the reference solver after the restarts also failed.
+    /// Problems escalated to the scaled simplex ([`super::scaled`]): the fast answer was not
+    /// certified, or the fast runs did not converge, or phase 1 called them infeasible.
     pub fallbacks: u64,
+    /// Problems returned as `Failed` (nothing settled them and the reference fallback is off).
+    pub failed: u64,
+    /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
+    pub improved: u64,
+    /// Answers returned WITHOUT a certificate (neither the fast basis, the accurate pivots nor
+    /// the scaled simplex certified): the fast solver's own answer, its infeasibility verdict,
+    /// or the reference solver's answer, as before the certificates. Issue 12's contract is
+    /// not met on these.
+    pub uncertified: u64,
     /// Solves started from a given distribution ([`MomentSolver::solve_distribution`]) by the
     /// crossover.
     pub hinted: u64,
@@ -167,8 +181,13 @@ pub struct FastSolver {
     last_c: Vec<f64>,
     warm: bool,
     stats: FastStats,
+    /// Checks every answer in the original coordinates.
+    cert: Certifier,
+    /// The escalation solver.
+    scaled: ScaledSimplex,
     fallback: Option<ReferenceSolver>,
-    /// Hand unsolved problems to the reference solver (default) or report an error.
+    /// Hand problems nothing else settles to the reference solver (default) or report them
+    /// `Failed`.
     use_fallback: bool,
     // Workspace (no allocation per solve).
     c: Vec<f64>,
@@ -241,6 +260,9 @@ impl FastSolver {
                 (0..n).map(|i| table.row(i)[j - 1]).collect()
             };
             fscale[j] = v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+            // Work on v·2^-e (exact) so that ‖v‖² cannot overflow (exp(400z) reaches 1e173).
+            let unit = super::dense::inv_pow2(fscale[j]);
+            v.iter_mut().for_each(|x| *x *= unit);
             let norm0 = norm(&v);
             let coef = &mut rcoef_full[j * mm..(j + 1) * mm];
             for _pass in 0..2 {
@@ -261,6 +283,8 @@ impl FastSolver {
                 }
                 q.push(v);
             }
+            // R's column of the unscaled function.
+            coef.iter_mut().for_each(|c| *c /= unit);
         }
         let r = q.len();
         let sn = (n as f64).sqrt();
@@ -303,6 +327,7 @@ impl FastSolver {
             }
         };
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
+        let cert_rows: Vec<usize> = (0..mm).filter(|&j| kept[j].is_some()).collect();
         let mut solver = FastSolver {
             n,
             m,
@@ -319,6 +344,8 @@ impl FastSolver {
             last_c: vec![f64::NAN; r],
             warm: true,
             stats: FastStats::default(),
+            cert: Certifier::new(&table, cert_rows),
+            scaled: ScaledSimplex::default(),
             fallback: None,
             use_fallback: true,
             c: vec![0.0; r],
@@ -369,9 +396,8 @@ impl FastSolver {
     }
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
-    /// Whether problems the simplex cannot settle (numerically singular clustered bases) go
-    /// to the reference solver (default, slow but usually right) or return an error at once
-    /// (for sweeps that count failures, see `lp::make_solver("fast-strict", …)`).
+    /// Whether problems that neither the fast runs nor the scaled simplex settle go to the
+    /// reference solver (default) or come back `Failed` (`lp::make_solver("fast-strict", …)`).
     pub fn set_reference_fallback(&mut self, on: bool) {
         self.use_fallback = on;
     }
@@ -1540,6 +1566,7 @@ impl FastSolver {
             status: Status::Optimal,
             g: g.clamp(0.0, 1.0),
             support,
+            reason: None,
         }
     }
 }
@@ -1575,7 +1602,27 @@ impl MomentSolver for FastSolver {
     }
 }
 
+/// The fast solver's own verdict, kept for when nothing certifies.
+enum Legacy {
+    Answer(Solution, Vec<usize>),
+    Infeasible,
+    Reference,
+}
+
+/// What the simplex attempts of [`FastSolver::attempts`] ended with.
+enum Verdict {
+    /// `self.basis` is optimal as far as the fast solver can tell (to be certified).
+    Optimal,
+    /// Phase 1 left the artificial positive (to be confirmed by a Farkas ray).
+    Infeasible,
+    /// No convergence from any start.
+    Failed,
+}
+
 impl FastSolver {
+    /// The contract ([`super::certify`]): a fast answer is returned only with its certificate;
+    /// otherwise the problem is escalated to the scaled simplex, whose answer is certified the
+    /// same way; what neither settles is `Failed` with the reason.
     fn solve_inner(
         &mut self,
         moments: &[f64],
@@ -1595,12 +1642,145 @@ impl FastSolver {
         self.stats.solves += 1;
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
-        if !c_given && !self.transform(moments) {
-            self.stats.infeasible += 1;
-            return Ok(Solution::infeasible());
-        }
-        self.c0.copy_from_slice(&self.c);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        let verdict = if c_given || self.transform(moments) {
+            self.c0.copy_from_slice(&self.c);
+            self.attempts(kf, hint)
+        } else {
+            Verdict::Infeasible
+        };
+        // The fast solver's own answer, returned (counted as uncertified) only if nothing
+        // certifies: the behaviour before the certificates.
+        let legacy = match verdict {
+            Verdict::Optimal => {
+                self.remember_optimal();
+                let fast_basis = self.basis.clone();
+                match self.cert.optimal(moments, kf, &fast_basis) {
+                    Ok(c) => return Ok(certified(c)),
+                    Err(_) => {
+                        if self.r < self.m + 1 && !c_given {
+                            self.polish_original(moments);
+                        }
+                        Legacy::Answer(self.solution(kf), fast_basis)
+                    }
+                }
+            }
+            Verdict::Infeasible => Legacy::Infeasible,
+            Verdict::Failed => Legacy::Reference,
+        };
+        if let Legacy::Answer(_, fast_basis) = &legacy {
+            let mut basis = fast_basis.clone();
+            if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                self.stats.improved += 1;
+                return Ok(certified(c));
+            }
+        }
+        // A start distribution with at most r atoms is itself a basic feasible solution: the
+        // accurate pivots from it never leave the feasible set.
+        if let Some(mut basis) = hint.and_then(|h| self.support_basis(h)) {
+            if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                self.stats.improved += 1;
+                return Ok(certified(c));
+            }
+        }
+        let start = match &legacy {
+            Legacy::Answer(_, b) => Some(b.clone()),
+            _ => None,
+        };
+        let sol = self.escalate(moments, kf, start.as_deref());
+        if sol.status != Status::Failed {
+            return Ok(sol);
+        }
+        match legacy {
+            Legacy::Answer(old, _) => {
+                self.stats.uncertified += 1;
+                Ok(old)
+            }
+            Legacy::Infeasible => {
+                self.stats.uncertified += 1;
+                self.stats.infeasible += 1;
+                Ok(Solution::infeasible())
+            }
+            Legacy::Reference if self.use_fallback => {
+                self.stats.uncertified += 1;
+                let table = &self.table;
+                let fb = self
+                    .fallback
+                    .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
+                let sol = fb.solve(moments, zf)?;
+                if sol.status == Status::Infeasible {
+                    self.stats.infeasible += 1;
+                }
+                Ok(sol)
+            }
+            Legacy::Reference => {
+                self.stats.failed += 1;
+                Ok(sol)
+            }
+        }
+    }
+
+    /// The scaled simplex on the problem, from `start` if given; its answer certified.
+    fn escalate(&mut self, moments: &[f64], kf: usize, start: Option<&[usize]>) -> Solution {
+        self.stats.fallbacks += 1;
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        self.cert.set_moments(moments);
+        let pivots = self.scaled.pivots;
+        let found = self.scaled.solve(&self.cert, kf, start);
+        self.stats.pivots += self.scaled.pivots - pivots;
+        let sol = match found {
+            Found::Optimal(mut basis) => {
+                match self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                    Ok(c) => certified(c),
+                    Err(e) => {
+                        Solution::failed(format!("scaled simplex optimum not certified: {e}"))
+                    }
+                }
+            }
+            Found::Infeasible(y) => match self.cert.infeasible(moments, &y) {
+                Ok(_) => Solution::infeasible(),
+                Err(e) => Solution::failed(format!("phase 1 infeasible, but {e}")),
+            },
+            Found::Failed(e) => Solution::failed(e),
+        };
+        if sol.status == Status::Infeasible {
+            self.stats.infeasible += 1;
+        }
+        sol
+    }
+
+    /// The support of a distribution with at most r atoms, completed to r columns from the
+    /// cold-start basis (None for larger supports).
+    fn support_basis(&self, dist: &[(u32, f64)]) -> Option<Vec<usize>> {
+        let mut basis: Vec<usize> = Vec::with_capacity(self.r);
+        for &(i, w) in dist {
+            let i = i as usize;
+            if w > 0.0 && !basis.contains(&i) {
+                if basis.len() == self.r {
+                    return None;
+                }
+                basis.push(i);
+            }
+        }
+        let rows = &self.rows;
+        complete_basis(rows, self.n, self.r, &basis)
+    }
+
+    /// After a certified fast optimum: its basis is the next warm start.
+    fn remember_optimal(&mut self) {
+        self.last_bound = f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
+        if self.warm {
+            match &mut self.warm_basis {
+                Some(wb) => wb.copy_from_slice(&self.basis),
+                None => self.warm_basis = Some(self.basis.clone()),
+            }
+            self.last_c.copy_from_slice(&self.c0);
+        }
+    }
+
+    /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
+    /// (two cold runs, the second with Bland's rule throughout).
+    fn attempts(&mut self, kf: usize, hint: Option<&[(u32, f64)]>) -> Verdict {
         #[derive(Clone, Copy)]
         enum Start {
             Hint,
@@ -1625,7 +1805,7 @@ impl FastSolver {
             warm_or_cold
         };
         let mut cold_runs = 0;
-        let mut stash: Option<(Solution, Vec<usize>)> = None;
+        let mut stash: Option<Vec<usize>> = None;
         for _attempt in 0..6 {
             if let Start::Hint = start {
                 self.c.copy_from_slice(&self.c0);
@@ -1652,34 +1832,15 @@ impl FastSolver {
             }
             // The second cold run uses Bland's rule throughout.
             self.c.copy_from_slice(&self.c0);
-            let out = self.run(kf, cold_runs >= 2);
-            match out {
+            match self.run(kf, cold_runs >= 2) {
                 Outcome::RetryAccurate => {
                     self.stats.restarts += 1;
-                    // The answer if the accurate run fails: this optimum, whose weights
-                    // reproduce the moments (to rounding, or were all the data allow).
-                    stash = Some((self.solution(kf), self.basis.clone()));
+                    // The answer to certify if the accurate run fails.
+                    stash = Some(self.basis.clone());
                     start = Start::Current;
                 }
-                Outcome::Optimal => {
-                    self.last_bound =
-                        f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
-                    if self.warm {
-                        match &mut self.warm_basis {
-                            Some(wb) => wb.copy_from_slice(&self.basis),
-                            None => self.warm_basis = Some(self.basis.clone()),
-                        }
-                        self.last_c.copy_from_slice(&self.c0);
-                    }
-                    if self.r < self.m + 1 && !c_given {
-                        self.polish_original(moments);
-                    }
-                    return Ok(self.solution(kf));
-                }
-                Outcome::Infeasible => {
-                    self.stats.infeasible += 1;
-                    return Ok(Solution::infeasible());
-                }
+                Outcome::Optimal => return Verdict::Optimal,
+                Outcome::Infeasible => return Verdict::Infeasible,
                 Outcome::Retry => {
                     self.stats.restarts += 1;
                     start = Start::Current;
@@ -1697,28 +1858,26 @@ impl FastSolver {
                 }
             }
         }
-        if let Some((sol, basis)) = stash {
-            self.stats.loose += 1;
-            if self.warm {
-                self.warm_basis = Some(basis);
-                self.last_c.copy_from_slice(&self.c0);
+        match stash {
+            Some(basis) => {
+                self.stats.loose += 1;
+                self.mark_basic(false);
+                self.basis.copy_from_slice(&basis);
+                self.mark_basic(true);
+                Verdict::Optimal
             }
-            return Ok(sol);
+            None => Verdict::Failed,
         }
-        // Last resort: the general-purpose solver.
-        self.stats.fallbacks += 1;
-        if !self.use_fallback {
-            anyhow::bail!("fast LP: no convergence (reference fallback disabled)");
-        }
-        let table = &self.table;
-        let fb = self
-            .fallback
-            .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
-        let sol = fb.solve(moments, zf)?;
-        if sol.status == Status::Infeasible {
-            self.stats.infeasible += 1;
-        }
-        Ok(sol)
+    }
+}
+
+/// The solution of a certified answer.
+fn certified(c: Certified) -> Solution {
+    Solution {
+        status: Status::Optimal,
+        g: c.g,
+        support: c.support,
+        reason: None,
     }
 }
 

@@ -110,6 +110,7 @@ impl MomentSolver for ReferenceSolver {
             status: Status::Optimal,
             g,
             support,
+            reason: None,
         })
     }
 }

@@ -1,0 +1,605 @@
+//! Certificates for the answers of Algorithm 1, checked in the ORIGINAL coordinates.
+//!
+//! Row j of the LP (j = 0: Σ w_i = 1; j ≥ 1: Σ w_i f_j(z_i) = b_j) is judged on its own scale
+//! σ_j = max(|b̄_j|, 1e-30 · max_i |f_j(z_i)|) (σ_0 = 1), so a moment of 1e-25 must be
+//! reproduced to 1e-34, not to 1e-9 of the function's range. The floor is lowered to the
+//! smallest nonzero |f_j(z_i)| where that is smaller (exp(400z) spans 173 orders of magnitude:
+//! its moments are judged on their own scale, not against 1e-30 · e^400); for a function that
+//! changes sign it is 1e-5 · max_i |f_j(z_i)| (see [`CANCEL`]). (A moment whose terms cancel, a
+//! sign-changing f_j with b_j ≈ 0, is judged against 1e-5 of the magnitude of its terms
+//! instead, see [`CANCEL`]: f64 weights cannot resolve more.)
+//!
+//! * **optimal**: weights w ≥ 0 on a basis with |Σ_i w_i f_j(z_i) − b̄_j| ≤ 1e-9 σ_j for every
+//!   row (residuals in double-double arithmetic), and duals y giving the weak-duality bound
+//!   L = y·b̄ + min(0, min_i d_i), d_i = p_i − y·ā_i (p_i = [z_i < z_f]), with |G − L| ≤ 1e-9
+//!   (or the tighter Σ_i u_i min(0, d_i) with u_i the bound on w_i from sign-definite rows):
+//!   every distribution with exactly these moments has mass ≥ L ≥ G − 1e-9 below z_f. The d_i
+//!   are computed in f64 and lowered by their rounding bound.
+//! * **infeasible**: a Farkas ray y with y·b̄ < min_i y·ā_i − 1e-9 (|min_i y·ā_i| + Σ_j |y_j| σ_j):
+//!   then no distribution reproduces the moments even to the tolerance above.
+//!
+//! Both solves (weights and duals) are done here from the basis alone, on the row-scaled basis
+//! matrix (exact power-of-two scales) with iterative refinement on double-double residuals, so
+//! the certificate does not trust the solver's own arithmetic.
+
+#![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 13
+
+use super::dense::{inv_pow2, residual2, DdLu, Lu};
+use super::GridTable;
+
+/// Relative tolerance on every moment (against its row scale σ_j).
+pub const TOL_MOMENT: f64 = 1e-9;
+/// Largest accepted |G − L| between the answer and its dual lower bound.
+pub const TOL_GAP: f64 = 1e-9;
+/// σ_j ≥ SCALE_FLOOR · max_i |f_j(z_i)|: moments below this are judged absolutely.
+pub const SCALE_FLOOR: f64 = 1e-30;
+/// A moment that is a sum of terms of both signs cancelling to nearly 0 is judged against
+/// CANCEL times the magnitude of its terms (f64 weights cannot resolve it more finely): the
+/// residual must then be ≤ 1e-14 of Σ_i w_i |f_j(z_i)|. For a function that changes sign on
+/// the grid the floor of σ_j is CANCEL · max_i |f_j(z_i)| (sin(4πz) at z = 1 is 4.9e-16, a
+/// rounding error, not a scale).
+pub const CANCEL: f64 = 1e-5;
+/// Accurate pivots by Dantzig's rule before Bland's.
+const BLAND_AFTER: usize = 60;
+/// Rounding bound factor per term of a reduced cost (a few units of ε for r ≤ 13 terms).
+const GAMMA: f64 = 16.0 * f64::EPSILON;
+
+#[derive(Clone, Copy)]
+enum Which {
+    X,
+    Y,
+    Tmp,
+}
+
+/// An answer with its evidence.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Certified {
+    /// Mass of the certified distribution below z_f.
+    pub g: f64,
+    /// (z_i, w_i) with w_i > 0, sorted by z.
+    pub support: Vec<(f64, f64)>,
+    /// max_j |Σ w_i f_j(z_i) − b̄_j| / σ_j.
+    pub residual: f64,
+    /// G − L (L the dual lower bound).
+    pub gap: f64,
+}
+
+/// Checks answers for one table; owns its workspace (no allocation per check except the
+/// returned support).
+#[derive(Clone, Debug)]
+pub struct Certifier {
+    n: usize,
+    m: usize,
+    z: Vec<f64>,
+    /// Column-major m × n: fcols[(j−1)·n + i] = f_j(z_i).
+    fcols: Vec<f64>,
+    /// max_i |f_j(z_i)| (j = 0: 1).
+    fmax: Vec<f64>,
+    /// Floor of σ_j: min(1e-30 max_i |f_j(z_i)|, min_i |f_j(z_i)| ≠ 0).
+    floor: Vec<f64>,
+    /// f_j does not change sign on the grid (then w_i ≤ b_j / f_j(z_i) for feasible w).
+    definite: Vec<bool>,
+    /// The rows the bases are square on (function indices, 0 = the constant): the numerically
+    /// independent ones. The others are checked through the residual only.
+    rows: Vec<usize>,
+    sigma: Vec<f64>,
+    scale: Vec<f64>,
+    bbar: Vec<f64>,
+    a: Vec<f64>,
+    lu: Lu,
+    /// The same basis matrix in double-double, used when the f64 factorisation cannot
+    /// certify (condition beyond 1/ε).
+    ddlu: DdLu,
+    precise: bool,
+    /// Column scales K of the basis matrix (M = B̃ K is factorised).
+    colscale: Vec<f64>,
+    /// The last basis given to [`Self::optimal`] was factorised, and its weights reproduced
+    /// the moments.
+    factored: bool,
+    primal_ok: bool,
+    /// Bland's rule in [`Self::improve`] (after BLAND_AFTER steps: no cycling).
+    bland: bool,
+    x: Vec<f64>,
+    /// x before clamping to ≥ 0.
+    xraw: Vec<f64>,
+    y: Vec<f64>,
+    tmp: Vec<f64>,
+    d: Vec<f64>,
+    e: Vec<f64>,
+}
+
+impl Certifier {
+    /// A certifier for `table` whose square bases use the function rows `rows` (0 = the
+    /// constant, must be first; all of 0..=m when the functions are independent).
+    pub fn new(table: &GridTable, rows: Vec<usize>) -> Certifier {
+        let (n, m) = (table.n(), table.m());
+        let mut fcols = vec![0.0; m * n];
+        let mut fmax = vec![1.0; m + 1];
+        let mut floor = vec![1.0; m + 1];
+        let mut definite = vec![false; m + 1];
+        for j in 1..=m {
+            let col = &mut fcols[(j - 1) * n..j * n];
+            for (i, v) in col.iter_mut().enumerate() {
+                *v = table.row(i)[j - 1];
+            }
+            fmax[j] = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let fmin = col
+                .iter()
+                .filter(|v| **v != 0.0)
+                .fold(f64::INFINITY, |a, v| a.min(v.abs()));
+            definite[j] = col.iter().all(|&v| v >= 0.0) || col.iter().all(|&v| v <= 0.0);
+            floor[j] = if definite[j] {
+                (SCALE_FLOOR * fmax[j]).min(fmin)
+            } else {
+                CANCEL * fmax[j]
+            };
+        }
+        let r = rows.len();
+        Certifier {
+            n,
+            m,
+            z: table.grid().points().to_vec(),
+            fcols,
+            fmax,
+            floor,
+            definite,
+            rows,
+            sigma: vec![1.0; m + 1],
+            scale: vec![1.0; m + 1],
+            bbar: vec![1.0; m + 1],
+            a: vec![0.0; r * r],
+            lu: Lu::default(),
+            ddlu: DdLu::default(),
+            precise: false,
+            colscale: vec![1.0; r],
+            factored: false,
+            primal_ok: false,
+            bland: false,
+            x: vec![0.0; r],
+            xraw: vec![0.0; r],
+            y: vec![0.0; r],
+            tmp: vec![0.0; r],
+            d: vec![0.0; n],
+            e: vec![0.0; n],
+        }
+    }
+
+    /// Number of grid points.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// b̄_j of the moments last given (b̄_0 = 1).
+    pub fn bbar(&self, j: usize) -> f64 {
+        self.bbar[j]
+    }
+
+    /// The independent rows (function indices).
+    pub fn rows(&self) -> &[usize] {
+        &self.rows
+    }
+
+    /// σ_j for the moments last given (row 0: 1).
+    pub fn sigma(&self) -> &[f64] {
+        &self.sigma
+    }
+
+    /// The exact power-of-two row scales ≈ 1/σ_j for the moments last given.
+    pub fn row_scales(&self) -> &[f64] {
+        &self.scale
+    }
+
+    /// Entry of row j (0 = constant) at grid point i.
+    #[inline]
+    pub fn entry(&self, j: usize, i: usize) -> f64 {
+        if j == 0 {
+            1.0
+        } else {
+            self.fcols[(j - 1) * self.n + i]
+        }
+    }
+
+    /// Set the moments b (length m): right-hand side b̄ = [1; b], σ_j and the row scales.
+    pub fn set_moments(&mut self, b: &[f64]) {
+        self.bbar[0] = 1.0;
+        self.bbar[1..].copy_from_slice(&b[..self.m]);
+        for j in 0..=self.m {
+            let s = self.bbar[j].abs().max(self.floor[j]);
+            self.sigma[j] = if s > 0.0 { s } else { f64::MIN_POSITIVE };
+            self.scale[j] = inv_pow2(self.sigma[j]);
+        }
+    }
+
+    /// Certify that `basis` (grid indices, one per independent row) is optimal for moments `b`
+    /// and `kf` grid points below z_f; the reason when it is not.
+    pub fn optimal(&mut self, b: &[f64], kf: usize, basis: &[usize]) -> Result<Certified, String> {
+        self.precise = false;
+        match self.check(b, kf, basis) {
+            Ok(c) => Ok(c),
+            Err(_) if self.factored => {
+                // Beyond f64: the same basis in double-double.
+                self.precise = true;
+                self.check(b, kf, basis)
+            }
+            Err(e) => Err(e),
+        }
+    }
+
+    fn check(&mut self, b: &[f64], kf: usize, basis: &[usize]) -> Result<Certified, String> {
+        self.set_moments(b);
+        let r = self.rows.len();
+        self.factored = false;
+        if basis.len() != r || basis.iter().any(|&i| i >= self.n) {
+            return Err("basis of the wrong size".into());
+        }
+        for t in 0..r {
+            let mut big = 0.0f64;
+            for k in 0..r {
+                let j = self.rows[k];
+                let v = self.scale[j] * self.entry(j, basis[t]);
+                self.a[k * r + t] = v;
+                big = big.max(v.abs());
+            }
+            // Column equilibration (exact): M = B̃ K.
+            self.colscale[t] = inv_pow2(big);
+            for k in 0..r {
+                self.a[k * r + t] *= self.colscale[t];
+            }
+        }
+        self.factored = if self.precise {
+            self.ddlu.factor(&self.a, r)
+        } else {
+            self.lu.factor(&self.a, r)
+        };
+        if !self.factored {
+            return Err("singular final basis".into());
+        }
+        self.primal(basis);
+        let residual = self.moment_residual(basis);
+        self.primal_ok = residual <= TOL_MOMENT;
+        if !self.primal_ok {
+            return Err(format!(
+                "support reproduces the moments only to {residual:.1e} (relative)"
+            ));
+        }
+        let g: f64 = (0..r).filter(|&t| basis[t] < kf).map(|t| self.x[t]).sum();
+        self.dual(basis, kf);
+        let lower = self.lower_bound(kf);
+        let gap = g - lower;
+        if !(gap.abs() <= TOL_GAP) {
+            return Err(format!("dual bound {lower:.12} does not match G = {g:.12}"));
+        }
+        let mut support: Vec<(f64, f64)> = (0..r)
+            .filter(|&t| self.x[t] > 0.0)
+            .map(|t| (self.z[basis[t]], self.x[t]))
+            .collect();
+        support.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Ok(Certified {
+            g: g.clamp(0.0, 1.0),
+            support,
+            residual,
+            gap,
+        })
+    }
+
+    /// Certify `basis`, and where that fails make up to `steps` simplex pivots in these
+    /// accurate coordinates (every step from a fresh factorisation with refined weights and
+    /// duals): a primal step on the most negative capped reduced cost u_i·d_i, or a dual step
+    /// when a refined weight is negative. `basis` holds the last basis tried.
+    pub fn improve(
+        &mut self,
+        b: &[f64],
+        kf: usize,
+        basis: &mut [usize],
+        steps: usize,
+    ) -> Result<Certified, String> {
+        let mut last = String::new();
+        for step in 0..=steps {
+            self.bland = step >= BLAND_AFTER;
+            match self.optimal(b, kf, basis) {
+                Ok(c) => return Ok(c),
+                Err(e) => last = e,
+            }
+            if !self.factored {
+                break;
+            }
+            self.dual(basis, kf);
+            let y = std::mem::take(&mut self.y);
+            self.reduced(&y, Some(kf));
+            self.y = y;
+            if !self.step(basis) {
+                break;
+            }
+        }
+        Err(last)
+    }
+
+    /// One pivot (see [`Self::improve`]); false when none is possible.
+    fn step(&mut self, basis: &mut [usize]) -> bool {
+        let r = self.rows.len();
+        let l = (0..r)
+            .min_by(|&a, &b| self.xraw[a].total_cmp(&self.xraw[b]))
+            .unwrap_or(0);
+        if !self.primal_ok && self.xraw[l] < 0.0 {
+            // Dual step: row l of B̃⁻¹, entering by the dual ratio test.
+            self.tmp.iter_mut().for_each(|v| *v = 0.0);
+            self.tmp[l] = 1.0;
+            self.solve(true, Which::Tmp);
+            for k in 0..r {
+                self.tmp[k] *= self.scale[self.rows[k]];
+            }
+            let mut best: Option<(usize, f64)> = None;
+            for i in 0..self.n {
+                if basis.contains(&i) {
+                    continue;
+                }
+                let a: f64 = (0..r)
+                    .map(|k| self.tmp[k] * self.entry(self.rows[k], i))
+                    .sum();
+                let mag: f64 = (0..r)
+                    .map(|k| (self.tmp[k] * self.entry(self.rows[k], i)).abs())
+                    .sum();
+                if a < -1e-9 * mag.max(f64::MIN_POSITIVE) {
+                    let ratio = self.d[i].max(0.0) / -a;
+                    if best.is_none_or(|(_, r0)| ratio < r0) {
+                        best = Some((i, ratio));
+                    }
+                }
+            }
+            return match best {
+                Some((q, _)) => {
+                    basis[l] = q;
+                    true
+                }
+                None => false,
+            };
+        }
+        // Primal step on the most negative capped reduced cost.
+        let mut best: Option<(usize, f64)> = None;
+        for i in 0..self.n {
+            let lo = self.d[i] - GAMMA * self.e[i];
+            if lo < 0.0 && !basis.contains(&i) {
+                let v = lo * self.cap(i);
+                if best.is_none_or(|(_, v0)| v < v0) {
+                    best = Some((i, v));
+                    if self.bland {
+                        break;
+                    }
+                }
+            }
+        }
+        let Some((q, _)) = best else {
+            return false;
+        };
+        for k in 0..r {
+            let j = self.rows[k];
+            self.tmp[k] = self.scale[j] * self.entry(j, q);
+        }
+        self.solve(false, Which::Tmp);
+        for t in 0..r {
+            self.tmp[t] *= self.colscale[t];
+        }
+        let amax = self.tmp.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut pick: Option<(usize, f64)> = None;
+        for t in 0..r {
+            let a = self.tmp[t];
+            if a > 1e-12 * amax {
+                let ratio = self.x[t] / a;
+                let better = match pick {
+                    None => true,
+                    Some((p, r0)) if self.bland => {
+                        ratio < r0 || (ratio == r0 && basis[t] < basis[p])
+                    }
+                    Some((p, r0)) => ratio < r0 || (ratio == r0 && a > self.tmp[p]),
+                };
+                if better {
+                    pick = Some((t, ratio));
+                }
+            }
+        }
+        match pick {
+            Some((t, _)) => {
+                basis[t] = q;
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// u_i = min(1, min_j b_j / f_j(z_i)) over the sign-definite rows: every exactly feasible
+    /// w has w_i ≤ u_i.
+    fn cap(&self, i: usize) -> f64 {
+        let mut u = 1.0f64;
+        for j in 1..=self.m {
+            let f = self.fcols[(j - 1) * self.n + i];
+            if self.definite[j] && f != 0.0 {
+                u = u.min((self.bbar[j] / f).max(0.0) * (1.0 + 1e-12));
+            }
+        }
+        u
+    }
+
+    /// Certify that `y` (unscaled duals on the independent rows) is a Farkas ray for moments
+    /// `b`: the margin by which the moments miss the (tolerance-widened) moment space.
+    pub fn infeasible(&mut self, b: &[f64], y: &[f64]) -> Result<f64, String> {
+        self.set_moments(b);
+        let r = self.rows.len();
+        if y.len() != r || y.iter().any(|v| !v.is_finite()) {
+            return Err("Farkas ray of the wrong size or not finite".into());
+        }
+        self.reduced(y, None);
+        let lo = self.min_lower();
+        let yb = -residual2(0.0, (0..r).map(|k| (y[k], self.bbar[self.rows[k]])));
+        // The tolerance-widened moment space, on the widest scale a distribution could claim.
+        let slack: f64 = (0..r)
+            .map(|k| {
+                let j = self.rows[k];
+                y[k].abs() * self.sigma[j].max(CANCEL * self.fmax[j])
+            })
+            .sum();
+        let bound = lo - TOL_MOMENT * (lo.abs() + slack);
+        let margin = bound - yb;
+        if margin > 1e-12 * (yb.abs() + bound.abs()) && margin.is_finite() {
+            Ok(margin)
+        } else {
+            Err("no certified Farkas ray".into())
+        }
+    }
+
+    /// Solve with the basis matrix (transposed if `t`) in place in one of the work vectors, in
+    /// f64 or, in precise mode, in double-double.
+    fn solve(&mut self, t: bool, which: Which) {
+        let v = match which {
+            Which::X => &mut self.x,
+            Which::Y => &mut self.y,
+            Which::Tmp => &mut self.tmp,
+        };
+        match (self.precise, t) {
+            (false, false) => self.lu.solve(v),
+            (false, true) => self.lu.solve_t(v),
+            (true, false) => self.ddlu.solve(v),
+            (true, true) => self.ddlu.solve_t(v),
+        }
+    }
+
+    /// x = B̃⁻¹ b̃ on the row-scaled basis, refined three times on double-double residuals.
+    fn primal(&mut self, basis: &[usize]) {
+        let r = self.rows.len();
+        for k in 0..r {
+            let j = self.rows[k];
+            self.x[k] = self.scale[j] * self.bbar[j];
+        }
+        self.solve(false, Which::X);
+        for t in 0..r {
+            self.x[t] *= self.colscale[t];
+        }
+        for _ in 0..3 {
+            for k in 0..r {
+                let j = self.rows[k];
+                let terms = (0..r).map(|t| (self.entry(j, basis[t]), self.x[t]));
+                self.tmp[k] = self.scale[j] * residual2(self.bbar[j], terms);
+            }
+            self.solve(false, Which::Tmp);
+            for t in 0..r {
+                self.x[t] += self.colscale[t] * self.tmp[t];
+            }
+        }
+        self.xraw.copy_from_slice(&self.x);
+        self.x.iter_mut().for_each(|v| *v = v.max(0.0));
+    }
+
+    /// max_j |Σ_t x_t f_j(z_{B_t}) − b̄_j| / max(σ_j, CANCEL · Σ_t x_t |f_j(z_{B_t})|) over
+    /// every row (independent or not).
+    fn moment_residual(&self, basis: &[usize]) -> f64 {
+        let r = self.rows.len();
+        (0..=self.m)
+            .map(|j| {
+                let terms = (0..r).map(|t| (self.entry(j, basis[t]), self.x[t]));
+                let mag: f64 = (0..r)
+                    .map(|t| (self.entry(j, basis[t]) * self.x[t]).abs())
+                    .sum();
+                residual2(self.bbar[j], terms).abs() / self.sigma[j].max(CANCEL * mag)
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Duals ỹ of the row-scaled basis: B̃ᵀ ỹ = p_B, refined twice; stored unscaled in y.
+    fn dual(&mut self, basis: &[usize], kf: usize) {
+        let r = self.rows.len();
+        // Mᵀ ỹ = K p_B (M = B̃ K).
+        let colscale = self.colscale.clone();
+        let cost = |t: usize| (basis[t] < kf) as u8 as f64 * colscale[t];
+        for t in 0..r {
+            self.y[t] = cost(t);
+        }
+        self.solve(true, Which::Y);
+        for _ in 0..2 {
+            for t in 0..r {
+                let terms = (0..r).map(|k| (self.a[k * r + t], self.y[k]));
+                self.tmp[t] = residual2(cost(t), terms);
+            }
+            self.solve(true, Which::Tmp);
+            for k in 0..r {
+                self.y[k] += self.tmp[k];
+            }
+        }
+        for k in 0..r {
+            self.y[k] *= self.scale[self.rows[k]];
+        }
+    }
+
+    /// L = y·b̄ + min(0, min_i d_i) for the duals in y.
+    fn lower_bound(&mut self, kf: usize) -> f64 {
+        let r = self.rows.len();
+        let y = std::mem::take(&mut self.y);
+        self.reduced(&y, Some(kf));
+        let yb = -residual2(0.0, (0..r).map(|k| (y[k], self.bbar[self.rows[k]])));
+        self.y = y;
+        yb + self.min_lower().min(0.0).max(self.capped_lower())
+    }
+
+    /// Σ_i u_i min(0, d_i − γ e_i) with u_i = min(1, min_j b_j / f_j(z_i)) over the rows whose
+    /// function does not change sign (every exactly feasible w has w_i ≤ u_i): a lower bound on
+    /// Σ_i w_i d_i that stays tight where huge columns (a steep exponential near its peak) can
+    /// only carry tiny weights.
+    fn capped_lower(&self) -> f64 {
+        let mut sum = 0.0;
+        for (i, (d, e)) in self.d.iter().zip(&self.e).enumerate() {
+            let lo = d - GAMMA * e;
+            if lo < 0.0 {
+                sum += self.cap(i) * lo;
+            }
+        }
+        sum
+    }
+
+    /// d_i = p_i − y·ā_i (p = 0 when `kf` is None) and the magnitudes e_i = |p_i| + Σ|y_j ā_ji|.
+    fn reduced(&mut self, y: &[f64], kf: Option<usize>) {
+        let n = self.n;
+        let (d, e) = (&mut self.d, &mut self.e);
+        let sign = if kf.is_some() { 1.0 } else { -1.0 };
+        // Farkas: d holds y·ā_i (sign −1 below undoes the subtraction).
+        let y0 = y[0];
+        for i in 0..n {
+            let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
+            d[i] = p - y0;
+            e[i] = p + y0.abs();
+        }
+        for (k, &j) in self.rows.iter().enumerate().skip(1) {
+            let (yk, col) = (y[k], &self.fcols[(j - 1) * n..j * n]);
+            for i in 0..n {
+                let t = yk * col[i];
+                d[i] -= t;
+                e[i] += t.abs();
+            }
+        }
+        // Where the f64 rounding bound could hide a negative value, recompute in double-double
+        // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
+        let rows = &self.rows;
+        let fcols = &self.fcols;
+        for i in 0..n {
+            if d[i] - GAMMA * e[i] < 0.0 {
+                let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
+                let terms = rows.iter().enumerate().map(|(k, &j)| {
+                    let a = if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
+                    (y[k], a)
+                });
+                let exact = residual2(p, terms);
+                d[i] = exact;
+                e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
+            }
+        }
+        if sign < 0.0 {
+            d.iter_mut().for_each(|v| *v = -*v);
+        }
+    }
+
+    /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
+    fn min_lower(&self) -> f64 {
+        self.d
+            .iter()
+            .zip(&self.e)
+            .map(|(d, e)| d - GAMMA * e)
+            .fold(f64::INFINITY, f64::min)
+    }
+}

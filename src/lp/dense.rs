@@ -1,0 +1,316 @@
+//! Small dense kernels shared by the certificates and the scaled simplex: error-free
+//! transformations (exact products and sums), a compensated dot product, exact power-of-two
+//! scales, and an LU factorisation with partial pivoting for r ≤ ~16 rows.
+
+#![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on tiny matrices
+
+/// Exact product a·b = p + e (Dekker's splitting; no FMA needed).
+#[inline]
+pub fn two_prod(a: f64, b: f64) -> (f64, f64) {
+    const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
+    let p = a * b;
+    let split = |v: f64| {
+        let c = SPLIT * v;
+        let h = c - (c - v);
+        (h, v - h)
+    };
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    let e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+    (p, e)
+}
+
+/// Exact sum a + b = s + e (Knuth's TwoSum).
+#[inline]
+pub fn two_sum(a: f64, b: f64) -> (f64, f64) {
+    let s = a + b;
+    let bb = s - a;
+    (s, (a - (s - bb)) + (b - bb))
+}
+
+/// c − Σ_t a_t·x_t as accurately as if computed in twice the working precision (Ogita, Rump
+/// & Oishi's Dot2), then rounded.
+pub fn residual2(c: f64, terms: impl Iterator<Item = (f64, f64)>) -> f64 {
+    let (mut s, mut err) = (c, 0.0);
+    for (a, x) in terms {
+        let (p, ep) = two_prod(a, x);
+        let (t, es) = two_sum(s, -p);
+        s = t;
+        err += es - ep;
+    }
+    s + err
+}
+
+/// The power of two 2^e closest above or at 1/v (v > 0 finite): an exact scale factor, so that
+/// scaling by it introduces no rounding. Clamped to the normal range.
+pub fn inv_pow2(v: f64) -> f64 {
+    let e = if v > 0.0 && v.is_finite() {
+        -(v.log2().floor() as i32)
+    } else {
+        0
+    };
+    pow2(e.clamp(-1000, 1000))
+}
+
+/// 2^e for |e| ≤ 1022, exactly.
+pub fn pow2(e: i32) -> f64 {
+    f64::from_bits(((1023 + e) as u64) << 52)
+}
+
+/// LU factorisation P A = L U of a row-major r × r matrix with partial pivoting.
+#[derive(Clone, Debug, Default)]
+pub struct Lu {
+    r: usize,
+    lu: Vec<f64>,
+    perm: Vec<usize>,
+}
+
+impl Lu {
+    /// Factorise `a` (row-major r × r); false if a pivot is exactly zero or not finite.
+    pub fn factor(&mut self, a: &[f64], r: usize) -> bool {
+        self.r = r;
+        self.lu.clear();
+        self.lu.extend_from_slice(&a[..r * r]);
+        self.perm.clear();
+        self.perm.extend(0..r);
+        let lu = &mut self.lu;
+        for k in 0..r {
+            let p = (k..r)
+                .max_by(|&i, &j| lu[i * r + k].abs().total_cmp(&lu[j * r + k].abs()))
+                .unwrap_or(k);
+            let piv = lu[p * r + k];
+            if piv == 0.0 || !piv.is_finite() {
+                return false;
+            }
+            if p != k {
+                for c in 0..r {
+                    lu.swap(p * r + c, k * r + c);
+                }
+                self.perm.swap(p, k);
+            }
+            for i in k + 1..r {
+                let l = lu[i * r + k] / piv;
+                lu[i * r + k] = l;
+                for c in k + 1..r {
+                    lu[i * r + c] -= l * lu[k * r + c];
+                }
+            }
+        }
+        true
+    }
+
+    /// Solve A x = b in place (x holds b on entry).
+    pub fn solve(&self, x: &mut [f64]) {
+        let (r, lu) = (self.r, &self.lu);
+        let mut y = [0.0f64; 32];
+        for i in 0..r {
+            y[i] = x[self.perm[i]];
+        }
+        for i in 0..r {
+            for c in 0..i {
+                y[i] -= lu[i * r + c] * y[c];
+            }
+        }
+        for i in (0..r).rev() {
+            for c in i + 1..r {
+                y[i] -= lu[i * r + c] * y[c];
+            }
+            y[i] /= lu[i * r + i];
+        }
+        x[..r].copy_from_slice(&y[..r]);
+    }
+
+    /// Solve Aᵀ x = b in place (x holds b on entry).
+    pub fn solve_t(&self, x: &mut [f64]) {
+        let (r, lu) = (self.r, &self.lu);
+        let mut y = [0.0f64; 32];
+        y[..r].copy_from_slice(&x[..r]);
+        // Uᵀ z = b
+        for i in 0..r {
+            for c in 0..i {
+                y[i] -= lu[c * r + i] * y[c];
+            }
+            y[i] /= lu[i * r + i];
+        }
+        // Lᵀ w = z
+        for i in (0..r).rev() {
+            for c in i + 1..r {
+                y[i] -= lu[c * r + i] * y[c];
+            }
+        }
+        for i in 0..r {
+            x[self.perm[i]] = y[i];
+        }
+    }
+}
+
+/// A double-double number hi + lo (about 32 significant digits).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Dd(pub f64, pub f64);
+
+impl Dd {
+    fn from(v: f64) -> Dd {
+        Dd(v, 0.0)
+    }
+    fn add(self, o: Dd) -> Dd {
+        let (s, e) = two_sum(self.0, o.0);
+        let e = e + self.1 + o.1;
+        let (h, l) = two_sum(s, e);
+        Dd(h, l)
+    }
+    fn neg(self) -> Dd {
+        Dd(-self.0, -self.1)
+    }
+    fn mul(self, o: Dd) -> Dd {
+        let (p, e) = two_prod(self.0, o.0);
+        let e = e + self.0 * o.1 + self.1 * o.0;
+        let (h, l) = two_sum(p, e);
+        Dd(h, l)
+    }
+    fn div(self, o: Dd) -> Dd {
+        let q1 = self.0 / o.0;
+        let r = self.add(o.mul(Dd::from(q1)).neg());
+        let q2 = r.0 / o.0;
+        let r = r.add(o.mul(Dd::from(q2)).neg());
+        let q3 = r.0 / o.0;
+        let (h, l) = two_sum(q1, q2);
+        Dd(h, l).add(Dd::from(q3))
+    }
+}
+
+/// LU factorisation with partial pivoting in double-double arithmetic: solves systems whose
+/// condition is far beyond 1/ε (clusters of neighbouring grid points under a power basis).
+#[derive(Clone, Debug, Default)]
+pub struct DdLu {
+    r: usize,
+    lu: Vec<Dd>,
+    perm: Vec<usize>,
+}
+
+impl DdLu {
+    /// Factorise `a` (row-major r × r, f64 entries taken exactly); false if singular.
+    pub fn factor(&mut self, a: &[f64], r: usize) -> bool {
+        self.r = r;
+        self.lu.clear();
+        self.lu.extend(a[..r * r].iter().map(|&v| Dd::from(v)));
+        self.perm.clear();
+        self.perm.extend(0..r);
+        let lu = &mut self.lu;
+        for k in 0..r {
+            let p = (k..r)
+                .max_by(|&i, &j| lu[i * r + k].0.abs().total_cmp(&lu[j * r + k].0.abs()))
+                .unwrap_or(k);
+            let piv = lu[p * r + k];
+            if piv.0 == 0.0 || !piv.0.is_finite() {
+                return false;
+            }
+            if p != k {
+                for c in 0..r {
+                    lu.swap(p * r + c, k * r + c);
+                }
+                self.perm.swap(p, k);
+            }
+            for i in k + 1..r {
+                let l = lu[i * r + k].div(piv);
+                lu[i * r + k] = l;
+                for c in k + 1..r {
+                    lu[i * r + c] = lu[i * r + c].add(l.mul(lu[k * r + c]).neg());
+                }
+            }
+        }
+        true
+    }
+
+    /// Solve A x = b in place.
+    pub fn solve(&self, x: &mut [f64]) {
+        let (r, lu) = (self.r, &self.lu);
+        let mut y = [Dd::default(); 32];
+        for i in 0..r {
+            y[i] = Dd::from(x[self.perm[i]]);
+        }
+        for i in 0..r {
+            for c in 0..i {
+                y[i] = y[i].add(lu[i * r + c].mul(y[c]).neg());
+            }
+        }
+        for i in (0..r).rev() {
+            for c in i + 1..r {
+                y[i] = y[i].add(lu[i * r + c].mul(y[c]).neg());
+            }
+            y[i] = y[i].div(lu[i * r + i]);
+        }
+        for i in 0..r {
+            x[i] = y[i].0 + y[i].1;
+        }
+    }
+
+    /// Solve Aᵀ x = b in place.
+    pub fn solve_t(&self, x: &mut [f64]) {
+        let (r, lu) = (self.r, &self.lu);
+        let mut y = [Dd::default(); 32];
+        for i in 0..r {
+            y[i] = Dd::from(x[i]);
+        }
+        for i in 0..r {
+            for c in 0..i {
+                y[i] = y[i].add(lu[c * r + i].mul(y[c]).neg());
+            }
+            y[i] = y[i].div(lu[i * r + i]);
+        }
+        for i in (0..r).rev() {
+            for c in i + 1..r {
+                y[i] = y[i].add(lu[c * r + i].mul(y[c]).neg());
+            }
+        }
+        for i in 0..r {
+            x[self.perm[i]] = y[i].0 + y[i].1;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lu_solves_both_systems() {
+        let a = [4.0, 1.0, 2.0, 0.5, 3.0, 1.0, 2.0, -1.0, 5.0];
+        let mut lu = Lu::default();
+        assert!(lu.factor(&a, 3));
+        let b = [1.0, 2.0, 3.0];
+        let mut x = b;
+        lu.solve(&mut x);
+        for i in 0..3 {
+            let ax: f64 = (0..3).map(|c| a[i * 3 + c] * x[c]).sum();
+            assert!((ax - b[i]).abs() < 1e-14, "row {i}: {ax}");
+        }
+        let mut y = b;
+        lu.solve_t(&mut y);
+        for c in 0..3 {
+            let aty: f64 = (0..3).map(|i| a[i * 3 + c] * y[i]).sum();
+            assert!((aty - b[c]).abs() < 1e-14, "col {c}: {aty}");
+        }
+        assert!(!lu.factor(&[1.0, 2.0, 2.0, 4.0], 2));
+    }
+
+    #[test]
+    fn dd_lu_solves_a_vandermonde_beyond_f64() {
+        // Five nodes 1e-4 apart under z..z^4: cond ≈ 1e17, hopeless in f64.
+        let r = 5;
+        let z: Vec<f64> = (0..r).map(|k| 0.7 + k as f64 * 1e-4).collect();
+        let a: Vec<f64> = (0..r * r).map(|e| z[e % r].powi((e / r) as i32)).collect();
+        let xs = [0.1, 0.2, 0.3, 0.25, 0.15];
+        let b: Vec<f64> = (0..r)
+            .map(|k| -residual2(0.0, (0..r).map(|t| (a[k * r + t], xs[t]))))
+            .collect();
+        let mut lu = DdLu::default();
+        assert!(lu.factor(&a, r));
+        let mut x = b.clone();
+        lu.solve(&mut x);
+        for k in 0..r {
+            let res = residual2(b[k], (0..r).map(|t| (a[k * r + t], x[t])));
+            assert!(res.abs() < 1e-15 * b[k].abs(), "{k}: residual {res:e}");
+        }
+        assert!(x.iter().all(|v| v.is_finite()));
+    }
+}

@@ -1,0 +1,378 @@
+//! The escalation solver: a textbook revised simplex on the LP scaled per problem, for the
+//! answers the fast solver cannot certify (functions spanning many orders of magnitude such as
+//! exp(80(z−1)), bases that are numerically singular in the orthonormalised coordinates).
+//!
+//! Every row j is scaled by an exact power of two s_j ≈ 1/σ_j (σ_j the row's own magnitude,
+//! see [`super::certify`]) and then every column i by an exact power of two κ_i ≈ 1/max_j |s_j ā_ji|:
+//! the LP min Σ (p_i κ_i) v_i s.t. Σ (s ∘ ā_i κ_i) v_i = s ∘ b̄, v ≥ 0 has entries in (−2, 2) and
+//! w_i = κ_i v_i. A weight of 1e-24 on a column with entries 1e24 (a steep exponential near its
+//! peak, under a moment of 1e-25) is an ordinary number here. Phase 1 uses one artificial per
+//! row; the final basis (or the Farkas ray of phase 1) is judged by the certifier, not trusted.
+
+#![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 13
+
+use super::certify::Certifier;
+use super::dense::{inv_pow2, Lu};
+
+const TOL_D: f64 = 1e-11;
+const TOL_PIV: f64 = 1e-10;
+const HARRIS: f64 = 1e-12;
+const TOL_ART: f64 = 1e-10;
+const REFACTOR_EVERY: usize = 24;
+const DEGENERATE_LIMIT: usize = 50;
+
+/// What the scaled simplex found (to be certified by the caller).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Found {
+    /// An optimal basis (grid indices, one per independent row).
+    Optimal(Vec<usize>),
+    /// Phase 1 ended with positive artificials: a Farkas ray (unscaled, per independent row).
+    Infeasible(Vec<f64>),
+    /// Numerical trouble or the iteration cap.
+    Failed(&'static str),
+}
+
+/// Workspace of the scaled simplex (reused between problems of one table).
+#[derive(Clone, Debug, Default)]
+pub struct ScaledSimplex {
+    n: usize,
+    r: usize,
+    /// Scaled columns, column i at acol[i·r..(i+1)·r].
+    acol: Vec<f64>,
+    /// Column scales (exact powers of two).
+    kappa: Vec<f64>,
+    rhs: Vec<f64>,
+    /// Basis: grid indices, or n + k for the artificial of row k.
+    basis: Vec<usize>,
+    is_basic: Vec<bool>,
+    sign: Vec<f64>,
+    binv: Vec<f64>,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    alpha: Vec<f64>,
+    col: Vec<f64>,
+    lu: Lu,
+    pub pivots: u64,
+}
+
+impl ScaledSimplex {
+    /// Solve for the moments last given to `cert` ([`Certifier::set_moments`]) with `kf` grid
+    /// points below z_f, starting from `start` when it is a primal feasible basis.
+    pub fn solve(&mut self, cert: &Certifier, kf: usize, start: Option<&[usize]>) -> Found {
+        self.setup(cert);
+        let warm = start.is_some_and(|s| self.try_start(s));
+        if !warm {
+            self.artificial_start();
+            if let Err(e) = self.iterate(kf, true) {
+                return Found::Failed(e);
+            }
+            let infeas: f64 = (0..self.r)
+                .filter(|&t| self.basis[t] >= self.n)
+                .map(|t| self.x[t].max(0.0))
+                .sum();
+            if infeas > TOL_ART {
+                return Found::Infeasible(self.farkas(cert));
+            }
+            if let Err(e) = self.drive_out_artificials() {
+                return Found::Failed(e);
+            }
+        }
+        match self.iterate(kf, false) {
+            Ok(()) => Found::Optimal(self.grid_basis()),
+            Err(e) => Found::Failed(e),
+        }
+    }
+
+    /// The final basis with any remaining (zero-level) artificial replaced by an unused grid
+    /// column of weight 0 (the certifier's accurate pivots take it from there).
+    fn grid_basis(&self) -> Vec<usize> {
+        let mut out = self.basis.clone();
+        let mut next = 0;
+        for t in 0..self.r {
+            if out[t] >= self.n {
+                while self.is_basic[next] || out.contains(&next) {
+                    next += 1;
+                }
+                out[t] = next;
+            }
+        }
+        out
+    }
+
+    /// Scaled columns, column scales and right-hand side for the current moments.
+    fn setup(&mut self, cert: &Certifier) {
+        let rows = cert.rows();
+        let (r, n) = (rows.len(), cert.n());
+        self.n = n;
+        self.r = r;
+        self.acol.resize(n * r, 0.0);
+        self.kappa.resize(n, 1.0);
+        let s = cert.row_scales();
+        for i in 0..n {
+            let col = &mut self.acol[i * r..(i + 1) * r];
+            let mut big = 0.0f64;
+            for (k, &j) in rows.iter().enumerate() {
+                col[k] = s[j] * cert.entry(j, i);
+                big = big.max(col[k].abs());
+            }
+            let kap = inv_pow2(big);
+            col.iter_mut().for_each(|v| *v *= kap);
+            self.kappa[i] = kap;
+        }
+        self.rhs = rows.iter().map(|&j| s[j] * cert.bbar(j)).collect();
+        self.basis.resize(r, 0);
+        self.is_basic.clear();
+        self.is_basic.resize(n + r, false);
+        self.sign = self
+            .rhs
+            .iter()
+            .map(|&v| if v < 0.0 { -1.0 } else { 1.0 })
+            .collect();
+        self.binv.resize(r * r, 0.0);
+        for v in [&mut self.x, &mut self.y, &mut self.alpha, &mut self.col] {
+            v.resize(r, 0.0);
+        }
+    }
+
+    /// Column q (grid index or artificial) into self.col.
+    fn load(&mut self, q: usize) {
+        let r = self.r;
+        if q >= self.n {
+            self.col.iter_mut().for_each(|v| *v = 0.0);
+            self.col[q - self.n] = self.sign[q - self.n];
+        } else {
+            self.col.copy_from_slice(&self.acol[q * r..(q + 1) * r]);
+        }
+    }
+
+    fn cost(&self, q: usize, kf: usize, phase1: bool) -> f64 {
+        match (phase1, q >= self.n) {
+            (true, art) => art as u8 as f64,
+            (false, true) => 0.0,
+            (false, false) => (q < kf) as u8 as f64 * self.kappa[q],
+        }
+    }
+
+    /// B⁻¹ from scratch and x = B⁻¹ b̂; false if singular.
+    fn factor(&mut self) -> bool {
+        let r = self.r;
+        let mut bm = vec![0.0; r * r];
+        for t in 0..r {
+            self.load(self.basis[t]);
+            for k in 0..r {
+                bm[k * r + t] = self.col[k];
+            }
+        }
+        if !self.lu.factor(&bm, r) {
+            return false;
+        }
+        for k in 0..r {
+            let mut e = vec![0.0; r];
+            e[k] = 1.0;
+            self.lu.solve(&mut e);
+            for t in 0..r {
+                self.binv[t * r + k] = e[t];
+            }
+        }
+        self.x.copy_from_slice(&self.rhs);
+        self.lu.solve(&mut self.x);
+        self.x.iter().all(|v| v.is_finite())
+    }
+
+    fn set_basis(&mut self, basis: &[usize]) {
+        for &b in &self.basis {
+            self.is_basic[b] = false;
+        }
+        self.basis.copy_from_slice(basis);
+        for &b in basis {
+            self.is_basic[b] = true;
+        }
+    }
+
+    /// Start from a given basis if it is nonsingular and primal feasible.
+    fn try_start(&mut self, start: &[usize]) -> bool {
+        if start.len() != self.r || start.iter().any(|&i| i >= self.n) {
+            return false;
+        }
+        self.is_basic.iter_mut().for_each(|b| *b = false);
+        self.basis.copy_from_slice(start);
+        self.set_basis(start);
+        self.factor() && self.x.iter().all(|&v| v >= -HARRIS)
+    }
+
+    fn artificial_start(&mut self) {
+        self.is_basic.iter_mut().for_each(|b| *b = false);
+        let arts: Vec<usize> = (0..self.r).map(|k| self.n + k).collect();
+        self.set_basis(&arts);
+        let ok = self.factor();
+        debug_assert!(ok);
+    }
+
+    /// Simplex iterations to optimality of the phase's costs.
+    fn iterate(&mut self, kf: usize, phase1: bool) -> Result<(), &'static str> {
+        let cap = 50 * self.n + 1000;
+        let (mut since, mut degenerate, mut bland) = (0, 0, false);
+        for _ in 0..cap {
+            if since >= REFACTOR_EVERY {
+                if !self.factor() {
+                    return Err("singular basis in the scaled simplex");
+                }
+                since = 0;
+            }
+            self.duals(kf, phase1);
+            let Some(q) = self.price(kf, phase1, bland) else {
+                return Ok(());
+            };
+            self.load(q);
+            let r = self.r;
+            for t in 0..r {
+                self.alpha[t] = (0..r).map(|k| self.binv[t * r + k] * self.col[k]).sum();
+            }
+            let Some(l) = self.ratio(bland) else {
+                return Err("unbounded ray in the scaled simplex");
+            };
+            let theta = (self.x[l] / self.alpha[l]).max(0.0);
+            degenerate = if theta == 0.0 { degenerate + 1 } else { 0 };
+            bland |= degenerate > DEGENERATE_LIMIT;
+            self.pivot(l, q, theta);
+            since += 1;
+        }
+        Err("iteration cap of the scaled simplex")
+    }
+
+    fn duals(&mut self, kf: usize, phase1: bool) {
+        let r = self.r;
+        self.y.iter_mut().for_each(|v| *v = 0.0);
+        for t in 0..r {
+            let c = self.cost(self.basis[t], kf, phase1);
+            if c != 0.0 {
+                for k in 0..r {
+                    self.y[k] += c * self.binv[t * r + k];
+                }
+            }
+        }
+    }
+
+    /// Entering column (Dantzig, or Bland's first improving index).
+    fn price(&self, kf: usize, phase1: bool, bland: bool) -> Option<usize> {
+        let r = self.r;
+        let mut best = (None, -TOL_D);
+        for i in 0..self.n {
+            if self.is_basic[i] {
+                continue;
+            }
+            let a = &self.acol[i * r..(i + 1) * r];
+            let d = self.cost(i, kf, phase1) - (0..r).map(|k| self.y[k] * a[k]).sum::<f64>();
+            if d < best.1 {
+                best = (Some(i), d);
+                if bland {
+                    break;
+                }
+            }
+        }
+        best.0
+    }
+
+    /// Leaving position: Harris' two passes, the largest pivot among the near-minimal ratios.
+    fn ratio(&self, bland: bool) -> Option<usize> {
+        let r = self.r;
+        let amax = self.alpha.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let tol = TOL_PIV * amax.max(1.0);
+        let mut bound = f64::INFINITY;
+        for t in 0..r {
+            if self.alpha[t] > tol {
+                bound = bound.min((self.x[t].max(0.0) + HARRIS) / self.alpha[t]);
+            }
+        }
+        let mut pick: Option<usize> = None;
+        // A zero-level artificial left in the basis must not become positive: it blocks.
+        for t in 0..r {
+            if self.basis[t] >= self.n && self.alpha[t].abs() > tol {
+                return Some(t);
+            }
+        }
+        for t in 0..r {
+            let a = self.alpha[t];
+            if a > tol && self.x[t].max(0.0) / a <= bound {
+                let better = match pick {
+                    None => true,
+                    Some(p) if bland => self.basis[t] < self.basis[p],
+                    Some(p) => a > self.alpha[p],
+                };
+                if better {
+                    pick = Some(t);
+                }
+            }
+        }
+        pick
+    }
+
+    fn pivot(&mut self, l: usize, q: usize, theta: f64) {
+        let r = self.r;
+        for t in 0..r {
+            self.x[t] -= theta * self.alpha[t];
+        }
+        self.x[l] = theta;
+        let al = self.alpha[l];
+        for k in 0..r {
+            self.binv[l * r + k] /= al;
+        }
+        for t in 0..r {
+            if t != l && self.alpha[t] != 0.0 {
+                let f = self.alpha[t];
+                for k in 0..r {
+                    self.binv[t * r + k] -= f * self.binv[l * r + k];
+                }
+            }
+        }
+        self.is_basic[self.basis[l]] = false;
+        self.basis[l] = q;
+        self.is_basic[q] = true;
+    }
+
+    /// Pivot the zero-level artificials of a feasible phase-1 optimum out of the basis.
+    fn drive_out_artificials(&mut self) -> Result<(), &'static str> {
+        let r = self.r;
+        for l in 0..r {
+            if self.basis[l] < self.n {
+                continue;
+            }
+            let mut best = (None, 1e-9);
+            for i in 0..self.n {
+                if self.is_basic[i] {
+                    continue;
+                }
+                let a = &self.acol[i * r..(i + 1) * r];
+                let v: f64 = (0..r).map(|k| self.binv[l * r + k] * a[k]).sum();
+                if v.abs() > best.1 {
+                    best = (Some(i), v.abs());
+                }
+            }
+            let Some(q) = best.0 else {
+                // A redundant row (at this precision): the artificial stays, blocking at 0.
+                continue;
+            };
+            self.load(q);
+            for t in 0..r {
+                self.alpha[t] = (0..r).map(|k| self.binv[t * r + k] * self.col[k]).sum();
+            }
+            let theta = self.x[l] / self.alpha[l];
+            self.pivot(l, q, theta);
+        }
+        if !self.factor() {
+            return Err("singular basis after phase 1");
+        }
+        self.x.iter_mut().for_each(|v| *v = v.max(0.0));
+        Ok(())
+    }
+
+    /// Farkas ray from the phase-1 duals: −y in the original (unscaled) rows.
+    fn farkas(&self, cert: &Certifier) -> Vec<f64> {
+        let s = cert.row_scales();
+        cert.rows()
+            .iter()
+            .enumerate()
+            .map(|(k, &j)| -self.y[k] * s[j])
+            .collect()
+    }
+}

@@ -1,0 +1,185 @@
+//! The correctness contract of Algorithm 1 (src/lp/certify.rs): no answer labelled optimal
+//! without its certificate. Checked against the one-function closed form for monotone f and on
+//! the adversarial corpus (src/lp/corpus.rs), independently of the solver's own checks.
+
+use momentlab::basis::Catalog;
+use momentlab::lp::corpus::{self, mass_below, table_for};
+use momentlab::lp::fast::FastSolver;
+use momentlab::lp::{distribution_moments, GridTable, MomentSolver, Status};
+use momentlab::Grid;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// G for one monotone function f: z⁺ the first grid point ≥ z_f; increasing f:
+/// max(0, (f(z⁺) − b)/(f(z⁺) − f(0))), decreasing f: max(0, (b − f(z⁺))/(f(0) − f(z⁺))).
+fn monotone_g(table: &GridTable, b: f64, zf: f64) -> f64 {
+    let z = table.grid().points();
+    let k = z.partition_point(|&v| v < zf);
+    if k == 0 {
+        return 0.0;
+    }
+    if k == z.len() {
+        return 1.0;
+    }
+    let (f0, fp) = (table.row(0)[0], table.row(k)[0]);
+    let g = if table.row(z.len() - 1)[0] >= f0 {
+        (fp - b) / (fp - f0)
+    } else {
+        (b - fp) / (f0 - fp)
+    };
+    g.clamp(0.0, 1.0)
+}
+
+fn one_function(formula: &str, n: usize) -> GridTable {
+    table_for(
+        &Catalog::embedded(),
+        &Grid::uniform(n).unwrap(),
+        &[formula.into()],
+    )
+    .unwrap()
+}
+
+/// Issue 12, item 1: the moment of one Dirac under exp(80(z−1)) (2.8e-25) was answered G = 0
+/// "optimal" with a support whose moment is 1.5e-17.
+#[test]
+fn steep_exponential_single_dirac() {
+    for formula in ["exp(80*(z-1))", "exp(40*z)", "exp(80*z)", "exp(400*z)"] {
+        let table = one_function(formula, 1024);
+        let f = Catalog::embedded().resolve(formula).unwrap();
+        let b = f.eval(0.2933);
+        let mut s = FastSolver::new(table.clone());
+        let sol = s.solve(&[b], 0.5).unwrap();
+        let want = monotone_g(&table, b, 0.5);
+        assert_eq!(sol.status, Status::Optimal, "{formula}: {:?}", sol.reason);
+        assert!(
+            (sol.g - want).abs() <= 1e-9,
+            "{formula}: G {} want {want}",
+            sol.g
+        );
+        assert!(want > 0.999, "{formula}: {want}");
+        let m: f64 = sol.support.iter().map(|&(z, w)| w * f.eval(z)).sum();
+        assert!((m - b).abs() <= 1e-8 * b, "{formula}: moment {m} of {b}");
+    }
+}
+
+/// The one-function closed form on monotone functions spanning up to 170 orders of magnitude,
+/// from the moments and from the distribution, with warm starts across problems.
+#[test]
+fn monotone_one_function_closed_form() {
+    let mut rng = ChaCha8Rng::seed_from_u64(12);
+    let formulas = [
+        "exp(80*(z-1))",
+        "exp(-80*z)",
+        "exp(-40*z)",
+        "exp(40*z)",
+        "exp(80*z)",
+        "exp(400*z)",
+        "exp(5*z)",
+        "z",
+        "z^5",
+        "sqrt(z)",
+        "1/(1+100*z)",
+        "ln(1+100*z)",
+    ];
+    let mut checked = 0;
+    for formula in formulas {
+        for n in [256usize, 1024, 4096] {
+            let table = one_function(formula, n);
+            let mut s = FastSolver::new(table.clone());
+            for _ in 0..40 {
+                let kind = [
+                    corpus::Kind::Cluster,
+                    corpus::Kind::Mixture,
+                    corpus::Kind::Flat,
+                ][rng.gen_range(0..3)];
+                let p = corpus::problem(&mut rng, n, 1, kind);
+                let b = distribution_moments(&table, &p.dist).unwrap();
+                for &zf in &p.zf {
+                    let want = monotone_g(&table, b[0], zf);
+                    for from_dist in [false, true] {
+                        let sol = if from_dist {
+                            s.solve_distribution(&p.dist, zf).unwrap()
+                        } else {
+                            s.solve(&b, zf).unwrap()
+                        };
+                        assert_eq!(sol.status, Status::Optimal, "{formula} n {n}: {sol:?}");
+                        assert!(
+                            (sol.g - want).abs() <= 1e-9,
+                            "{formula} n {n} b {:e} zf {zf}: G {} want {want}",
+                            b[0],
+                            sol.g
+                        );
+                        checked += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(checked > 5000, "{checked}");
+}
+
+/// Every problem of the adversarial corpus settled (optimal, never failed or infeasible: they
+/// are all moments of distributions), G no more than the start distribution's own mass below
+/// z_f, and the support reproducing every moment, checked here in f64 against each moment's
+/// own magnitude.
+#[test]
+fn adversarial_corpus_is_certified() {
+    let groups = corpus::adversarial(6, false, 7).unwrap();
+    let (mut solves, mut escalated, mut failed) = (0u64, 0u64, 0u64);
+    for g in &groups {
+        let mut s = FastSolver::new(g.table.clone());
+        let (n, m) = (g.table.n(), g.table.m());
+        let fmax: Vec<f64> = (0..m)
+            .map(|j| (0..n).map(|i| g.table.row(i)[j].abs()).fold(0.0, f64::max))
+            .collect();
+        for p in &g.problems {
+            let b = distribution_moments(&g.table, &p.dist).unwrap();
+            for (k, &zf) in p.zf.iter().enumerate() {
+                let sol = if k % 2 == 0 {
+                    s.solve_distribution(&p.dist, zf).unwrap()
+                } else {
+                    s.solve(&b, zf).unwrap()
+                };
+                assert_ne!(sol.status, Status::Infeasible, "{}", g.name);
+                if sol.status == Status::Failed {
+                    assert!(sol.g.is_nan() && sol.reason.is_some(), "{}", g.name);
+                    continue;
+                }
+                let upper = mass_below(g.table.grid(), &p.dist, zf);
+                assert!(sol.g <= upper + 1e-9, "{}: G {} > {upper}", g.name, sol.g);
+                let total: f64 = sol.support.iter().map(|e| e.1).sum();
+                assert!((total - 1.0).abs() < 1e-9, "{}: mass {total}", g.name);
+                for j in 0..m {
+                    let mut got = 0.0;
+                    let mut mag = 0.0;
+                    for &(z, w) in &sol.support {
+                        let i = ((z * (n - 1) as f64).round()) as usize;
+                        got += w * g.table.row(i)[j];
+                        mag += (w * g.table.row(i)[j]).abs();
+                    }
+                    let scale = b[j].abs().max(1e-30 * fmax[j]).max(1e-5 * mag);
+                    assert!(
+                        (got - b[j]).abs() <= 1e-8 * scale + 4.0 * f64::EPSILON * mag,
+                        "{}: moment {j} {got:e} vs {:e}",
+                        g.name,
+                        b[j]
+                    );
+                }
+            }
+        }
+        let st = s.stats();
+        solves += st.solves;
+        escalated += st.fallbacks;
+        failed += st.uncertified + st.failed;
+        // The issue's targets: no failures on the one-function and MSM flat-receiver groups.
+        if g.basis.len() == 1 {
+            assert_eq!(st.failed, 0, "{}", g.name);
+        }
+    }
+    eprintln!("adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed");
+    assert!(solves > 10_000, "{solves}");
+    // NOT MET yet (docs/lp.md): bases of neighbouring grid points beyond f64 (power bases
+    // m ≥ 5, clusters) are not certified (answered as before, counted as uncertified); this
+    // bounds the share so that it cannot grow unnoticed.
+    assert!(failed * 10 <= solves, "{failed} of {solves} failed");
+}
