@@ -266,7 +266,7 @@ impl Certifier {
         self.dual(basis, kf);
         let lower = self.lower_bound(kf);
         let gap = g - lower;
-        if !(gap.abs() <= TOL_GAP) {
+        if gap.abs() > TOL_GAP || gap.is_nan() {
             return Err(format!("dual bound {lower:.12} does not match G = {g:.12}"));
         }
         let mut support: Vec<(f64, f64)> = (0..r)
