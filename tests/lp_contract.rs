@@ -176,7 +176,7 @@ fn adversarial_corpus_is_certified() {
         }
         let st = s.stats();
         solves += st.solves;
-        escalated += st.fallbacks;
+        escalated += st.escalations;
         failed += st.uncertified + st.failed;
         // The targets: no failures on the one-function and MSM flat-receiver groups.
         if g.basis.len() == 1 {

@@ -95,9 +95,11 @@ pub struct FastStats {
     pub loose: u64,
     /// Cold restarts after an iteration cap, a singular basis or a failed verification.
     pub restarts: u64,
+    /// Problems handed to the reference solver after everything else failed.
+    pub fallbacks: u64,
     /// Problems escalated to the scaled simplex ([`super::scaled`]): the fast answer was not
     /// certified, or the fast runs did not converge, or phase 1 called them infeasible.
-    pub fallbacks: u64,
+    pub escalations: u64,
     /// Problems returned as `Failed` (nothing settled them and the reference fallback is off).
     pub failed: u64,
     /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
@@ -1703,6 +1705,7 @@ impl FastSolver {
             }
             Legacy::Reference if self.use_fallback => {
                 self.stats.uncertified += 1;
+                self.stats.fallbacks += 1;
                 let table = &self.table;
                 let fb = self
                     .fallback
@@ -1722,7 +1725,7 @@ impl FastSolver {
 
     /// The scaled simplex on the problem, from `start` if given; its answer certified.
     fn escalate(&mut self, moments: &[f64], kf: usize, start: Option<&[usize]>) -> Solution {
-        self.stats.fallbacks += 1;
+        self.stats.escalations += 1;
         self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
         self.cert.set_moments(moments);
         let pivots = self.scaled.pivots;
