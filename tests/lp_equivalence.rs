@@ -67,6 +67,28 @@ fn check_support(
     Ok(())
 }
 
+/// Whether the reference's answer reproduces every moment on that moment's own scale
+/// (max(|b_j|, 1e-10 · max_i |f_j(z_i)|), to 1e-6): microlp's absolute tolerances accept
+/// supports that miss a tiny moment (exp(−40z) at z ≈ 0.8 is 1e-14) by orders of magnitude.
+fn reference_is_valid(table: &GridTable, b: &[f64], sol: &Solution) -> bool {
+    let z = table.grid().points();
+    let mut mom = vec![0.0; table.m()];
+    for &(zs, w) in &sol.support {
+        let Some(i) = z.iter().position(|&v| v == zs) else {
+            return false;
+        };
+        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
+            *mj += w * v;
+        }
+    }
+    (0..table.m()).all(|j| {
+        let fmax = (0..table.n())
+            .map(|i| table.row(i)[j].abs())
+            .fold(0.0, f64::max);
+        (mom[j] - b[j]).abs() <= 1e-6 * b[j].abs().max(1e-10 * fmax)
+    })
+}
+
 /// A random distinct m-subset of the built-in smooth functions.
 fn random_basis(rng: &mut ChaCha8Rng, m: usize) -> Vec<SmoothFn> {
     let mut all = smooth_functions();
@@ -310,9 +332,9 @@ fn run_family(
                         .failures
                         .push(format!("fallback to the reference: {what}"));
                 }
-                if r.status != Status::Optimal {
+                if r.status != Status::Optimal || !reference_is_valid(&table, &b, &r) {
                     // The mixture certifies feasibility: a reference misreport (microlp's
-                    // phase-1 tolerances). The fast solution must still be a valid
+                    // phase-1 tolerances, or a support that misses a tiny moment). The fast solution must still be a valid
                     // distribution no worse than the mixture itself.
                     tally.reference_misreports += 1;
                     let g_mix: f64 = mix
@@ -402,8 +424,10 @@ fn fast_equals_reference_on_random_instances() {
 fn fast_equals_reference_on_catalog_candidates() {
     let mut tally = Tally::default();
     run_family(3, 120, 8, &[24, 32, 64, 128], &catalog_basis, &mut tally);
-    // microlp misreports about 0.1 % of these (exp(±40z)-type catalog entries).
-    tally.finish_with(2000, 50, 500);
+    // microlp misreports about 0.3 % of these: supports that miss the tiny moments of
+    // exp(−40z)-type catalog entries by orders of magnitude (the fast answers are then checked
+    // against the mixture instead).
+    tally.finish_with(2000, 50, 200);
 }
 
 #[test]
