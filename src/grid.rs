@@ -57,6 +57,20 @@ impl Grid {
         self.points.len()
     }
 
+    /// Index of the grid point nearest to z (ties to the lower point; outside the grid: an
+    /// end).
+    pub fn nearest(&self, z: f64) -> usize {
+        let p = &self.points;
+        let i = p.partition_point(|&g| g < z);
+        if i == 0 {
+            0
+        } else if i == p.len() || z - p[i - 1] <= p[i] - z {
+            i - 1
+        } else {
+            i
+        }
+    }
+
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
     }

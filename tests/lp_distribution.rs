@@ -165,10 +165,19 @@ fn run(seed: u64, tables: usize, per_table: usize, ns: &[usize], catalog: bool, 
                         continue;
                     }
                 };
-                // A distribution always has a representing measure: never infeasible.
-                if f.status != Status::Optimal {
-                    t.failures.push(format!("{what}: fast says infeasible"));
-                    continue;
+                // A distribution always has a representing measure: never infeasible. `failed`
+                // (no certificate either way) is allowed and counted (bounded in `finish`).
+                match f.status {
+                    Status::Optimal => {}
+                    Status::Failed => {
+                        assert!(f.g.is_nan() && f.reason.is_some(), "{what}: {f:?}");
+                        t.fast_errors += 1;
+                        continue;
+                    }
+                    Status::Infeasible => {
+                        t.failures.push(format!("{what}: fast says infeasible"));
+                        continue;
+                    }
                 }
                 if let Err(e) = check_support(&table, &b, zf, &f) {
                     t.failures.push(format!("{what}: {e}"));
@@ -219,6 +228,13 @@ fn finish(t: &Tally, min_strict: usize) {
     }
     assert!(t.failures.is_empty(), "{} failures", t.failures.len());
     assert!(t.strict >= min_strict, "only {} strict", t.strict);
+    // Unsettled (clusters of neighbouring grid points whose f64 data leave G open beyond the
+    // certificate's 1e-9): at most 1 in 100.
+    assert!(
+        t.fast_errors * 100 <= t.strict,
+        "unsettled: {}",
+        t.fast_errors
+    );
     assert!(t.loose * 20 <= t.strict, "too many ill-posed: {}", t.loose);
     assert!(
         t.reference_errors * 100 <= t.strict,
@@ -250,7 +266,7 @@ fn kernel_distributions_at_1024_match_reference() {
     let mut moments_only = FastSolver::new(table.clone());
     let mut reference = ReferenceSolver::new(table.clone());
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let (mut strict, mut loose, mut ill) = (0, 0, 0);
+    let (mut strict, mut loose, mut ill, mut unsettled) = (0, 0, 0, 0);
     for patch in kernel_patches(&mut rng, &grid, 60) {
         let d: Vec<(u32, f64)> = patch.mixture.iter().map(|&(i, w)| (i as u32, w)).collect();
         let b = distribution_moments(&table, &d).unwrap();
@@ -258,6 +274,10 @@ fn kernel_distributions_at_1024_match_reference() {
             let f = fast.solve_distribution(&d, zf).unwrap();
             let s = moments_only.solve(&b, zf).unwrap();
             let r = reference.solve(&b, zf).unwrap();
+            if f.status == Status::Failed || s.status == Status::Failed {
+                unsettled += 1;
+                continue;
+            }
             check_support(&table, &b, zf, &f).unwrap();
             let diff = (f.g - r.g).abs().max((f.g - s.g).abs());
             let bound = fast.last_error_bound().max(moments_only.last_error_bound());
@@ -274,8 +294,11 @@ fn kernel_distributions_at_1024_match_reference() {
             }
         }
     }
-    eprintln!("{strict} strict, {loose} within the rounding bound, {ill} ill-posed");
+    eprintln!(
+        "{strict} strict, {loose} within the rounding bound, {ill} ill-posed, {unsettled} unsettled"
+    );
     assert!(strict >= 150 && loose * 4 <= strict && ill * 20 <= strict);
+    assert!(unsettled * 50 <= strict, "unsettled: {unsettled}");
     let st = fast.stats();
     // The start replaced phase 1 (but after a rare retry from a drifted basis): the crossover
     // for a new texel, the last optimal basis for another depth of the same texel.

@@ -4,11 +4,40 @@
 
 use super::common::usize_in;
 use crate::lp::bench::{run_one, BenchConfig, BenchRow};
+use crate::lp::bench_corpus::{self, CorpusRow};
+use crate::lp::corpus::{self, Group};
 use crate::progress::Bar;
 use anyhow::{bail, Result};
+use std::path::PathBuf;
+
+/// Where the benchmark problems come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum CorpusKind {
+    /// 9×9 Gaussian kernels over random depth maps with 1–3 clusters; reference, warm, cold and
+    /// distribution-start modes side by side.
+    Kernels,
+    /// Filter windows of fragments sampled from real depth stacks (every layer, the pipeline's
+    /// bias), depths snapped to each grid.
+    Stacks,
+    /// The adversarial corpus (lp::corpus: flat receivers, adjacent points, tight clusters,
+    /// boundary moments, steep exponentials, power bases up to m = 12).
+    Adversarial,
+}
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
+    /// Where the problems come from.
+    #[arg(long, value_enum, default_value_t = CorpusKind::Kernels)]
+    pub corpus: CorpusKind,
+    /// `--corpus stacks`: a folder of .exr depth stacks (default: render the embedded dataset).
+    #[arg(long)]
+    pub stacks: Option<PathBuf>,
+    /// `--corpus stacks` without `--stacks`: resolution of the rendered dataset (16..=4096).
+    #[arg(long, default_value_t = 256, value_parser = usize_in(16, 4096))]
+    pub resolution: usize,
+    /// `--corpus adversarial`: also the n = 4096 and 8192 tables.
+    #[arg(long)]
+    pub large: bool,
     /// Grid sizes n (comma-separated; each 2..=100000).
     #[arg(long, value_delimiter = ',', default_values_t = vec![256usize, 1024, 4096], value_parser = usize_in(2, 100_000))]
     pub n: Vec<usize>,
@@ -35,6 +64,9 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    if args.corpus != CorpusKind::Kernels {
+        return run_corpus(&args);
+    }
     if args.n.is_empty() {
         bail!("bench lp: --n needs at least one grid size");
     }
@@ -122,5 +154,107 @@ pub fn run(args: Args) -> Result<()> {
         "(µs: median per LP, fast = per-problem minimum of {} repeats; warm/cold: from the moments only; dist: given the kernel's depth distribution (crossover start); × = reference median / fast median, same run)",
         cfg.repeats
     );
+    Ok(())
+}
+
+/// The problem groups of `--corpus stacks` (one table per grid size, power basis z…z^m) or
+/// `--corpus adversarial`.
+fn groups(args: &Args) -> Result<Vec<Group>> {
+    if args.corpus == CorpusKind::Adversarial {
+        return corpus::adversarial(6, args.large, args.seed);
+    }
+    let stacks = match &args.stacks {
+        Some(d) => crate::stack::load_dir(d)?,
+        None => crate::render::default_dataset(args.resolution)?,
+    };
+    let windows = crate::metrics::windows::stacks_corpus(&stacks, args.problems, args.seed)?;
+    let basis: Vec<String> = (1..=args.m).map(|k| format!("z^{k}")).collect();
+    args.n
+        .iter()
+        .map(|&n| {
+            let grid = crate::Grid::uniform(n)?;
+            let table = crate::lp::instances::power_table(&grid, args.m)?;
+            let name = format!("stacks, power basis m = {} @ {n}", args.m);
+            corpus::from_windows(&name, &basis, &table, &windows.dists, &windows.zfs)
+        })
+        .collect()
+}
+
+/// `--corpus stacks|adversarial`: one row per grid size (stacks) or one for the corpus.
+fn run_corpus(args: &Args) -> Result<()> {
+    let groups = groups(args)?;
+    let total: u64 = groups
+        .iter()
+        .map(|g| g.problems.iter().map(|p| p.zf.len() as u64).sum::<u64>())
+        .sum();
+    let bar = Bar::new("bench lp: fast solves", total);
+    let rows: Vec<CorpusRow> = if args.corpus == CorpusKind::Stacks {
+        groups
+            .iter()
+            .map(|g| {
+                let name = format!("stacks n = {}", g.table.n());
+                bench_corpus::run(
+                    &name,
+                    std::slice::from_ref(g),
+                    args.reference_problems,
+                    args.repeats,
+                    |k| bar.inc(k),
+                )
+            })
+            .collect::<Result<_>>()?
+    } else {
+        // Two reference solves per table keep the reference part to seconds.
+        let per = args.reference_problems.div_ceil(groups.len()).max(2);
+        vec![bench_corpus::run(
+            "adversarial",
+            &groups,
+            per,
+            args.repeats,
+            |k| bar.inc(k),
+        )?]
+    };
+    bar.finish();
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!(
+        "Algorithm 1, fast solver given each window's depth distribution (one solver per table, warm), µs per LP: per-problem minimum of {} passes; reference = good_lp + microlp on a prefix, same run; pricing kernel {}",
+        args.repeats,
+        crate::lp::pricing_kernel()
+    );
+    println!(
+        "{:<18} {:>7} | {:>8} {:>8} {:>8} {:>8} {:>9} | {:>7} {:>6} {:>6} {:>5} | {:>5} {:>10} {:>10} {:>8} {:>8}",
+        "corpus", "LPs", "mean", "median", "p99", "p99.9", "max", "optimal", "infeas", "failed", "escal",
+        "ref n", "ref mean", "ref median", "× mean", "max |dG|"
+    );
+    for r in &rows {
+        println!(
+            "{:<18} {:>7} | {:>8.2} {:>8.2} {:>8.2} {:>8.2} {:>9.1} | {:>7} {:>6} {:>6} {:>5} | {:>5} {:>10.0} {:>10.0} {:>8.0} {:>8.1e}",
+            r.corpus,
+            r.problems,
+            r.fast_us.mean,
+            r.fast_us.median,
+            r.fast_us.p99,
+            r.fast_us.p999,
+            r.fast_us.max,
+            r.optimal,
+            r.infeasible,
+            r.failed,
+            r.escalations,
+            r.reference_problems,
+            r.reference_us.mean,
+            r.reference_us.median,
+            r.speedup_mean,
+            r.max_abs_diff
+        );
+        if r.reference_invalid > 0 || r.fallbacks > 0 {
+            println!(
+                "  {}: {} reference answers invalid (not compared), {} fallbacks",
+                r.corpus, r.reference_invalid, r.fallbacks
+            );
+        }
+    }
+    println!("(× mean = reference mean / fast mean on the same problems; failed = no certificate for either verdict)");
     Ok(())
 }

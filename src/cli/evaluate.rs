@@ -197,6 +197,12 @@ fn print_table(r: &EvalReport) {
     if r.out_of_range > 0 {
         println!("warning: {} outputs outside [0,1]", r.out_of_range);
     }
+    if r.unsettled > 0 {
+        println!(
+            "warning: {} LPs unsettled (no certificate either way), scored as the trivial bound G = 0",
+            r.unsettled
+        );
+    }
     if r.non_finite > 0 {
         println!(
             "warning: {} non-finite outputs (excluded from the mean)",

@@ -39,6 +39,8 @@ pub const SCALE_FLOOR: f64 = 1e-30;
 /// the grid the floor of σ_j is CANCEL · max_i |f_j(z_i)| (sin(4πz) at z = 1 is 4.9e-16, a
 /// rounding error, not a scale).
 pub const CANCEL: f64 = 1e-5;
+/// Weights (≤ 1, the total mass) below this are rounding-level in the ratio test.
+const TOL_WEIGHT: f64 = 1e-12;
 /// Accurate pivots by Dantzig's rule before Bland's.
 const BLAND_AFTER: usize = 60;
 /// Rounding bound factor per term of a reduced cost (a few units of ε for r ≤ 13 terms).
@@ -216,8 +218,8 @@ impl Certifier {
         self.precise = false;
         match self.check(b, kf, basis) {
             Ok(c) => Ok(c),
-            Err(_) if self.factored => {
-                // Beyond f64: the same basis in double-double.
+            Err(_) if basis.len() == self.rows.len() => {
+                // Beyond f64 (or singular in f64): the same basis in double-double.
                 self.precise = true;
                 self.check(b, kf, basis)
             }
@@ -380,23 +382,11 @@ impl Certifier {
             self.tmp[t] *= self.colscale[t];
         }
         let amax = self.tmp.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let mut pick: Option<(usize, f64)> = None;
-        for t in 0..r {
-            let a = self.tmp[t];
-            if a > 1e-12 * amax {
-                let ratio = self.x[t] / a;
-                let better = match pick {
-                    None => true,
-                    Some((p, r0)) if self.bland => {
-                        ratio < r0 || (ratio == r0 && basis[t] < basis[p])
-                    }
-                    Some((p, r0)) => ratio < r0 || (ratio == r0 && a > self.tmp[p]),
-                };
-                if better {
-                    pick = Some((t, ratio));
-                }
-            }
-        }
+        let pick = if self.bland {
+            self.ratio_bland(basis, amax)
+        } else {
+            self.ratio_harris(amax)
+        };
         match pick {
             Some((t, _)) => {
                 basis[t] = q;
@@ -404,6 +394,44 @@ impl Certifier {
             }
             None => false,
         }
+    }
+
+    /// Harris's two-pass ratio test on the column in `tmp` (weights in `xraw`, entries below
+    /// [`TOL_WEIGHT`] read as 0): the bound θ_max = min_t (x_t + tol)/α_t over pivots
+    /// α_t > 1e-9·max|α|, then the largest pivot among the rows with x_t/α_t ≤ θ_max. Tiny pivots
+    /// on weights that are rounding-level negative would move the point by x_t/α_t.
+    fn ratio_harris(&self, amax: f64) -> Option<(usize, f64)> {
+        let r = self.rows.len();
+        let x = |t: usize| self.xraw[t].max(0.0);
+        let ok = |t: usize| self.tmp[t] > 1e-9 * amax;
+        let bound = (0..r)
+            .filter(|&t| ok(t))
+            .map(|t| (x(t) + TOL_WEIGHT) / self.tmp[t])
+            .fold(f64::INFINITY, f64::min);
+        (0..r)
+            .filter(|&t| ok(t) && x(t) / self.tmp[t] <= bound)
+            .max_by(|&a, &b| self.tmp[a].total_cmp(&self.tmp[b]))
+            .map(|t| (t, x(t) / self.tmp[t]))
+    }
+
+    /// Bland's ratio test: the smallest ratio, ties to the smallest grid index.
+    fn ratio_bland(&self, basis: &[usize], amax: f64) -> Option<(usize, f64)> {
+        let r = self.rows.len();
+        let mut pick: Option<(usize, f64)> = None;
+        for t in 0..r {
+            let a = self.tmp[t];
+            if a > 1e-9 * amax {
+                let ratio = self.xraw[t].max(0.0) / a;
+                let better = match pick {
+                    None => true,
+                    Some((p, r0)) => ratio < r0 || (ratio == r0 && basis[t] < basis[p]),
+                };
+                if better {
+                    pick = Some((t, ratio));
+                }
+            }
+        }
+        pick
     }
 
     /// u_i = min(1, min_j b_j / f_j(z_i)) over the sign-definite rows: every exactly feasible

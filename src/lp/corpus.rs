@@ -242,3 +242,51 @@ pub fn mass_below(grid: &Grid, dist: &[(u32, f64)], zf: f64) -> f64 {
         .map(|e| e.1)
         .sum()
 }
+
+/// A group from filter windows of real depth stacks (`metrics::windows::stacks_corpus`): each
+/// window Σ w·δ(z) has its depths snapped to the nearest grid point of `table` (duplicates
+/// merged), and its fragment depth z_f snapped likewise, as the pipeline evaluates LP
+/// candidates. Windows and depths come as plain slices so this module needs no renderer.
+pub fn from_windows(
+    name: &str,
+    basis: &[String],
+    table: &GridTable,
+    windows: &[Vec<(f64, f64)>],
+    zfs: &[f64],
+) -> Result<Group> {
+    if windows.len() != zfs.len() {
+        anyhow::bail!(
+            "{} windows but {} fragment depths",
+            windows.len(),
+            zfs.len()
+        );
+    }
+    let grid = table.grid();
+    let problems = windows
+        .iter()
+        .zip(zfs)
+        .map(|(w, &zf)| {
+            let mut dist: Vec<(u32, f64)> = Vec::with_capacity(w.len());
+            for &(z, wt) in w {
+                let i = grid.nearest(z) as u32;
+                match dist.iter_mut().find(|e| e.0 == i) {
+                    Some(e) => e.1 += wt,
+                    None => dist.push((i, wt)),
+                }
+            }
+            let total: f64 = dist.iter().map(|e| e.1).sum();
+            dist.iter_mut().for_each(|e| e.1 /= total);
+            dist.sort_by_key(|e| e.0);
+            Problem {
+                dist,
+                zf: vec![grid.points()[grid.nearest(zf)]],
+            }
+        })
+        .collect();
+    Ok(Group {
+        name: name.to_string(),
+        basis: basis.to_vec(),
+        table: table.clone(),
+        problems,
+    })
+}

@@ -149,25 +149,25 @@ impl Lu {
 pub struct Dd(pub f64, pub f64);
 
 impl Dd {
-    fn from(v: f64) -> Dd {
+    pub fn from(v: f64) -> Dd {
         Dd(v, 0.0)
     }
-    fn add(self, o: Dd) -> Dd {
+    pub fn add(self, o: Dd) -> Dd {
         let (s, e) = two_sum(self.0, o.0);
         let e = e + self.1 + o.1;
         let (h, l) = two_sum(s, e);
         Dd(h, l)
     }
-    fn neg(self) -> Dd {
+    pub fn neg(self) -> Dd {
         Dd(-self.0, -self.1)
     }
-    fn mul(self, o: Dd) -> Dd {
+    pub fn mul(self, o: Dd) -> Dd {
         let (p, e) = two_prod(self.0, o.0);
         let e = e + self.0 * o.1 + self.1 * o.0;
         let (h, l) = two_sum(p, e);
         Dd(h, l)
     }
-    fn div(self, o: Dd) -> Dd {
+    pub fn div(self, o: Dd) -> Dd {
         let q1 = self.0 / o.0;
         let r = self.add(o.mul(Dd::from(q1)).neg());
         let q2 = r.0 / o.0;
@@ -246,10 +246,19 @@ impl DdLu {
 
     /// Solve Aᵀ x = b in place.
     pub fn solve_t(&self, x: &mut [f64]) {
+        let mut out = [Dd::default(); 32];
+        self.solve_t_dd(x, &mut out);
+        for i in 0..self.r {
+            x[i] = out[i].0 + out[i].1;
+        }
+    }
+
+    /// Solve Aᵀ x = b, keeping x in double-double (duals whose products with a column cancel).
+    pub fn solve_t_dd(&self, b: &[f64], out: &mut [Dd]) {
         let (r, lu) = (self.r, &self.lu);
         let mut y = [Dd::default(); 32];
         for i in 0..r {
-            y[i] = Dd::from(x[i]);
+            y[i] = Dd::from(b[i]);
         }
         for i in 0..r {
             for c in 0..i {
@@ -263,7 +272,7 @@ impl DdLu {
             }
         }
         for i in 0..r {
-            x[self.perm[i]] = y[i].0 + y[i].1;
+            out[self.perm[i]] = y[i];
         }
     }
 }

@@ -60,8 +60,6 @@ const TOL_RANK: f64 = 1e-10;
 const TOL_DEP: f64 = 1e-8;
 /// Largest condition number (Frobenius) of a basis accepted at refactorisation.
 const MAX_COND: f64 = 1e12;
-/// Weights at or below this are left out of an uncertified support (as in the reference).
-const SUPPORT_MIN: f64 = 1e-12;
 /// Accurate pivots ([`Certifier::improve`]) tried on a basis that does not certify.
 const IMPROVE_STEPS: usize = 20;
 /// Pivots between refactorisations of the basis inverse.
@@ -104,11 +102,6 @@ pub struct FastStats {
     pub failed: u64,
     /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
     pub improved: u64,
-    /// Answers returned WITHOUT a certificate (neither the fast basis, the accurate pivots nor
-    /// the scaled simplex certified): the fast solver's own answer, its infeasibility verdict,
-    /// or the reference solver's answer, as before the certificates. Issue 12's contract is
-    /// not met on these.
-    pub uncertified: u64,
     /// Solves started from a given distribution ([`MomentSolver::solve_distribution`]) by the
     /// crossover.
     pub hinted: u64,
@@ -231,10 +224,6 @@ pub struct FastSolver {
     ls_w: Vec<f64>,
     /// 1 / max_i |M_j(z_i)|: row equilibration of the original system.
     oscale: Vec<f64>,
-    lo_a: Vec<f64>,
-    lo_q: Vec<f64>,
-    lo_r: Vec<f64>,
-    lo_w: Vec<f64>,
     lo_rhs: Vec<f64>,
     /// Crossover workspace: the start distribution, residuals, orthonormal directions and
     /// basis positions of its support points.
@@ -349,7 +338,7 @@ impl FastSolver {
             cert: Certifier::new(&table, cert_rows),
             scaled: ScaledSimplex::default(),
             fallback: None,
-            use_fallback: true,
+            use_fallback: false,
             c: vec![0.0; r],
             u: vec![0.0; r],
             basis: vec![0; r],
@@ -381,10 +370,6 @@ impl FastSolver {
                 .iter()
                 .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
                 .collect(),
-            lo_a: vec![0.0; mm * mm],
-            lo_q: vec![0.0; mm * mm],
-            lo_r: vec![0.0; mm * mm],
-            lo_w: vec![0.0; mm],
             lo_rhs: vec![0.0; mm],
             fscale,
             table,
@@ -398,8 +383,10 @@ impl FastSolver {
     }
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
-    /// Whether problems that neither the fast runs nor the scaled simplex settle go to the
-    /// reference solver (default) or come back `Failed` (`lp::make_solver("fast-strict", …)`).
+    /// Whether problems that neither the fast runs nor the scaled simplex settle are also given
+    /// to the reference solver, whose support is then certified like any other basis (off by
+    /// default: the reference is an oracle for the tests, not a rescue). Without a certificate
+    /// the answer is `Failed` either way.
     pub fn set_reference_fallback(&mut self, on: bool) {
         self.use_fallback = on;
     }
@@ -1289,74 +1276,6 @@ impl FastSolver {
         worst
     }
 
-    /// Final refinement in the original coordinates: least squares of the (row-equilibrated)
-    /// system [1; b(z_i)] w = [1; b] on the support found, accepted when the weights stay
-    /// non-negative and the residual shrinks. The transformed moments c carry the rounding of
-    /// R^{-T}; this removes it from the weights (and G).
-    fn polish_original(&mut self, moments: &[f64]) {
-        let mm = self.m + 1;
-        let mut k = 0;
-        for t in 0..self.r {
-            if self.basis[t] != ART && self.x[t] > 0.0 {
-                self.ls_sup[k] = t;
-                k += 1;
-            }
-        }
-        if k == 0 {
-            return;
-        }
-        self.lo_rhs[0] = 1.0;
-        for j in 1..mm {
-            self.lo_rhs[j] = moments[j - 1] * self.oscale[j];
-        }
-        for a in 0..k {
-            let i = self.basis[self.ls_sup[a]];
-            let col = &mut self.lo_a[a * mm..(a + 1) * mm];
-            col[0] = 1.0;
-            for (j, v) in self.table.row(i).iter().enumerate() {
-                col[j + 1] = v * self.oscale[j + 1];
-            }
-        }
-        let resid = |a: &[f64], w: &[f64], rhs: &[f64]| -> f64 {
-            let mut ss = 0.0;
-            for j in 0..mm {
-                let mut acc = -rhs[j];
-                for (t, wt) in w.iter().enumerate() {
-                    acc += wt * a[t * mm + j];
-                }
-                ss += acc * acc;
-            }
-            ss
-        };
-        for a in 0..k {
-            self.lo_w[a] = self.x[self.ls_sup[a]];
-        }
-        let before = resid(&self.lo_a[..k * mm], &self.lo_w[..k], &self.lo_rhs);
-        let (w, rest) = self.lo_w.split_at_mut(k);
-        let _ = rest;
-        if !least_squares(
-            &self.lo_a[..k * mm],
-            mm,
-            k,
-            &self.lo_rhs,
-            &mut self.lo_q,
-            &mut self.lo_r,
-            w,
-        ) {
-            return;
-        }
-        if w.iter().any(|&v| v < -1e-12) {
-            return;
-        }
-        w.iter_mut().for_each(|v| *v = v.max(0.0));
-        let after = resid(&self.lo_a[..k * mm], w, &self.lo_rhs);
-        if after < before {
-            for a in 0..k {
-                self.x[self.ls_sup[a]] = w[a];
-            }
-        }
-    }
-
     /// Crossover from a known distribution `start` = [(grid index, weight)] with these moments
     /// (e.g. the filtered depth distribution of a kernel) to a basis whose basic solution is
     /// feasible and costs no more. The basis is the support columns of greatest volume (greedy
@@ -1548,29 +1467,6 @@ impl FastSolver {
         }
         true
     }
-
-    fn solution(&self, kf: usize) -> Solution {
-        let z = self.table.grid().points();
-        let mut g = 0.0;
-        let mut support = Vec::with_capacity(self.r);
-        for t in 0..self.r {
-            let bt = self.basis[t];
-            let w = self.x[t].max(0.0);
-            if bt < kf {
-                g += w;
-            }
-            if w > SUPPORT_MIN {
-                support.push((z[bt], w));
-            }
-        }
-        support.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Solution {
-            status: Status::Optimal,
-            g: g.clamp(0.0, 1.0),
-            support,
-            reason: None,
-        }
-    }
 }
 
 impl MomentSolver for FastSolver {
@@ -1606,7 +1502,7 @@ impl MomentSolver for FastSolver {
 
 /// The fast solver's own verdict, kept for when nothing certifies.
 enum Legacy {
-    Answer(Solution, Vec<usize>),
+    Answer(Vec<usize>),
     Infeasible,
     Reference,
 }
@@ -1651,26 +1547,24 @@ impl FastSolver {
         } else {
             Verdict::Infeasible
         };
-        // The fast solver's own answer, returned (counted as uncertified) only if nothing
-        // certifies: the behaviour before the certificates.
+        // The fast solver's verdict: its basis is certified, improved or escalated below.
+        let mut why = String::new();
         let legacy = match verdict {
             Verdict::Optimal => {
                 self.remember_optimal();
                 let fast_basis = self.basis.clone();
                 match self.cert.optimal(moments, kf, &fast_basis) {
                     Ok(c) => return Ok(certified(c)),
-                    Err(_) => {
-                        if self.r < self.m + 1 && !c_given {
-                            self.polish_original(moments);
-                        }
-                        Legacy::Answer(self.solution(kf), fast_basis)
+                    Err(e) => {
+                        why = e;
+                        Legacy::Answer(fast_basis)
                     }
                 }
             }
             Verdict::Infeasible => Legacy::Infeasible,
             Verdict::Failed => Legacy::Reference,
         };
-        if let Legacy::Answer(_, fast_basis) = &legacy {
+        if let Legacy::Answer(fast_basis) = &legacy {
             let mut basis = fast_basis.clone();
             if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
                 self.stats.improved += 1;
@@ -1686,41 +1580,56 @@ impl FastSolver {
             }
         }
         let start = match &legacy {
-            Legacy::Answer(_, b) => Some(b.clone()),
+            Legacy::Answer(b) => Some(b.clone()),
             _ => None,
         };
         let sol = self.escalate(moments, kf, start.as_deref());
         if sol.status != Status::Failed {
             return Ok(sol);
         }
-        match legacy {
-            Legacy::Answer(old, _) => {
-                self.stats.uncertified += 1;
-                Ok(old)
-            }
+        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`). The
+        // reference, when enabled, is one more source of a basis to certify, not a rescue.
+        self.stats.failed += 1;
+        let fast = match &legacy {
+            Legacy::Answer(..) => format!("fast optimum not certified ({why})"),
             Legacy::Infeasible => {
-                self.stats.uncertified += 1;
-                self.stats.infeasible += 1;
-                Ok(Solution::infeasible())
+                "phase 1 found no feasible point, but no Farkas ray certifies it".into()
             }
-            Legacy::Reference if self.use_fallback => {
-                self.stats.uncertified += 1;
+            Legacy::Reference => "the simplex did not converge".into(),
+        };
+        let escalation = sol.reason.unwrap_or_default();
+        if self.use_fallback {
+            if let Some(c) = self.reference_certified(moments, zf, kf) {
+                self.stats.failed -= 1;
                 self.stats.fallbacks += 1;
-                let table = &self.table;
-                let fb = self
-                    .fallback
-                    .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
-                let sol = fb.solve(moments, zf)?;
-                if sol.status == Status::Infeasible {
-                    self.stats.infeasible += 1;
-                }
-                Ok(sol)
-            }
-            Legacy::Reference => {
-                self.stats.failed += 1;
-                Ok(sol)
+                return Ok(c);
             }
         }
+        Ok(Solution::failed(format!("{fast}; {escalation}")))
+    }
+
+    /// The reference's answer, if its support (completed to a basis) certifies.
+    fn reference_certified(&mut self, moments: &[f64], zf: f64, kf: usize) -> Option<Solution> {
+        let table = &self.table;
+        let fb = self
+            .fallback
+            .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
+        let sol = fb.solve(moments, zf).ok()?;
+        if sol.status == Status::Infeasible {
+            return None;
+        }
+        let grid = self.table.grid();
+        let dist: Vec<(u32, f64)> = sol
+            .support
+            .iter()
+            .map(|&(z, w)| (grid.nearest(z) as u32, w))
+            .collect();
+        let mut basis = self.support_basis(&dist)?;
+        let c = self
+            .cert
+            .improve(moments, kf, &mut basis, IMPROVE_STEPS)
+            .ok()?;
+        Some(certified(c))
     }
 
     /// The scaled simplex on the problem, from `start` if given; its answer certified.

@@ -8,6 +8,7 @@
 //! exactly as stated) and the fast solver (OWNER: lp helper).
 
 pub mod bench;
+pub mod bench_corpus;
 pub mod certify;
 pub mod corpus;
 mod dense;
@@ -144,8 +145,9 @@ pub trait MomentSolver: Send {
     fn table(&self) -> &GridTable;
 }
 
-/// The solver of the given name on `table`: "reference", "fast", or "fast-strict" (the fast
-/// solver without the reference fallback: problems nothing settles come back `Failed`).
+/// The solver of the given name on `table`: "reference" or "fast" ("fast-strict", the name
+/// from before the certificates, is the same solver: problems nothing certifies come back
+/// `Failed`, never from a reference fallback).
 pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
     match kind {
         "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),
@@ -158,6 +160,22 @@ pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>
         other => {
             bail!("unknown LP solver '{other}' (expected 'reference', 'fast' or 'fast-strict')")
         }
+    }
+}
+
+/// The one meaning of an unsettled LP (status `Failed`, or a solver error) everywhere G is
+/// scored (the sweep, `evaluate`, the reports): the trivial bound G = 0 — every distribution
+/// has mass ≥ 0 below z_f, so this claims nothing — counted per candidate and shown in the
+/// results tables. Never NaN (which would drop the fragment and flatter the candidate).
+pub const UNSETTLED_G: f64 = 0.0;
+
+/// G of a settled answer; None when it is unsettled (see [`UNSETTLED_G`]). Infeasible
+/// answers are settled (NaN: moments outside the moment space, e.g. after quantisation).
+pub fn settled_g(sol: &Result<Solution>) -> Option<f64> {
+    match sol {
+        Ok(s) if s.status == Status::Optimal => Some(s.g),
+        Ok(s) if s.status == Status::Infeasible => Some(f64::NAN),
+        _ => None,
     }
 }
 

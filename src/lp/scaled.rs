@@ -8,17 +8,23 @@
 //! w_i = κ_i v_i. A weight of 1e-24 on a column with entries 1e24 (a steep exponential near its
 //! peak, under a moment of 1e-25) is an ordinary number here. Phase 1 uses one artificial per
 //! row; the final basis (or the Farkas ray of phase 1) is judged by the certifier, not trusted.
+//!
+//! All linear algebra is in double-double arithmetic and from scratch at every pivot (an LU of
+//! the r × r basis, r ≤ 13): the bases of neighbouring grid points under a power basis (flat
+//! receivers, tight clusters) have condition 1e12–1e20, beyond f64 but far inside the ~1e-32 of
+//! double-double. Reduced costs d_i = c_i − y·a_i are computed in f64 with their rounding bound
+//! and recomputed in double-double where the bound leaves the sign of d_i + tol open: the duals
+//! of such bases reach 1e8 and cancel.
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 13
 
 use super::certify::Certifier;
-use super::dense::{inv_pow2, Lu};
+use super::dense::{inv_pow2, Dd, DdLu};
 
 const TOL_D: f64 = 1e-11;
 const TOL_PIV: f64 = 1e-10;
 const HARRIS: f64 = 1e-12;
 const TOL_ART: f64 = 1e-10;
-const REFACTOR_EVERY: usize = 24;
 const DEGENERATE_LIMIT: usize = 50;
 
 /// What the scaled simplex found (to be certified by the caller).
@@ -46,12 +52,14 @@ pub struct ScaledSimplex {
     basis: Vec<usize>,
     is_basic: Vec<bool>,
     sign: Vec<f64>,
-    binv: Vec<f64>,
     x: Vec<f64>,
-    y: Vec<f64>,
+    /// Duals in double-double.
+    y: Vec<Dd>,
     alpha: Vec<f64>,
     col: Vec<f64>,
-    lu: Lu,
+    /// Row-major basis matrix.
+    bm: Vec<f64>,
+    lu: DdLu,
     pub pivots: u64,
 }
 
@@ -128,8 +136,9 @@ impl ScaledSimplex {
             .iter()
             .map(|&v| if v < 0.0 { -1.0 } else { 1.0 })
             .collect();
-        self.binv.resize(r * r, 0.0);
-        for v in [&mut self.x, &mut self.y, &mut self.alpha, &mut self.col] {
+        self.bm.resize(r * r, 0.0);
+        self.y.resize(r, Dd::default());
+        for v in [&mut self.x, &mut self.alpha, &mut self.col] {
             v.resize(r, 0.0);
         }
     }
@@ -153,26 +162,17 @@ impl ScaledSimplex {
         }
     }
 
-    /// B⁻¹ from scratch and x = B⁻¹ b̂; false if singular.
+    /// LU of the basis from scratch and x = B⁻¹ b̂; false if singular.
     fn factor(&mut self) -> bool {
         let r = self.r;
-        let mut bm = vec![0.0; r * r];
         for t in 0..r {
             self.load(self.basis[t]);
             for k in 0..r {
-                bm[k * r + t] = self.col[k];
+                self.bm[k * r + t] = self.col[k];
             }
         }
-        if !self.lu.factor(&bm, r) {
+        if !self.lu.factor(&self.bm, r) {
             return false;
-        }
-        for k in 0..r {
-            let mut e = vec![0.0; r];
-            e[k] = 1.0;
-            self.lu.solve(&mut e);
-            for t in 0..r {
-                self.binv[t * r + k] = e[t];
-            }
         }
         self.x.copy_from_slice(&self.rhs);
         self.lu.solve(&mut self.x);
@@ -208,62 +208,80 @@ impl ScaledSimplex {
         debug_assert!(ok);
     }
 
-    /// Simplex iterations to optimality of the phase's costs.
+    /// Simplex iterations to optimality of the phase's costs (each from a fresh factorisation).
     fn iterate(&mut self, kf: usize, phase1: bool) -> Result<(), &'static str> {
         let cap = 50 * self.n + 1000;
-        let (mut since, mut degenerate, mut bland) = (0, 0, false);
+        let (mut degenerate, mut bland) = (0, false);
         for _ in 0..cap {
-            if since >= REFACTOR_EVERY {
-                if !self.factor() {
-                    return Err("singular basis in the scaled simplex");
-                }
-                since = 0;
+            if !self.factor() {
+                return Err("singular basis in the scaled simplex");
             }
             self.duals(kf, phase1);
             let Some(q) = self.price(kf, phase1, bland) else {
                 return Ok(());
             };
-            self.load(q);
-            let r = self.r;
-            for t in 0..r {
-                self.alpha[t] = (0..r).map(|k| self.binv[t * r + k] * self.col[k]).sum();
-            }
-            let Some(l) = self.ratio(bland) else {
+            self.entering(q);
+            let Some(l) = self.ratio(bland, phase1) else {
                 return Err("unbounded ray in the scaled simplex");
             };
             let theta = (self.x[l] / self.alpha[l]).max(0.0);
             degenerate = if theta == 0.0 { degenerate + 1 } else { 0 };
             bland |= degenerate > DEGENERATE_LIMIT;
-            self.pivot(l, q, theta);
-            since += 1;
+            self.replace(l, q);
         }
         Err("iteration cap of the scaled simplex")
     }
 
+    /// α = B⁻¹ a_q for column q.
+    fn entering(&mut self, q: usize) {
+        self.load(q);
+        self.alpha.copy_from_slice(&self.col);
+        self.lu.solve(&mut self.alpha);
+    }
+
+    /// Duals y = B⁻ᵀ c_B in double-double.
     fn duals(&mut self, kf: usize, phase1: bool) {
-        let r = self.r;
-        self.y.iter_mut().for_each(|v| *v = 0.0);
-        for t in 0..r {
-            let c = self.cost(self.basis[t], kf, phase1);
-            if c != 0.0 {
-                for k in 0..r {
-                    self.y[k] += c * self.binv[t * r + k];
-                }
-            }
+        let mut c = [0.0; 32];
+        for t in 0..self.r {
+            c[t] = self.cost(self.basis[t], kf, phase1);
         }
+        self.lu.solve_t_dd(&c[..self.r], &mut self.y);
+    }
+
+    /// d_q = c_q − y·a_q: in f64 when its rounding bound settles the comparison with −tol,
+    /// else in double-double.
+    fn reduced(&self, q: usize, c: f64, tol: f64) -> f64 {
+        let r = self.r;
+        let a = &self.acol[q * r..(q + 1) * r];
+        let (mut d, mut e) = (c, c.abs());
+        for k in 0..r {
+            let t = self.y[k].0 * a[k];
+            d -= t;
+            e += t.abs();
+        }
+        let err = 4.0 * (r as f64 + 2.0) * f64::EPSILON * e;
+        if (d + tol).abs() > err {
+            return d;
+        }
+        let mut acc = Dd::from(c);
+        for k in 0..r {
+            acc = acc.add(self.y[k].mul(Dd::from(a[k])).neg());
+        }
+        acc.0 + acc.1
     }
 
     /// Entering column (Dantzig, or Bland's first improving index).
     fn price(&self, kf: usize, phase1: bool, bland: bool) -> Option<usize> {
-        let r = self.r;
-        let mut best = (None, -TOL_D);
+        let mut best = (None, 0.0);
         for i in 0..self.n {
             if self.is_basic[i] {
                 continue;
             }
-            let a = &self.acol[i * r..(i + 1) * r];
-            let d = self.cost(i, kf, phase1) - (0..r).map(|k| self.y[k] * a[k]).sum::<f64>();
-            if d < best.1 {
+            // Eligible when the reduced cost is below −TOL_D in scaled or in original units
+            // (d_i = d̃_i / κ_i: a large column's weight moves G by its unscaled value).
+            let tol = TOL_D * self.kappa[i].min(1.0);
+            let d = self.reduced(i, self.cost(i, kf, phase1), tol);
+            if d < -tol && d < best.1 {
                 best = (Some(i), d);
                 if bland {
                     break;
@@ -274,7 +292,7 @@ impl ScaledSimplex {
     }
 
     /// Leaving position: Harris' two passes, the largest pivot among the near-minimal ratios.
-    fn ratio(&self, bland: bool) -> Option<usize> {
+    fn ratio(&self, bland: bool, phase1: bool) -> Option<usize> {
         let r = self.r;
         let amax = self.alpha.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let tol = TOL_PIV * amax.max(1.0);
@@ -285,10 +303,13 @@ impl ScaledSimplex {
             }
         }
         let mut pick: Option<usize> = None;
-        // A zero-level artificial left in the basis must not become positive: it blocks.
-        for t in 0..r {
-            if self.basis[t] >= self.n && self.alpha[t].abs() > tol {
-                return Some(t);
+        // In phase 2 a zero-level artificial left in the basis must not become positive: it
+        // blocks.
+        if !phase1 {
+            for t in 0..r {
+                if self.basis[t] >= self.n && self.alpha[t].abs() > tol {
+                    return Some(t);
+                }
             }
         }
         for t in 0..r {
@@ -307,27 +328,12 @@ impl ScaledSimplex {
         pick
     }
 
-    fn pivot(&mut self, l: usize, q: usize, theta: f64) {
-        let r = self.r;
-        for t in 0..r {
-            self.x[t] -= theta * self.alpha[t];
-        }
-        self.x[l] = theta;
-        let al = self.alpha[l];
-        for k in 0..r {
-            self.binv[l * r + k] /= al;
-        }
-        for t in 0..r {
-            if t != l && self.alpha[t] != 0.0 {
-                let f = self.alpha[t];
-                for k in 0..r {
-                    self.binv[t * r + k] -= f * self.binv[l * r + k];
-                }
-            }
-        }
+    /// Column q replaces the basic column at position l (the next factorisation recomputes x).
+    fn replace(&mut self, l: usize, q: usize) {
         self.is_basic[self.basis[l]] = false;
         self.basis[l] = q;
         self.is_basic[q] = true;
+        self.pivots += 1;
     }
 
     /// Pivot the zero-level artificials of a feasible phase-1 optimum out of the basis.
@@ -337,27 +343,28 @@ impl ScaledSimplex {
             if self.basis[l] < self.n {
                 continue;
             }
+            if !self.factor() {
+                return Err("singular basis after phase 1");
+            }
+            // Row l of B⁻¹.
+            let mut row = vec![0.0; r];
+            row[l] = 1.0;
+            self.lu.solve_t(&mut row);
             let mut best = (None, 1e-9);
             for i in 0..self.n {
                 if self.is_basic[i] {
                     continue;
                 }
                 let a = &self.acol[i * r..(i + 1) * r];
-                let v: f64 = (0..r).map(|k| self.binv[l * r + k] * a[k]).sum();
+                let v: f64 = (0..r).map(|k| row[k] * a[k]).sum();
                 if v.abs() > best.1 {
                     best = (Some(i), v.abs());
                 }
             }
-            let Some(q) = best.0 else {
-                // A redundant row (at this precision): the artificial stays, blocking at 0.
-                continue;
-            };
-            self.load(q);
-            for t in 0..r {
-                self.alpha[t] = (0..r).map(|k| self.binv[t * r + k] * self.col[k]).sum();
+            // None: a redundant row (at this precision): the artificial stays, blocking at 0.
+            if let Some(q) = best.0 {
+                self.replace(l, q);
             }
-            let theta = self.x[l] / self.alpha[l];
-            self.pivot(l, q, theta);
         }
         if !self.factor() {
             return Err("singular basis after phase 1");
@@ -372,7 +379,7 @@ impl ScaledSimplex {
         cert.rows()
             .iter()
             .enumerate()
-            .map(|(k, &j)| -self.y[k] * s[j])
+            .map(|(k, &j)| -(self.y[k].0 + self.y[k].1) * s[j])
             .collect()
     }
 }

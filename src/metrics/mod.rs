@@ -327,17 +327,7 @@ pub fn fragments_subsampled(
 
 /// Index of the grid point nearest to z (ties to the lower point; outside the grid: an end).
 pub fn snap_index(grid: &Grid, z: f64) -> usize {
-    let p = grid.points();
-    let i = p.partition_point(|&g| g < z);
-    if i == 0 {
-        0
-    } else if i == p.len() {
-        p.len() - 1
-    } else if z - p[i - 1] <= p[i] - z {
-        i - 1
-    } else {
-        i
-    }
+    grid.nearest(z)
 }
 
 /// The grid point nearest to z (monotone in z).
@@ -413,6 +403,9 @@ pub struct ViewReport {
     pub solved: usize,
     /// Fragments with non-finite G (excluded from the mean, reported here).
     pub non_finite: usize,
+    /// Fragments whose LP was unsettled: scored as the trivial bound G = 0 (included in the
+    /// mean; `lp::UNSETTLED_G`).
+    pub unsettled: usize,
     /// Fragments with finite G outside [0,1] (more than 1e-9; included in the mean as is).
     pub out_of_range: usize,
     /// Σ |G − PCF| over the finite fragments.
@@ -438,6 +431,8 @@ pub struct EvalReport {
     pub trivial: usize,
     pub solved: usize,
     pub non_finite: usize,
+    /// LP answers scored as the trivial bound because the solver settled neither verdict.
+    pub unsettled: usize,
     pub out_of_range: usize,
     /// Mean |G − PCF| over all finite evaluated fragments of all views.
     pub error: f64,
@@ -564,6 +559,7 @@ struct Partial {
     trivial: usize,
     solved: usize,
     non_finite: usize,
+    unsettled: usize,
     out_of_range: usize,
     values: Vec<FragmentValue>,
 }
@@ -630,6 +626,7 @@ pub fn evaluate_subject(
                 },
                 |(ev, buf), chunk| {
                     let mut p = Partial::default();
+                    let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
                     for f in chunk {
                         let (g, trivial, solved) = shader.shade(ev, buf, f);
                         p.trivial += trivial as usize;
@@ -652,6 +649,7 @@ pub fn evaluate_subject(
                             });
                         }
                     }
+                    p.unsettled = ev.as_ref().map_or(0, |e| e.unsettled()) - unsettled0;
                     let d = done.fetch_add(chunk.len(), Ordering::Relaxed) + chunk.len();
                     if let Some(cb) = &opts.progress {
                         cb(d, planned);
@@ -668,6 +666,7 @@ pub fn evaluate_subject(
             total.trivial += p.trivial;
             total.solved += p.solved;
             total.non_finite += p.non_finite;
+            total.unsettled += p.unsettled;
             total.out_of_range += p.out_of_range;
             values.extend(p.values);
         }
@@ -683,6 +682,7 @@ pub fn evaluate_subject(
             trivial: total.trivial,
             solved: total.solved,
             non_finite: total.non_finite,
+            unsettled: total.unsettled,
             out_of_range: total.out_of_range,
             sum_abs_error: total.sum,
             error: if finite > 0 {
@@ -711,6 +711,7 @@ pub fn evaluate_subject(
         trivial: sum(|v| v.trivial),
         solved,
         non_finite,
+        unsettled: sum(|v| v.unsettled),
         out_of_range: sum(|v| v.out_of_range),
         error: if fragments > non_finite {
             sum_abs / (fragments - non_finite) as f64

@@ -156,6 +156,7 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             "fragments",
             "trivial",
             "non-finite",
+            "unsettled LPs",
         ],
         sorted
             .iter()
@@ -169,6 +170,7 @@ pub fn build(r: ReportInputs) -> Result<Document> {
                     m.fragments.to_string(),
                     m.trivial.to_string(),
                     m.non_finite.to_string(),
+                    m.unsettled.to_string(),
                 ]
             })
             .collect(),

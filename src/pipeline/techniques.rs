@@ -188,6 +188,7 @@ pub fn measured(
         fragments: r.fragments,
         trivial: r.trivial,
         non_finite: r.non_finite,
+        unsettled: r.unsettled,
         seconds: r.seconds,
         scenes: per_scene(&r),
         histogram,

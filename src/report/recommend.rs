@@ -16,6 +16,10 @@ pub struct Measured {
     pub fragments: usize,
     pub trivial: usize,
     pub non_finite: usize,
+    /// LP answers the solver settled neither way, scored as the trivial bound G = 0
+    /// (`lp::UNSETTLED_G`); 0 for closed forms and in artefacts of older runs.
+    #[serde(default)]
+    pub unsettled: usize,
     pub seconds: f64,
     /// Per scene: (scene, mean error over its fragments, fragments).
     pub scenes: Vec<(String, f64, usize)>,

@@ -79,14 +79,16 @@ impl<'a> Scorer<'a> {
         for &k in ids {
             let f = &frags[k as usize];
             // b = Σ w b(z_i) of the fragment's filtered depth distribution (Section 3.2).
-            let g =
-                match solver.solve_distribution(self.data.distribution(f.dist), z[f.zf as usize]) {
-                    Ok(s) if s.status == Status::Optimal && s.g.is_finite() => s.g.clamp(0.0, 1.0),
-                    _ => {
-                        out.failures += 1;
-                        0.0
-                    }
-                };
+            // The moments are a distribution's, so `infeasible` is a failure here too; an
+            // unsettled answer scores the trivial bound and is counted (lp::UNSETTLED_G).
+            let sol = solver.solve_distribution(self.data.distribution(f.dist), z[f.zf as usize]);
+            let g = match lp::settled_g(&sol) {
+                Some(g) if g.is_finite() => g.clamp(0.0, 1.0),
+                _ => {
+                    out.failures += 1;
+                    lp::UNSETTLED_G
+                }
+            };
             out.errors.push((g - f.pcf).abs());
         }
         out.seconds = t0.elapsed().as_secs_f64();

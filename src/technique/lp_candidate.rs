@@ -4,7 +4,7 @@
 
 use super::{Evaluator, Technique};
 use crate::basis::{split_list, Basis, Catalog};
-use crate::lp::{make_solver, GridTable, MomentSolver, Status};
+use crate::lp::{self, make_solver, GridTable, MomentSolver};
 use crate::Grid;
 use anyhow::{bail, Context, Result};
 
@@ -76,18 +76,24 @@ impl LpCandidate {
 /// One solver per evaluator: warm-start state stays per thread.
 struct LpEvaluator {
     solver: Option<Box<dyn MomentSolver>>,
+    unsettled: usize,
 }
 
 impl Evaluator for LpEvaluator {
-    /// G(b, z_f); NaN when the moments are infeasible on the grid or the solver fails.
+    /// G(b, z_f); NaN when the moments are infeasible on the grid; the trivial bound
+    /// [`lp::UNSETTLED_G`] (counted) when the solver settles neither.
     fn shadow(&mut self, moments: &[f64], zf: f64) -> f64 {
-        let Some(solver) = self.solver.as_mut() else {
-            return f64::NAN;
-        };
-        match solver.solve(moments, zf) {
-            Ok(s) if s.status == Status::Optimal => s.g,
-            _ => f64::NAN,
-        }
+        let settled = self
+            .solver
+            .as_mut()
+            .and_then(|s| lp::settled_g(&s.solve(moments, zf)));
+        settled.unwrap_or_else(|| {
+            self.unsettled += 1;
+            lp::UNSETTLED_G
+        })
+    }
+    fn unsettled(&self) -> usize {
+        self.unsettled
     }
 }
 
@@ -108,6 +114,7 @@ impl Technique for LpCandidate {
         // `new` checked that this solver kind builds on this table.
         Box::new(LpEvaluator {
             solver: make_solver(&self.solver_kind, self.table.clone()).ok(),
+            unsettled: 0,
         })
     }
 }

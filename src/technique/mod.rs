@@ -35,6 +35,11 @@ pub trait Technique: Send + Sync {
 pub trait Evaluator {
     /// Shadow intensity G(b, z_f) ∈ [0,1] from filtered moments `moments` at depth `zf`.
     fn shadow(&mut self, moments: &[f64], zf: f64) -> f64;
+    /// Calls so far whose answer was unsettled (an LP the solver could not certify either way,
+    /// scored as the trivial bound G = 0: see [`crate::lp::UNSETTLED_G`]). Closed forms: 0.
+    fn unsettled(&self) -> usize {
+        0
+    }
 }
 
 /// Closed-form techniques: a pure function of (b, z_f).

@@ -1,0 +1,229 @@
+//! Timing of the fast solver on a corpus of problems (`momentlab bench lp --corpus stacks` or
+//! `--corpus adversarial`): µs per LP as mean, median, p99, p99.9 and max, per-problem status
+//! counts, and the microlp reference timed on a prefix of the same problems in the same run.
+//!
+//! Every problem is solved the way the pipeline solves it: given its depth distribution
+//! ([`MomentSolver::solve_distribution`]), one solver per table, warm state carried from one
+//! problem to the next.
+
+use super::corpus::Group;
+use super::fast::FastSolver;
+use super::reference::ReferenceSolver;
+use super::{distribution_moments, MomentSolver, Solution, Status};
+use anyhow::Result;
+use std::time::Instant;
+
+/// Summary of a set of per-LP times (µs).
+#[derive(Clone, Copy, Debug, Default, serde::Serialize)]
+pub struct Spread {
+    pub mean: f64,
+    pub median: f64,
+    pub p99: f64,
+    pub p999: f64,
+    pub max: f64,
+}
+
+impl Spread {
+    /// Mean and order statistics (nearest rank) of `v`; all NaN when empty.
+    pub fn of(v: &[f64]) -> Spread {
+        if v.is_empty() {
+            let nan = f64::NAN;
+            return Spread {
+                mean: nan,
+                median: nan,
+                p99: nan,
+                p999: nan,
+                max: nan,
+            };
+        }
+        let mut s = v.to_vec();
+        s.sort_by(|a, b| a.total_cmp(b));
+        let rank = |q: f64| s[((q * s.len() as f64).ceil() as usize).clamp(1, s.len()) - 1];
+        Spread {
+            mean: s.iter().sum::<f64>() / s.len() as f64,
+            median: rank(0.5),
+            p99: rank(0.99),
+            p999: rank(0.999),
+            max: s[s.len() - 1],
+        }
+    }
+}
+
+/// One corpus's figures.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct CorpusRow {
+    pub corpus: String,
+    /// Grid sizes of the corpus's tables.
+    pub ns: Vec<usize>,
+    pub tables: usize,
+    /// LPs solved by the fast solver.
+    pub problems: usize,
+    /// Fast solver, µs per LP (per-problem minimum over the repeats).
+    pub fast_us: Spread,
+    pub optimal: usize,
+    pub infeasible: usize,
+    /// `Failed` answers (no certificate for either verdict).
+    pub failed: usize,
+    /// Solves escalated to the scaled simplex.
+    pub escalations: u64,
+    /// Fallbacks to the reference (the fast solver runs with the fallback off: must be 0).
+    pub fallbacks: u64,
+    /// The reference (good_lp + microlp) on a prefix of the problems, µs per LP.
+    pub reference_problems: usize,
+    pub reference_us: Spread,
+    /// The fast solver's mean µs on the same prefix.
+    pub fast_prefix_mean_us: f64,
+    /// reference mean / fast mean on the same problems.
+    pub speedup_mean: f64,
+    /// Reference answers that are errors, not optimal, or miss a moment on its own scale
+    /// (max(|b_j|, 1e-10·max|f_j|), to 1e-6): counted, not compared.
+    pub reference_invalid: usize,
+    /// max |G_fast − G_reference| where both are optimal and the reference answer valid.
+    pub max_abs_diff: f64,
+}
+
+/// Time the fast solver on every problem of `groups` (`repeats` passes, minimum per problem)
+/// and the reference on the first `reference_per_group` problems of each group;
+/// `progress(k)` after each group with k LPs done.
+pub fn run(
+    corpus: &str,
+    groups: &[Group],
+    reference_per_group: usize,
+    repeats: usize,
+    mut progress: impl FnMut(u64),
+) -> Result<CorpusRow> {
+    let mut fast_us = Vec::new();
+    let (mut ref_us, mut prefix_us) = (Vec::new(), Vec::new());
+    let mut row = CorpusRow {
+        corpus: corpus.to_string(),
+        ns: Vec::new(),
+        tables: groups.len(),
+        problems: 0,
+        fast_us: Spread::default(),
+        optimal: 0,
+        infeasible: 0,
+        failed: 0,
+        escalations: 0,
+        fallbacks: 0,
+        reference_problems: 0,
+        reference_us: Spread::default(),
+        fast_prefix_mean_us: f64::NAN,
+        speedup_mean: f64::NAN,
+        reference_invalid: 0,
+        max_abs_diff: 0.0,
+    };
+    for g in groups {
+        if !row.ns.contains(&g.table.n()) {
+            row.ns.push(g.table.n());
+        }
+        let (times, sols, stats) = time_group(g, repeats)?;
+        row.escalations += stats.escalations;
+        row.fallbacks += stats.fallbacks;
+        for s in &sols {
+            match s.status {
+                Status::Optimal => row.optimal += 1,
+                Status::Infeasible => row.infeasible += 1,
+                Status::Failed => row.failed += 1,
+            }
+        }
+        let mut reference = ReferenceSolver::new(g.table.clone());
+        // The first fragment depth of each of the first problems (index into the sequence).
+        let mut k = 0;
+        for p in g.problems.iter().take(reference_per_group) {
+            let b = distribution_moments(&g.table, &p.dist)?;
+            let t0 = Instant::now();
+            let r = reference.solve(&b, p.zf[0]);
+            ref_us.push(t0.elapsed().as_secs_f64() * 1e6);
+            prefix_us.push(times[k]);
+            match r {
+                Ok(r) if r.status == Status::Optimal && valid(&g.table, &b, &r) => {
+                    if sols[k].status == Status::Optimal {
+                        row.max_abs_diff = row.max_abs_diff.max((sols[k].g - r.g).abs());
+                    }
+                }
+                _ => row.reference_invalid += 1,
+            }
+            k += p.zf.len();
+        }
+        row.problems += times.len();
+        fast_us.extend(times);
+        progress(sols.len() as u64);
+    }
+    row.fast_us = Spread::of(&fast_us);
+    row.reference_problems = ref_us.len();
+    row.reference_us = Spread::of(&ref_us);
+    row.fast_prefix_mean_us = Spread::of(&prefix_us).mean;
+    row.speedup_mean = row.reference_us.mean / row.fast_prefix_mean_us;
+    Ok(row)
+}
+
+/// µs per LP (minimum over `repeats` identical passes), the answers, and the solver's stats.
+fn time_group(
+    g: &Group,
+    repeats: usize,
+) -> Result<(Vec<f64>, Vec<Solution>, super::fast::FastStats)> {
+    let mut solver = FastSolver::new(g.table.clone());
+    solver.set_reference_fallback(false);
+    let mut best: Vec<f64> = Vec::new();
+    let mut sols = Vec::new();
+    for rep in 0..repeats.max(1) {
+        solver.reset();
+        sols.clear();
+        let mut k = 0;
+        for p in &g.problems {
+            for &zf in &p.zf {
+                let t0 = Instant::now();
+                let s = solver.solve_distribution(&p.dist, zf)?;
+                let us = t0.elapsed().as_secs_f64() * 1e6;
+                if rep == 0 {
+                    best.push(us);
+                } else {
+                    best[k] = best[k].min(us);
+                }
+                sols.push(s);
+                k += 1;
+            }
+        }
+    }
+    let stats = solver.stats();
+    Ok((best, sols, stats))
+}
+
+/// The reference's support reproduces every moment on that moment's own scale
+/// (max(|b_j|, 1e-10·max_i |f_j(z_i)|), to 1e-6) and lies on the grid.
+fn valid(table: &super::GridTable, b: &[f64], sol: &Solution) -> bool {
+    let z = table.grid().points();
+    let mut mom = vec![0.0; table.m()];
+    for &(zs, w) in &sol.support {
+        let i = table.grid().nearest(zs);
+        if z[i] != zs {
+            return false;
+        }
+        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
+            *mj += w * v;
+        }
+    }
+    (0..table.m()).all(|j| {
+        let fmax = (0..table.n())
+            .map(|i| table.row(i)[j].abs())
+            .fold(0.0, f64::max);
+        (mom[j] - b[j]).abs() <= 1e-6 * b[j].abs().max(1e-10 * fmax)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Spread;
+
+    #[test]
+    fn spread_order_statistics() {
+        let v: Vec<f64> = (1..=1000).map(|k| k as f64).collect();
+        let s = Spread::of(&v);
+        assert_eq!(s.mean, 500.5);
+        assert_eq!(s.median, 500.0);
+        assert_eq!(s.p99, 990.0);
+        assert_eq!(s.p999, 999.0);
+        assert_eq!(s.max, 1000.0);
+        assert!(Spread::of(&[]).mean.is_nan());
+    }
+}
