@@ -434,7 +434,11 @@ fn pd_bound<T: Real, const SUPPORT: bool>(
                 out.case = case;
                 return out;
             }
-            Verdict::Quartic => {
+            Verdict::Quartic(hint, n) => {
+                if quartic_bracketed(c1, c2, ea, h0, h1, tol, &hint[..n], &mut out) {
+                    out.g = max(zero, min(one, out.g));
+                    return out;
+                }
                 quartic_candidates(c1, c2, ea, h0, h1, tol, &mut out);
                 if out.case == Case::Quartic {
                     out.g = max(zero, min(one, out.g));
@@ -493,23 +497,12 @@ fn pd_bound<T: Real, const SUPPORT: bool>(
     out
 }
 
-/// (III-q): Diracs at ±a, x ∈ (−a, a), y outside; τ = tan(x/2) = k σ solves the quartic of
-/// docs/tmsm.md §4.4. e^{ix} = (1 − τ² + 2iτ)/(1 + τ²), e^{iu} ∝ sin x + i(cos x − cos a),
-/// e^{iy} = e^{ix}·e^{−2iu}.
+/// The quartic of docs/tmsm.md §4.4 in σ = tan(x/2)/tan(a/2) ∈ (−1, 1), and tan(a/2).
 #[inline(always)]
-fn quartic_candidates<T: Real>(
-    c1: Cx<T>,
-    c2: Cx<T>,
-    ea: Cx<T>,
-    h0: T,
-    h1: Cx<T>,
-    tol: &Tol<T>,
-    out: &mut Outcome<T>,
-) {
+fn quartic_coef<T: Real>(ea: Cx<T>, h0: T, h1: Cx<T>) -> ([T; 5], T) {
     let one = T::ONE;
     let two = T::of(2.0);
     let (ca, sa) = (ea.re, ea.im);
-    let ema = ea.conj();
     let (p, q) = (h1.re, h1.im);
     let (am, bm) = (one - ca, one + ca);
     let k = sa / bm; // tan(a/2)
@@ -520,35 +513,114 @@ fn quartic_candidates<T: Real>(
         two * (h0 + p * (one + bm)) * k * k * k,
         q * bm * k * k * k * k,
     ];
-    let mut roots = [T::ZERO; 4];
-    let nr = roots_in_interval(coef, -one, one, &mut roots);
-    for &sigma in &roots[..nr] {
-        if sigma.abs() >= one {
-            continue;
-        }
-        let tau = k * sigma;
-        let t2 = tau * tau;
-        let inv = one / (one + t2);
-        let zx = Cx::new((one - t2) * inv, two * tau * inv);
-        let eu = Cx::new(zx.im, zx.re - ca).normalized().conj();
-        let zy = zx * eu * eu;
-        if zy.re >= ca {
-            continue;
-        }
-        let nodes = [ea, ema, zx, zy];
-        // G of this candidate is the weight at x; the other weights only if it improves G.
-        if weight4(&nodes, 2, c1, c2).partial_cmp(&out.g) != Some(std::cmp::Ordering::Less) {
-            continue;
-        }
-        let w = weights4(nodes, c1, c2);
-        if w.iter().all(|&wi| wi >= -tol.weight) && w[2] < out.g {
-            out.set(
-                w[2],
-                Case::Quartic,
-                &[(ea, w[0]), (ema, w[1]), (zx, w[2]), (zy, w[3])],
-            );
-        }
+    (coef, k)
+}
+
+/// The (III-q) candidate of a root σ: Diracs at ±a, x ∈ (−a, a), y outside, with
+/// τ = tan(x/2) = k σ, e^{ix} = (1 − τ² + 2iτ)/(1 + τ²), e^{iu} ∝ sin x + i(cos x − cos a),
+/// e^{iy} = e^{ix}·e^{−2iu}. Kept in `out` if y is lit, its weights are ≥ −tol and its G
+/// (the weight at x) is below `out.g`; true if kept.
+#[inline(always)]
+fn quartic_candidate<T: Real>(
+    sigma: T,
+    k: T,
+    c1: Cx<T>,
+    c2: Cx<T>,
+    ea: Cx<T>,
+    tol: &Tol<T>,
+    out: &mut Outcome<T>,
+) -> bool {
+    let one = T::ONE;
+    let two = T::of(2.0);
+    if sigma.abs() >= one {
+        return false;
     }
+    let ca = ea.re;
+    let tau = k * sigma;
+    let t2 = tau * tau;
+    let inv = one / (one + t2);
+    let zx = Cx::new((one - t2) * inv, two * tau * inv);
+    let eu = Cx::new(zx.im, zx.re - ca).normalized().conj();
+    let zy = zx * eu * eu;
+    if zy.re >= ca {
+        return false;
+    }
+    let ema = ea.conj();
+    let nodes = [ea, ema, zx, zy];
+    // G of this candidate is the weight at x; the other weights only if it improves G.
+    if out.g < one
+        && weight4(&nodes, 2, c1, c2).partial_cmp(&out.g) != Some(std::cmp::Ordering::Less)
+    {
+        return false;
+    }
+    let w = weights4(nodes, c1, c2);
+    if w.iter().all(|&wi| wi >= -tol.weight) && w[2] < out.g {
+        out.set(
+            w[2],
+            Case::Quartic,
+            &[(ea, w[0]), (ema, w[1]), (zx, w[2]), (zy, w[3])],
+        );
+        return true;
+    }
+    false
+}
+
+/// (III-q): every real root of the quartic in (−1, 1) is a candidate.
+#[inline(always)]
+fn quartic_candidates<T: Real>(
+    c1: Cx<T>,
+    c2: Cx<T>,
+    ea: Cx<T>,
+    h0: T,
+    h1: Cx<T>,
+    tol: &Tol<T>,
+    out: &mut Outcome<T>,
+) {
+    let (coef, k) = quartic_coef(ea, h0, h1);
+    let mut roots = [T::ZERO; 4];
+    let nr = roots_in_interval(coef, -T::ONE, T::ONE, &mut roots);
+    for &sigma in &roots[..nr] {
+        quartic_candidate(sigma, k, c1, c2, ea, tol, out);
+    }
+}
+
+/// (III-q) when every other structure is ruled out (certified path, §4.6): the quartic's root
+/// between the nodes in A of the canonical representations (`hint`), if the quartic changes
+/// sign there, by one safeguarded Newton solve. Every root with y lit gives a feasible dual
+/// polynomial p_y (§4.4), so a root whose weights are ≥ 0 is optimal. False (nothing kept) if
+/// the bracket has no sign change or its candidate is not feasible: the caller then isolates
+/// every root.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn quartic_bracketed<T: Real>(
+    c1: Cx<T>,
+    c2: Cx<T>,
+    ea: Cx<T>,
+    h0: T,
+    h1: Cx<T>,
+    tol: &Tol<T>,
+    hint: &[Cx<T>],
+    out: &mut Outcome<T>,
+) -> bool {
+    let one = T::ONE;
+    let (coef, k) = quartic_coef(ea, h0, h1);
+    let (mut lo, mut hi) = (one, -one);
+    for z in hint {
+        // σ = tan(x/2)/k with tan(x/2) = Im z/(1 + Re z).
+        let s = z.im / ((one + z.re) * k);
+        lo = min(lo, s);
+        hi = max(hi, s);
+    }
+    let (lo, hi) = (max(lo, -one), min(hi, one));
+    if !(lo < hi) {
+        return false;
+    }
+    let (plo, phi) = (roots::eval(&coef, lo), roots::eval(&coef, hi));
+    if plo == T::ZERO || phi == T::ZERO || (plo < T::ZERO) == (phi < T::ZERO) {
+        return false;
+    }
+    let sigma = roots::newton_in_bracket(&coef, 4, lo, hi, plo, phi);
+    quartic_candidate(sigma, k, c1, c2, ea, tol, out)
 }
 
 /// The other two atoms of the canonical 3-Dirac representation through ζ: P(z) = (z−ζ)(z²+αz+β)

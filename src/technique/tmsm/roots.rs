@@ -129,6 +129,12 @@ fn descartes_bound<T: Real>(c: &[T; 5], lo: T, hi: T) -> Option<u32> {
     Some(changes)
 }
 
+/// p(x) for a quartic.
+#[inline(always)]
+pub(super) fn eval<T: Real>(c: &[T; 5], x: T) -> T {
+    horner(c, 4, x).0
+}
+
 /// p(x), p′(x) and Σ|c_j||x|^j (the scale of p's rounding error at x).
 #[inline(always)]
 fn horner<T: Real>(c: &[T; 5], deg: usize, x: T) -> (T, T, T) {
@@ -145,7 +151,14 @@ fn horner<T: Real>(c: &[T; 5], deg: usize, x: T) -> (T, T, T) {
 /// The root of p in [a, b] given p(a) = `pa`, p(b) = `pb` of opposite signs: from the secant
 /// point, Newton steps kept inside the shrinking bracket (bisection otherwise), stopped when p
 /// is at rounding level, a step is at rounding level of x or the bracket has collapsed.
-fn newton_in_bracket<T: Real>(c: &[T; 5], deg: usize, mut a: T, mut b: T, pa: T, pb: T) -> T {
+pub(super) fn newton_in_bracket<T: Real>(
+    c: &[T; 5],
+    deg: usize,
+    mut a: T,
+    mut b: T,
+    pa: T,
+    pb: T,
+) -> T {
     let half = T::of(0.5);
     let iters = if is_single::<T>() { 30 } else { 60 };
     let stop = T::EPS * T::of(4.0);
