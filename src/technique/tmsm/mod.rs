@@ -612,7 +612,7 @@ fn quartic_bracketed<T: Real>(
         hi = max(hi, s);
     }
     let (lo, hi) = (max(lo, -one), min(hi, one));
-    if !(lo < hi) {
+    if lo.is_nan() || hi.is_nan() || lo >= hi {
         return false;
     }
     let (plo, phi) = (roots::eval(&coef, lo), roots::eval(&coef, hi));
