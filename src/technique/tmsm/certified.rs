@@ -21,7 +21,7 @@
 //! measure above). `None` means no certificate held (or a degenerate configuration): the caller
 //! enumerates every candidate (docs/tmsm.md §4) as before.
 
-use super::{min, Case, Cx, Tol};
+use super::{max, min, Case, Cx, Tol};
 use crate::technique::linalg::Real;
 
 /// The monic orthogonal polynomials Φ₁ = z − c₁, Φ₂ = z² + αz + β and their squared norms.
@@ -125,12 +125,12 @@ pub(super) fn bound<T: Real>(
     h1: Cx<T>,
     tol: &Tol<T>,
 ) -> Verdict<T> {
-    let least = tol.certify_weight;
     match symmetric(c1, c2, ea, h0, h1) {
-        Some((g, w)) if w >= least => return Verdict::Optimal(g, Case::Symmetric),
-        Some((_, w)) if w >= -tol.weight - tol.weight => return Verdict::Unknown,
+        Some((g, w)) if w >= tol.certify_weight => return Verdict::Optimal(g, Case::Symmetric),
+        Some((_, w)) if w >= tol.uncertain_below => return Verdict::Unknown,
         _ => {}
     }
+    let least = max(tol.certify_weight, T::ZERO);
     let sz = Szego::new(c1, c2);
     if sz.d2.is_nan() || sz.d2 < tol.certify_det {
         return Verdict::Unknown;
@@ -233,11 +233,19 @@ fn through<T: Real>(sz: &Szego<T>, ea: Cx<T>, least: T) -> Through<T> {
             // Tangency at x: cot((x − r)/2) = −cot((x − a)/2) − 2 cot((x − y)/2); r ∈ [−a, x)
             // ⇔ that is ≥ cot((x + a)/2). With cot(δ/2) = sin δ/(1 − cos δ) and the
             // denominators (> 0 for distinct points) multiplied out:
+            // x within rounding of a (du = 0) is the limit x → a⁻ (−cot → +∞), which the
+            // multiplied-out test gets right when Im u < 0; x within rounding of −a (dw = 0) is
+            // the limit x → −a⁺, where cot((x + a)/2) → +∞ and the test fails.
             let (u, v, w) = (x * ea.conj(), x * y.conj(), x * ea);
             let (du, dv, dw) = (one - u.re, one - v.re, one - w.re);
-            if !(du > T::ZERO && dv > T::ZERO && dw > T::ZERO) {
+            let at_a = du <= T::ZERO;
+            if (at_a && !(u.im < T::ZERO)) || !(dv > T::ZERO) || dw.is_nan() {
                 return Through::Unknown;
             }
+            if dw <= T::ZERO {
+                return Through::Failed([x, x], 1);
+            }
+            let du = max(du, T::ZERO);
             let lhs = -(u.im * dv + T::of(2.0) * v.im * du) * dw;
             let rhs = w.im * du * dv;
             if lhs >= rhs {

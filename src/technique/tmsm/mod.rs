@@ -162,9 +162,14 @@ struct Tol<T> {
     /// The certified fast path (§4.6) is used only when every weight of its candidate is at
     /// least this and D₂ = (1 − |c₁|²)(1 − |γ₂|²) is at least `certify_det`; closer to the
     /// boundary of the moment space the full enumeration decides (in f64 it reproduces the
-    /// previous implementation, which accepts weights down to −`weight`, to 1e-9).
+    /// previous implementation, which accepts weights down to −`weight`, to 1e-9). In f32
+    /// (judged against the f64 bound) (III-s) is accepted down to −`weight` like every
+    /// candidate of the enumeration, and canonical weights are not guarded.
     certify_weight: T,
     certify_det: T,
+    /// (III-s) with its least weight in [`uncertain_below`, `certify_weight`): undecided, the
+    /// full enumeration decides; below: infeasible.
+    uncertain_below: T,
 }
 
 impl<T: Real> Tol<T> {
@@ -176,8 +181,9 @@ impl<T: Real> Tol<T> {
                 double: T::of(1e-4),
                 weight: T::of(1e-4),
                 angle: T::of(1e-5),
-                certify_weight: T::ZERO,
+                certify_weight: T::of(-1e-4),
                 certify_det: T::ZERO,
+                uncertain_below: T::of(-1e-4),
             }
         } else {
             Tol {
@@ -187,6 +193,7 @@ impl<T: Real> Tol<T> {
                 angle: T::of(2.2e-10),
                 certify_weight: T::of(1e-6),
                 certify_det: T::of(1e-6),
+                uncertain_below: T::of(-4.4e-8),
             }
         }
     }
