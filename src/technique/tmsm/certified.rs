@@ -239,7 +239,8 @@ fn through<T: Real>(sz: &Szego<T>, ea: Cx<T>, least: T) -> Through<T> {
             let (u, v, w) = (x * ea.conj(), x * y.conj(), x * ea);
             let (du, dv, dw) = (one - u.re, one - v.re, one - w.re);
             let at_a = du <= T::ZERO;
-            if (at_a && !(u.im < T::ZERO)) || !(dv > T::ZERO) || dw.is_nan() {
+            let at_a_lit = at_a && (u.im >= T::ZERO || u.im.is_nan());
+            if at_a_lit || dv <= T::ZERO || dv.is_nan() || dw.is_nan() {
                 return Through::Unknown;
             }
             if dw <= T::ZERO {
