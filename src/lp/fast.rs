@@ -61,7 +61,7 @@ const TOL_DEP: f64 = 1e-8;
 /// Largest condition number (Frobenius) of a basis accepted at refactorisation.
 const MAX_COND: f64 = 1e12;
 /// Accurate pivots ([`Certifier::improve`]) tried on a basis that does not certify.
-const IMPROVE_STEPS: usize = 20;
+const IMPROVE_STEPS: usize = 4;
 /// Pivots between refactorisations of the basis inverse.
 const REFACTOR_EVERY: usize = 16;
 /// Consecutive degenerate pivots after which Bland's rule takes over.
