@@ -75,8 +75,9 @@ pub struct CorpusRow {
     pub fast_prefix_mean_us: f64,
     /// reference mean / fast mean on the same problems.
     pub speedup_mean: f64,
-    /// Reference answers that are errors, not optimal, or miss a moment on its own scale
-    /// (max(|b_j|, 1e-10·max|f_j|), to 1e-6): counted, not compared.
+    /// Reference answers that are errors, not optimal, or miss a moment by more than the
+    /// contract's 1e-9 of its own scale (max(|b_j|, 1e-10·max|f_j|)): counted, not compared.
+    /// On flat receivers G moves by up to 1e-2 within a 1e-6 moment tolerance (docs/lp.md).
     pub reference_invalid: usize,
     /// max |G_fast − G_reference| where both are optimal and the reference answer valid.
     pub max_abs_diff: f64,
@@ -190,7 +191,7 @@ fn time_group(
 }
 
 /// The reference's support reproduces every moment on that moment's own scale
-/// (max(|b_j|, 1e-10·max_i |f_j(z_i)|), to 1e-6) and lies on the grid.
+/// (max(|b_j|, 1e-10·max_i |f_j(z_i)|), to the contract's 1e-9) and lies on the grid.
 fn valid(table: &super::GridTable, b: &[f64], sol: &Solution) -> bool {
     let z = table.grid().points();
     let mut mom = vec![0.0; table.m()];
@@ -207,7 +208,7 @@ fn valid(table: &super::GridTable, b: &[f64], sol: &Solution) -> bool {
         let fmax = (0..table.n())
             .map(|i| table.row(i)[j].abs())
             .fold(0.0, f64::max);
-        (mom[j] - b[j]).abs() <= 1e-6 * b[j].abs().max(1e-10 * fmax)
+        (mom[j] - b[j]).abs() <= 1e-9 * b[j].abs().max(1e-10 * fmax)
     })
 }
 
