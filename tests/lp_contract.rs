@@ -181,8 +181,8 @@ fn adversarial_corpus_is_certified() {
     }
     eprintln!("adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed");
     assert!(solves > 10_000, "{solves}");
-    // NOT MET yet (docs/lp.md): bases of neighbouring grid points beyond f64 (power bases
-    // m ≥ 5, clusters) are not certified (answered as before, counted as uncertified); this
+    // NOT MET yet (docs/lp.md): on bases of neighbouring grid points (power bases m ≥ 5,
+    // clusters, flat receivers) and mixed exp(±40z) bases about 6 % come back `failed`; this
     // bounds the share so that it cannot grow unnoticed.
     assert!(failed * 10 <= solves, "{failed} of {solves} failed");
 }
