@@ -79,8 +79,11 @@ pub struct Certifier {
     fmax: Vec<f64>,
     /// Floor of σ_j: min(1e-30 max_i |f_j(z_i)|, min_i |f_j(z_i)| ≠ 0).
     floor: Vec<f64>,
-    /// f_j does not change sign on the grid (then w_i ≤ b_j / f_j(z_i) for feasible w).
-    definite: Vec<bool>,
+    /// (row, column-major 1/f_j(z_i), 0 where f_j(z_i) = 0) of the sign-definite rows: the
+    /// caps u_i without a division per grid point.
+    finv: Vec<(usize, Vec<f64>)>,
+    /// The duals y and reduced costs d belong to the basis last checked.
+    duals_fresh: bool,
     /// The rows the bases are square on (function indices, 0 = the constant): the numerically
     /// independent ones. The others are checked through the residual only.
     rows: Vec<usize>,
@@ -137,14 +140,23 @@ impl Certifier {
             };
         }
         let r = rows.len();
+        let finv = (1..=m)
+            .filter(|&j| definite[j])
+            .map(|j| {
+                let col = &fcols[(j - 1) * n..j * n];
+                let inv = col.iter().map(|&f| if f != 0.0 { 1.0 / f } else { 0.0 });
+                (j, inv.collect())
+            })
+            .collect();
         Certifier {
             n,
             m,
+            finv,
+            duals_fresh: false,
             z: table.grid().points().to_vec(),
             fcols,
             fmax,
             floor,
-            definite,
             rows,
             sigma: vec![1.0; m + 1],
             scale: vec![1.0; m + 1],
@@ -228,6 +240,7 @@ impl Certifier {
     }
 
     fn check(&mut self, b: &[f64], kf: usize, basis: &[usize]) -> Result<Certified, String> {
+        self.duals_fresh = false;
         self.set_moments(b);
         let r = self.rows.len();
         self.factored = false;
@@ -305,10 +318,12 @@ impl Certifier {
             if !self.factored {
                 break;
             }
-            self.dual(basis, kf);
-            let y = std::mem::take(&mut self.y);
-            self.reduced(&y, Some(kf));
-            self.y = y;
+            if !self.duals_fresh {
+                self.dual(basis, kf);
+                let y = std::mem::take(&mut self.y);
+                self.reduced(&y, Some(kf));
+                self.y = y;
+            }
             if !self.step(basis) {
                 break;
             }
@@ -438,10 +453,9 @@ impl Certifier {
     /// w has w_i ≤ u_i.
     fn cap(&self, i: usize) -> f64 {
         let mut u = 1.0f64;
-        for j in 1..=self.m {
-            let f = self.fcols[(j - 1) * self.n + i];
-            if self.definite[j] && f != 0.0 {
-                u = u.min((self.bbar[j] / f).max(0.0) * (1.0 + 1e-12));
+        for (j, inv) in &self.finv {
+            if inv[i] != 0.0 {
+                u = u.min((self.bbar[*j] * inv[i]).max(0.0) * (1.0 + 1e-12));
             }
         }
         u
@@ -563,6 +577,7 @@ impl Certifier {
         self.reduced(&y, Some(kf));
         let yb = -residual2(0.0, (0..r).map(|k| (y[k], self.bbar[self.rows[k]])));
         self.y = y;
+        self.duals_fresh = true;
         yb + self.min_lower().min(0.0).max(self.capped_lower())
     }
 
