@@ -38,6 +38,10 @@ pub struct Args {
     /// `--corpus adversarial`: also the n = 4096 and 8192 tables.
     #[arg(long)]
     pub large: bool,
+    /// `--corpus stacks`: the basis (comma-separated catalog names or formulas, e.g.
+    /// "exp(40z),tanh(10(z-0.5))") instead of the power basis z…z^m.
+    #[arg(long)]
+    pub basis: Option<String>,
     /// Grid sizes n (comma-separated; each 2..=100000).
     #[arg(long, value_delimiter = ',', default_values_t = vec![256usize, 1024, 4096], value_parser = usize_in(2, 100_000))]
     pub n: Vec<usize>,
@@ -168,13 +172,20 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         None => crate::render::default_dataset(args.resolution)?,
     };
     let windows = crate::metrics::windows::stacks_corpus(&stacks, args.problems, args.seed)?;
-    let basis: Vec<String> = (1..=args.m).map(|k| format!("z^{k}")).collect();
+    let basis: Vec<String> = match &args.basis {
+        Some(list) => crate::basis::split_list(list),
+        None => (1..=args.m).map(|k| format!("z^{k}")).collect(),
+    };
+    let catalog = crate::basis::Catalog::embedded();
     args.n
         .iter()
         .map(|&n| {
             let grid = crate::Grid::uniform(n)?;
-            let table = crate::lp::instances::power_table(&grid, args.m)?;
-            let name = format!("stacks, power basis m = {} @ {n}", args.m);
+            let table = match &args.basis {
+                Some(_) => corpus::table_for(&catalog, &grid, &basis)?,
+                None => crate::lp::instances::power_table(&grid, args.m)?,
+            };
+            let name = format!("stacks, basis {} @ {n}", basis.join(", "));
             corpus::from_windows(&name, &basis, &table, &windows.dists, &windows.zfs)
         })
         .collect()
