@@ -8,7 +8,7 @@ use momentlab::lp::instances::{
     SmoothFn,
 };
 use momentlab::lp::reference::ReferenceSolver;
-use momentlab::lp::{GridTable, MomentSolver, Solution, Status};
+use momentlab::lp::{support_reproduces, GridTable, MomentSolver, Solution, Status};
 use momentlab::Grid;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
@@ -65,28 +65,6 @@ fn check_support(
         }
     }
     Ok(())
-}
-
-/// Whether the reference's answer reproduces every moment on that moment's own scale
-/// (max(|b_j|, 1e-10 · max_i |f_j(z_i)|), to 1e-6): microlp's absolute tolerances accept
-/// supports that miss a tiny moment (exp(−40z) at z ≈ 0.8 is 1e-14) by orders of magnitude.
-fn reference_is_valid(table: &GridTable, b: &[f64], sol: &Solution) -> bool {
-    let z = table.grid().points();
-    let mut mom = vec![0.0; table.m()];
-    for &(zs, w) in &sol.support {
-        let Some(i) = z.iter().position(|&v| v == zs) else {
-            return false;
-        };
-        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
-            *mj += w * v;
-        }
-    }
-    (0..table.m()).all(|j| {
-        let fmax = (0..table.n())
-            .map(|i| table.row(i)[j].abs())
-            .fold(0.0, f64::max);
-        (mom[j] - b[j]).abs() <= 1e-6 * b[j].abs().max(1e-10 * fmax)
-    })
 }
 
 /// A random distinct m-subset of the built-in smooth functions.
@@ -357,7 +335,7 @@ fn run_family(
                         .failures
                         .push(format!("fallback to the reference: {what}"));
                 }
-                if r.status != Status::Optimal || !reference_is_valid(&table, &b, &r) {
+                if r.status != Status::Optimal || !support_reproduces(&table, &b, &r, 1e-6) {
                     // The mixture certifies feasibility: a reference misreport (microlp's
                     // phase-1 tolerances, or a support that misses a tiny moment). The fast solution must still be a valid
                     // distribution no worse than the mixture itself.

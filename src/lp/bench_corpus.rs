@@ -9,7 +9,7 @@
 use super::corpus::Group;
 use super::fast::FastSolver;
 use super::reference::ReferenceSolver;
-use super::{distribution_moments, MomentSolver, Solution, Status};
+use super::{distribution_moments, support_reproduces, MomentSolver, Solution, Status};
 use anyhow::Result;
 use std::time::Instant;
 
@@ -137,7 +137,10 @@ pub fn run(
             ref_us.push(t0.elapsed().as_secs_f64() * 1e6);
             prefix_us.push(times[k]);
             match r {
-                Ok(r) if r.status == Status::Optimal && valid(&g.table, &b, &r) => {
+                Ok(r)
+                    if r.status == Status::Optimal
+                        && support_reproduces(&g.table, &b, &r, 1e-9) =>
+                {
                     if sols[k].status == Status::Optimal {
                         row.max_abs_diff = row.max_abs_diff.max((sols[k].g - r.g).abs());
                     }
@@ -193,28 +196,6 @@ fn time_group(
     stats.escalations -= before.escalations;
     stats.fallbacks -= before.fallbacks;
     Ok((best, sols, stats))
-}
-
-/// The reference's support reproduces every moment on that moment's own scale
-/// (max(|b_j|, 1e-10·max_i |f_j(z_i)|), to the contract's 1e-9) and lies on the grid.
-fn valid(table: &super::GridTable, b: &[f64], sol: &Solution) -> bool {
-    let z = table.grid().points();
-    let mut mom = vec![0.0; table.m()];
-    for &(zs, w) in &sol.support {
-        let i = table.grid().nearest(zs);
-        if z[i] != zs {
-            return false;
-        }
-        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
-            *mj += w * v;
-        }
-    }
-    (0..table.m()).all(|j| {
-        let fmax = (0..table.n())
-            .map(|i| table.row(i)[j].abs())
-            .fold(0.0, f64::max);
-        (mom[j] - b[j]).abs() <= 1e-9 * b[j].abs().max(1e-10 * fmax)
-    })
 }
 
 #[cfg(test)]

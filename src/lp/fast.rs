@@ -38,6 +38,7 @@
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
 use super::certify::{Certified, Certifier};
+use super::dense::{two_prod, two_sum};
 use super::pricing::ColumnTable;
 use super::reference::ReferenceSolver;
 use super::scaled::{Found, ScaledSimplex};
@@ -1799,30 +1800,6 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
 
 fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
-}
-
-/// Exact product a·b = p + e (Dekker's splitting; no FMA needed).
-#[inline]
-fn two_prod(a: f64, b: f64) -> (f64, f64) {
-    const SPLIT: f64 = 134_217_729.0; // 2^27 + 1
-    let p = a * b;
-    let split = |v: f64| {
-        let c = SPLIT * v;
-        let h = c - (c - v);
-        (h, v - h)
-    };
-    let (ah, al) = split(a);
-    let (bh, bl) = split(b);
-    let e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
-    (p, e)
-}
-
-/// Exact sum a + b = s + e (Knuth's TwoSum).
-#[inline]
-fn two_sum(a: f64, b: f64) -> (f64, f64) {
-    let s = a + b;
-    let bb = s - a;
-    (s, (a - (s - bb)) + (b - bb))
 }
 
 /// out = A v for row-major r × r A.

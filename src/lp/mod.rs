@@ -179,6 +179,29 @@ pub fn settled_g(sol: &Result<Solution>) -> Option<f64> {
     }
 }
 
+/// Whether `sol`'s support lies on the grid and reproduces every moment to `tol` of that
+/// moment's own scale max(|b_j|, 1e-10 · max_i |f_j(z_i)|): how an answer that did not come
+/// with a certificate (the reference's) is judged before it is compared.
+pub fn support_reproduces(table: &GridTable, b: &[f64], sol: &Solution, tol: f64) -> bool {
+    let z = table.grid().points();
+    let mut mom = vec![0.0; table.m()];
+    for &(zs, w) in &sol.support {
+        let i = table.grid().nearest(zs);
+        if z[i] != zs {
+            return false;
+        }
+        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
+            *mj += w * v;
+        }
+    }
+    (0..table.m()).all(|j| {
+        let fmax = (0..table.n())
+            .map(|i| table.row(i)[j].abs())
+            .fold(0.0, f64::max);
+        (mom[j] - b[j]).abs() <= tol * b[j].abs().max(1e-10 * fmax)
+    })
+}
+
 /// b = Σ w_i b(z_i) / Σ w_i for a distribution [(grid index, weight)] on the table's grid.
 pub fn distribution_moments(table: &GridTable, dist: &[(u32, f64)]) -> Result<Vec<f64>> {
     let (n, m) = (table.n(), table.m());
