@@ -25,6 +25,7 @@
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 13
 
 use super::dense::{inv_pow2, residual2, DdLu, Lu};
+use super::row_kernels;
 use super::GridTable;
 
 /// Relative tolerance on every moment (against its row scale σ_j).
@@ -72,6 +73,8 @@ pub struct Certified {
 pub struct Certifier {
     n: usize,
     m: usize,
+    /// The row kernels may use AVX-512 (detected once).
+    avx512: bool,
     z: Vec<f64>,
     /// Column-major m × n: fcols[(j−1)·n + i] = f_j(z_i).
     fcols: Vec<f64>,
@@ -111,6 +114,9 @@ pub struct Certifier {
     tmp: Vec<f64>,
     d: Vec<f64>,
     e: Vec<f64>,
+    /// −α and Σ|·| of a row of B⁻¹A over the grid (dual steps of [`Self::improve`]).
+    ra: Vec<f64>,
+    rm: Vec<f64>,
 }
 
 impl Certifier {
@@ -151,6 +157,7 @@ impl Certifier {
         Certifier {
             n,
             m,
+            avx512: row_kernels::has_avx512(),
             finv,
             duals_fresh: false,
             z: table.grid().points().to_vec(),
@@ -175,6 +182,8 @@ impl Certifier {
             tmp: vec![0.0; r],
             d: vec![0.0; n],
             e: vec![0.0; n],
+            ra: vec![0.0; n],
+            rm: vec![0.0; n],
         }
     }
 
@@ -345,18 +354,18 @@ impl Certifier {
             for k in 0..r {
                 self.tmp[k] *= self.scale[self.rows[k]];
             }
+            // α_i = Σ_k tmp_k ā_ki for every column (as −α in `ra`, Σ|·| in `rm`).
+            let (ra, rm) = (&mut self.ra, &mut self.rm);
+            ra.fill(-self.tmp[0]);
+            rm.fill(self.tmp[0].abs());
+            for (k, &j) in self.rows.iter().enumerate().skip(1) {
+                let col = &self.fcols[(j - 1) * self.n..j * self.n];
+                row_kernels::sub_scaled_abs(ra, rm, self.tmp[k], col, self.avx512);
+            }
             let mut best: Option<(usize, f64)> = None;
             for i in 0..self.n {
-                if basis.contains(&i) {
-                    continue;
-                }
-                let a: f64 = (0..r)
-                    .map(|k| self.tmp[k] * self.entry(self.rows[k], i))
-                    .sum();
-                let mag: f64 = (0..r)
-                    .map(|k| (self.tmp[k] * self.entry(self.rows[k], i)).abs())
-                    .sum();
-                if a < -1e-9 * mag.max(f64::MIN_POSITIVE) {
+                let a = -self.ra[i];
+                if a < -1e-9 * self.rm[i].max(f64::MIN_POSITIVE) && !basis.contains(&i) {
                     let ratio = self.d[i].max(0.0) / -a;
                     if best.is_none_or(|(_, r0)| ratio < r0) {
                         best = Some((i, ratio));
@@ -373,14 +382,20 @@ impl Certifier {
         }
         // Primal step on the most negative capped reduced cost.
         let mut best: Option<(usize, f64)> = None;
-        for i in 0..self.n {
-            let lo = self.d[i] - GAMMA * self.e[i];
-            if lo < 0.0 && !basis.contains(&i) {
-                let v = lo * self.cap(i);
-                if best.is_none_or(|(_, v0)| v < v0) {
-                    best = Some((i, v));
-                    if self.bland {
-                        break;
+        'scan: for lo in (0..self.n).step_by(row_kernels::BLOCK) {
+            let hi = (lo + row_kernels::BLOCK).min(self.n);
+            if !row_kernels::any_below(&self.d[lo..hi], &self.e[lo..hi], GAMMA) {
+                continue;
+            }
+            for i in lo..hi {
+                let low = self.d[i] - GAMMA * self.e[i];
+                if low < 0.0 && !basis.contains(&i) {
+                    let v = low * self.cap(i);
+                    if best.is_none_or(|(_, v0)| v < v0) {
+                        best = Some((i, v));
+                        if self.bland {
+                            break 'scan;
+                        }
                     }
                 }
             }
@@ -586,11 +601,18 @@ impl Certifier {
     /// Σ_i w_i d_i that stays tight where huge columns (a steep exponential near its peak) can
     /// only carry tiny weights.
     fn capped_lower(&self) -> f64 {
+        let (d, e) = (&self.d, &self.e);
         let mut sum = 0.0;
-        for (i, (d, e)) in self.d.iter().zip(&self.e).enumerate() {
-            let lo = d - GAMMA * e;
-            if lo < 0.0 {
-                sum += self.cap(i) * lo;
+        for lo in (0..self.n).step_by(row_kernels::BLOCK) {
+            let hi = (lo + row_kernels::BLOCK).min(self.n);
+            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], GAMMA) {
+                continue;
+            }
+            for i in lo..hi {
+                let v = d[i] - GAMMA * e[i];
+                if v < 0.0 {
+                    sum += self.cap(i) * v;
+                }
             }
         }
         sum
@@ -600,49 +622,45 @@ impl Certifier {
     fn reduced(&mut self, y: &[f64], kf: Option<usize>) {
         let n = self.n;
         let (d, e) = (&mut self.d, &mut self.e);
-        let sign = if kf.is_some() { 1.0 } else { -1.0 };
-        // Farkas: d holds y·ā_i (sign −1 below undoes the subtraction).
+        // Farkas: d holds y·ā_i (the sign is flipped at the end).
         let y0 = y[0];
-        for i in 0..n {
-            let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
-            d[i] = p - y0;
-            e[i] = p + y0.abs();
-        }
-        for (k, &j) in self.rows.iter().enumerate().skip(1) {
-            let (yk, col) = (y[k], &self.fcols[(j - 1) * n..j * n]);
-            for i in 0..n {
-                let t = yk * col[i];
-                d[i] -= t;
-                e[i] += t.abs();
-            }
+        let k = kf.unwrap_or(0).min(n);
+        d[..k].fill(1.0 - y0);
+        e[..k].fill(1.0 + y0.abs());
+        d[k..].fill(-y0);
+        e[k..].fill(y0.abs());
+        for (yk, &j) in y.iter().zip(&self.rows).skip(1) {
+            let col = &self.fcols[(j - 1) * n..j * n];
+            row_kernels::sub_scaled_abs(d, e, *yk, col, self.avx512);
         }
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
-        let rows = &self.rows;
-        let fcols = &self.fcols;
-        for i in 0..n {
-            if d[i] - GAMMA * e[i] < 0.0 {
-                let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
-                let terms = rows.iter().enumerate().map(|(k, &j)| {
-                    let a = if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
-                    (y[k], a)
-                });
-                let exact = residual2(p, terms);
-                d[i] = exact;
-                e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
+        let (rows, fcols) = (&self.rows, &self.fcols);
+        for lo in (0..n).step_by(row_kernels::BLOCK) {
+            let hi = (lo + row_kernels::BLOCK).min(n);
+            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], GAMMA) {
+                continue;
+            }
+            for i in lo..hi {
+                if d[i] - GAMMA * e[i] < 0.0 {
+                    let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
+                    let terms = rows.iter().enumerate().map(|(k, &j)| {
+                        let a = if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
+                        (y[k], a)
+                    });
+                    let exact = residual2(p, terms);
+                    d[i] = exact;
+                    e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
+                }
             }
         }
-        if sign < 0.0 {
+        if kf.is_none() {
             d.iter_mut().for_each(|v| *v = -*v);
         }
     }
 
     /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
     fn min_lower(&self) -> f64 {
-        self.d
-            .iter()
-            .zip(&self.e)
-            .map(|(d, e)| d - GAMMA * e)
-            .fold(f64::INFINITY, f64::min)
+        row_kernels::min_lower(&self.d, &self.e, GAMMA)
     }
 }

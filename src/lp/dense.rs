@@ -44,10 +44,14 @@ pub fn residual2(c: f64, terms: impl Iterator<Item = (f64, f64)>) -> f64 {
 /// The power of two 2^e closest above or at 1/v (v > 0 finite): an exact scale factor, so that
 /// scaling by it introduces no rounding. Clamped to the normal range.
 pub fn inv_pow2(v: f64) -> f64 {
-    let e = if v > 0.0 && v.is_finite() {
-        -(v.log2().floor() as i32)
-    } else {
+    let biased = ((v.to_bits() >> 52) & 0x7ff) as i32;
+    let e = if !(v > 0.0 && v.is_finite()) {
         0
+    } else if biased > 0 {
+        // floor(log2 v), exactly, from the exponent field of a normal number.
+        1023 - biased
+    } else {
+        -(v.log2().floor() as i32)
     };
     pow2(e.clamp(-1000, 1000))
 }

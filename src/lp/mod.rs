@@ -16,6 +16,7 @@ pub mod fast;
 pub mod instances;
 mod pricing;
 pub mod reference;
+mod row_kernels;
 pub mod scaled;
 
 use crate::Grid;

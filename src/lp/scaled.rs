@@ -20,6 +20,7 @@
 
 use super::certify::Certifier;
 use super::dense::{inv_pow2, Dd, DdLu};
+use super::row_kernels;
 
 const TOL_D: f64 = 1e-11;
 const TOL_PIV: f64 = 1e-10;
@@ -45,8 +46,17 @@ pub struct ScaledSimplex {
     r: usize,
     /// Scaled columns, column i at acol[i·r..(i+1)·r].
     acol: Vec<f64>,
+    /// The same scaled entries row by row: arow[k·n + i] (the pricing kernel's layout).
+    arow: Vec<f64>,
     /// Column scales (exact powers of two).
     kappa: Vec<f64>,
+    /// Eligibility tolerance of each column, TOL_D · min(1, κ_i).
+    tol: Vec<f64>,
+    /// Reduced costs of every column and their magnitudes (pricing workspace).
+    d: Vec<f64>,
+    e: Vec<f64>,
+    /// The row kernels may use AVX-512.
+    avx512: bool,
     rhs: Vec<f64>,
     /// Basis: grid indices, or n + k for the artificial of row k.
     basis: Vec<usize>,
@@ -114,7 +124,12 @@ impl ScaledSimplex {
         self.n = n;
         self.r = r;
         self.acol.resize(n * r, 0.0);
+        self.arow.resize(n * r, 0.0);
         self.kappa.resize(n, 1.0);
+        self.d.resize(n, 0.0);
+        self.tol.resize(n, 0.0);
+        self.e.resize(n, 0.0);
+        self.avx512 = row_kernels::has_avx512();
         let s = cert.row_scales();
         for i in 0..n {
             let col = &mut self.acol[i * r..(i + 1) * r];
@@ -126,6 +141,10 @@ impl ScaledSimplex {
             let kap = inv_pow2(big);
             col.iter_mut().for_each(|v| *v *= kap);
             self.kappa[i] = kap;
+            self.tol[i] = TOL_D * kap.min(1.0);
+            for k in 0..r {
+                self.arow[k * n + i] = col[k];
+            }
         }
         self.rhs = rows.iter().map(|&j| s[j] * cert.bbar(j)).collect();
         self.basis.resize(r, 0);
@@ -248,21 +267,11 @@ impl ScaledSimplex {
         self.lu.solve_t_dd(&c[..self.r], &mut self.y);
     }
 
-    /// d_q = c_q − y·a_q: in f64 when its rounding bound settles the comparison with −tol,
-    /// else in double-double.
-    fn reduced(&self, q: usize, c: f64, tol: f64) -> f64 {
+    /// d_q = c_q − y·a_q in double-double (where the f64 value's rounding bound leaves the
+    /// comparison with −tol open).
+    fn reduced_dd(&self, q: usize, c: f64) -> f64 {
         let r = self.r;
         let a = &self.acol[q * r..(q + 1) * r];
-        let (mut d, mut e) = (c, c.abs());
-        for k in 0..r {
-            let t = self.y[k].0 * a[k];
-            d -= t;
-            e += t.abs();
-        }
-        let err = 4.0 * (r as f64 + 2.0) * f64::EPSILON * e;
-        if (d + tol).abs() > err {
-            return d;
-        }
         let mut acc = Dd::from(c);
         for k in 0..r {
             acc = acc.add(self.y[k].mul(Dd::from(a[k])).neg());
@@ -270,21 +279,50 @@ impl ScaledSimplex {
         acc.0 + acc.1
     }
 
-    /// Entering column (Dantzig, or Bland's first improving index).
-    fn price(&self, kf: usize, phase1: bool, bland: bool) -> Option<usize> {
+    /// Entering column (Dantzig, or Bland's first improving index). The reduced costs
+    /// d_i = c_i − y·a_i of all columns are computed in f64 with their magnitudes
+    /// e_i = |c_i| + Σ_k |y_k a_ki| (one vectorised pass per row), and recomputed in
+    /// double-double where the rounding bound 4(r+2)ε·e_i leaves the sign of d_i + tol open.
+    fn price(&mut self, kf: usize, phase1: bool, bland: bool) -> Option<usize> {
+        let (n, r) = (self.n, self.r);
+        let k = if phase1 { 0 } else { kf.min(n) };
+        self.d[..k].copy_from_slice(&self.kappa[..k]);
+        self.e[..k].copy_from_slice(&self.kappa[..k]);
+        self.d[k..].fill(0.0);
+        self.e[k..].fill(0.0);
+        for (t, y) in self.y.iter().enumerate() {
+            let row = &self.arow[t * n..(t + 1) * n];
+            row_kernels::sub_scaled_abs(&mut self.d, &mut self.e, y.0, row, self.avx512);
+        }
+        let factor = 4.0 * (r as f64 + 2.0) * f64::EPSILON;
         let mut best = (None, 0.0);
-        for i in 0..self.n {
-            if self.is_basic[i] {
+        for lo in (0..n).step_by(row_kernels::BLOCK) {
+            let hi = (lo + row_kernels::BLOCK).min(n);
+            // No column of the block can be eligible: d_i + tol_i > factor · e_i everywhere.
+            if !row_kernels::any_below_shifted(
+                &self.d[lo..hi],
+                &self.tol[lo..hi],
+                &self.e[lo..hi],
+                factor,
+            ) {
                 continue;
             }
-            // Eligible when the reduced cost is below −TOL_D in scaled or in original units
-            // (d_i = d̃_i / κ_i: a large column's weight moves G by its unscaled value).
-            let tol = TOL_D * self.kappa[i].min(1.0);
-            let d = self.reduced(i, self.cost(i, kf, phase1), tol);
-            if d < -tol && d < best.1 {
-                best = (Some(i), d);
-                if bland {
-                    break;
+            for i in lo..hi {
+                if self.is_basic[i] {
+                    continue;
+                }
+                // Eligible when the reduced cost is below −TOL_D in scaled or in original units
+                // (d_i = d̃_i / κ_i: a large column's weight moves G by its unscaled value).
+                let tol = self.tol[i];
+                let mut d = self.d[i];
+                if (d + tol).abs() <= factor * self.e[i] {
+                    d = self.reduced_dd(i, self.cost(i, kf, phase1));
+                }
+                if d < -tol && d < best.1 {
+                    best = (Some(i), d);
+                    if bland {
+                        return best.0;
+                    }
                 }
             }
         }

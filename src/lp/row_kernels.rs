@@ -1,0 +1,111 @@
+//! Kernels over the grid points of one row of the LP, used by the certificate
+//! ([`super::certify`]): pure functions over slices, written so the compiler vectorises them
+//! (no fused multiply-add: the results are the same, bit for bit, on every path).
+
+/// Grid points per block of [`any_below`] scans.
+pub const BLOCK: usize = 16;
+
+/// Whether the AVX-512 versions may run on this CPU.
+pub fn has_avx512() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("avx512f")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+/// d_i −= y·f_i and e_i += |y·f_i| (one row of d = p − Σ_j y_j f_j(z_i) and of its magnitude).
+pub fn sub_scaled_abs(d: &mut [f64], e: &mut [f64], y: f64, f: &[f64], avx512: bool) {
+    #[cfg(target_arch = "x86_64")]
+    if avx512 {
+        // SAFETY: `avx512` is only true where the CPU has AVX-512F (`has_avx512`).
+        unsafe { sub_scaled_abs_avx512(d, e, y, f) };
+        return;
+    }
+    let _ = avx512;
+    sub_scaled_abs_generic(d, e, y, f);
+}
+
+#[inline(always)]
+fn sub_scaled_abs_generic(d: &mut [f64], e: &mut [f64], y: f64, f: &[f64]) {
+    let n = d.len().min(e.len()).min(f.len());
+    let (d, e, f) = (&mut d[..n], &mut e[..n], &f[..n]);
+    for i in 0..n {
+        let t = y * f[i];
+        d[i] -= t;
+        e[i] += t.abs();
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sub_scaled_abs_avx512(d: &mut [f64], e: &mut [f64], y: f64, f: &[f64]) {
+    sub_scaled_abs_generic(d, e, y, f)
+}
+
+/// Whether some d_i − γ e_i < 0 (d and e of equal length).
+pub fn any_below(d: &[f64], e: &[f64], gamma: f64) -> bool {
+    let mut hit = false;
+    for (d, e) in d.iter().zip(e) {
+        hit |= d - gamma * e < 0.0;
+    }
+    hit
+}
+
+/// Whether some d_i + t_i ≤ γ e_i, i.e. d_i + t_i may be negative within the rounding bound
+/// γ e_i (the slices of equal length).
+pub fn any_below_shifted(d: &[f64], t: &[f64], e: &[f64], gamma: f64) -> bool {
+    let mut hit = false;
+    for ((d, t), e) in d.iter().zip(t).zip(e) {
+        hit |= d + t <= gamma * e;
+    }
+    hit
+}
+
+/// min_i (d_i − γ e_i) (+∞ for no points).
+pub fn min_lower(d: &[f64], e: &[f64], gamma: f64) -> f64 {
+    let mut lanes = [f64::INFINITY; 4];
+    let (dc, ec) = (d.chunks_exact(4), e.chunks_exact(4));
+    let (dr, er) = (dc.remainder(), ec.remainder());
+    for (d4, e4) in dc.zip(ec) {
+        for k in 0..4 {
+            lanes[k] = lanes[k].min(d4[k] - gamma * e4[k]);
+        }
+    }
+    let tail = dr.iter().zip(er).map(|(d, e)| d - gamma * e);
+    tail.chain(lanes).fold(f64::INFINITY, f64::min)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sub_scaled_abs_is_the_same_on_every_path() {
+        let f: Vec<f64> = (0..37).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+        let mut d1 = vec![0.5; 37];
+        let mut e1 = vec![0.5; 37];
+        let (mut d2, mut e2) = (d1.clone(), e1.clone());
+        sub_scaled_abs(&mut d1, &mut e1, -0.3, &f, false);
+        sub_scaled_abs(&mut d2, &mut e2, -0.3, &f, has_avx512());
+        assert_eq!(d1, d2);
+        assert_eq!(e1, e2);
+        assert_eq!(d1[3], 0.5 + 0.3 * f[3]);
+        assert_eq!(e1[3], 0.5 + (0.3 * f[3]).abs());
+    }
+
+    #[test]
+    fn min_lower_and_any_below_match_a_scan() {
+        let d: Vec<f64> = (0..23).map(|i| (i as f64 - 11.3).abs() * 1e-15).collect();
+        let e = vec![1.0; 23];
+        let g = 16.0 * f64::EPSILON;
+        let want = d.iter().map(|d| d - g).fold(f64::INFINITY, f64::min);
+        assert_eq!(min_lower(&d, &e, g), want);
+        assert!(any_below(&d, &e, g));
+        assert!(!any_below(&d, &e, 0.0));
+        assert_eq!(min_lower(&[], &[], g), f64::INFINITY);
+    }
+}
