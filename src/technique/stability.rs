@@ -495,15 +495,17 @@ pub fn sharp_bound(tech: &dyn Technique, sample: &Sample, grid_points: usize, so
     }) else {
         return f64::NAN;
     };
-    let b: Vec<f64> = moments(tech, &sample.atoms)
+    // The sample's Diracs are grid points: the LP gets the distribution itself (its moments
+    // formed from the table, and a feasible start), as the pipeline does.
+    let dist: Vec<(u32, f64)> = sample
+        .atoms
         .iter()
-        .zip(&scale)
-        .map(|(b, s)| b * s)
+        .map(|&(z, w)| (grid.nearest(z) as u32, w))
         .collect();
     let Ok(mut s) = make_solver(solver, table) else {
         return f64::NAN;
     };
-    match s.solve(&b, sample.zf) {
+    match s.solve_distribution(&dist, sample.zf) {
         Ok(sol) if sol.status == Status::Optimal => sol.g,
         _ => f64::NAN,
     }
