@@ -627,7 +627,7 @@ impl Certifier {
                 .map(|v| v * v)
                 .sum::<f64>()
                 .sqrt();
-            if !(nrm > 1e-14 * n0) {
+            if nrm.is_nan() || nrm <= 1e-14 * n0 {
                 return None;
             }
             rm[c * s + c] = nrm;
