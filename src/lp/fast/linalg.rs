@@ -1,0 +1,231 @@
+//! Dense linear algebra on the r ≤ 9 rows of the transformed LP: dot products, the explicit
+//! inverse (Gauss–Jordan), least squares by Gram–Schmidt, and greedy maximal-volume bases.
+
+/// a·b.
+pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// ‖a‖₂.
+pub(super) fn norm(a: &[f64]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// out = A v for row-major r × r A.
+#[inline]
+pub(super) fn mat_vec(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
+    for t in 0..r {
+        out[t] = dot(&a[t * r..(t + 1) * r], &v[..r]);
+    }
+}
+
+/// Invert the r × r row-major matrix `a` (destroyed) into `inv`; false if singular.
+pub(super) fn invert(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
+    // Specialised for the row count (loops unrolled at compile time).
+    match r {
+        1 => invert_r::<1>(a, inv, r),
+        2 => invert_r::<2>(a, inv, r),
+        3 => invert_r::<3>(a, inv, r),
+        4 => invert_r::<4>(a, inv, r),
+        5 => invert_r::<5>(a, inv, r),
+        6 => invert_r::<6>(a, inv, r),
+        7 => invert_r::<7>(a, inv, r),
+        8 => invert_r::<8>(a, inv, r),
+        9 => invert_r::<9>(a, inv, r),
+        _ => invert_r::<0>(a, inv, r),
+    }
+}
+
+/// Gauss–Jordan with partial pivoting for r = R (R = 0: any r).
+#[inline(always)]
+fn invert_r<const R: usize>(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
+    let r = if R > 0 { R } else { r };
+    let (a, inv) = (&mut a[..r * r], &mut inv[..r * r]);
+    inv.iter_mut().for_each(|v| *v = 0.0);
+    for t in 0..r {
+        inv[t * r + t] = 1.0;
+    }
+    for col in 0..r {
+        let mut p = col;
+        let mut pv = a[col * r + col].abs();
+        for row in col + 1..r {
+            let v = a[row * r + col].abs();
+            if v > pv {
+                pv = v;
+                p = row;
+            }
+        }
+        if pv < 1e-12 || !pv.is_finite() {
+            return false;
+        }
+        if p != col {
+            for k in 0..r {
+                a.swap(p * r + k, col * r + k);
+                inv.swap(p * r + k, col * r + k);
+            }
+        }
+        let d = a[col * r + col];
+        for k in 0..r {
+            a[col * r + k] /= d;
+            inv[col * r + k] /= d;
+        }
+        for row in 0..r {
+            if row != col {
+                let f = a[row * r + col];
+                if f != 0.0 {
+                    for k in 0..r {
+                        a[row * r + k] -= f * a[col * r + k];
+                        inv[row * r + k] -= f * inv[col * r + k];
+                    }
+                }
+            }
+        }
+    }
+    true
+}
+
+/// Least squares min ‖A w − c‖ for the column-major r × k matrix `a` (k ≤ r) by modified
+/// Gram–Schmidt with reorthogonalisation, using the scratch `q` (r·k) and `rm` (k·k); false if
+/// the columns are numerically dependent.
+pub(super) fn least_squares(
+    a: &[f64],
+    r: usize,
+    k: usize,
+    c: &[f64],
+    q: &mut [f64],
+    rm: &mut [f64],
+    w: &mut [f64],
+) -> bool {
+    rm[..k * k].iter_mut().for_each(|v| *v = 0.0);
+    for j in 0..k {
+        let (done, rest) = q.split_at_mut(j * r);
+        let v = &mut rest[..r];
+        v.copy_from_slice(&a[j * r..(j + 1) * r]);
+        let n0 = norm(v);
+        for _pass in 0..2 {
+            for i in 0..j {
+                let qi = &done[i * r..(i + 1) * r];
+                let h = dot(qi, v);
+                rm[i * k + j] += h;
+                for (vv, qq) in v.iter_mut().zip(qi) {
+                    *vv -= h * qq;
+                }
+            }
+        }
+        let nv = norm(v);
+        if nv.is_nan() || nv <= 1e-13 * n0 {
+            return false;
+        }
+        rm[j * k + j] = nv;
+        let inv = 1.0 / nv;
+        v.iter_mut().for_each(|x| *x *= inv);
+    }
+    for j in 0..k {
+        w[j] = dot(&q[j * r..(j + 1) * r], &c[..r]);
+    }
+    for j in (0..k).rev() {
+        let mut acc = w[j];
+        for l in j + 1..k {
+            acc -= rm[j * k + l] * w[l];
+        }
+        w[j] = acc / rm[j * k + j];
+    }
+    true
+}
+
+/// Complete the grid columns `cols` (independent) to a basis of r columns by greedily adding the
+/// column with the largest component orthogonal to the span so far; None if that fails.
+pub(super) fn complete_basis(
+    rows: &[f64],
+    n: usize,
+    r: usize,
+    cols: &[usize],
+) -> Option<Vec<usize>> {
+    let mut basis: Vec<usize> = cols.to_vec();
+    let mut q: Vec<Vec<f64>> = Vec::with_capacity(r);
+    let add = |v: &[f64], q: &mut Vec<Vec<f64>>| -> bool {
+        let mut v = v.to_vec();
+        let n0 = norm(&v);
+        for _ in 0..2 {
+            for qi in q.iter() {
+                let h = dot(qi, &v);
+                for (a, b) in v.iter_mut().zip(qi) {
+                    *a -= h * b;
+                }
+            }
+        }
+        let nv = norm(&v);
+        if nv.is_nan() || nv <= 1e-10 * n0 {
+            return false;
+        }
+        v.iter_mut().for_each(|a| *a /= nv);
+        q.push(v);
+        true
+    };
+    for &i in cols {
+        if !add(&rows[i * r..(i + 1) * r], &mut q) {
+            return None;
+        }
+    }
+    while basis.len() < r {
+        let mut best = None;
+        let mut best_v = 0.0;
+        for i in 0..n {
+            if basis.contains(&i) {
+                continue;
+            }
+            let row = &rows[i * r..(i + 1) * r];
+            let mut res = dot(row, row);
+            for qi in &q {
+                let h = dot(qi, row);
+                res -= h * h;
+            }
+            if res > best_v {
+                best_v = res;
+                best = Some(i);
+            }
+        }
+        let i = best?;
+        if !add(&rows[i * r..(i + 1) * r], &mut q) {
+            return None;
+        }
+        basis.push(i);
+    }
+    Some(basis)
+}
+
+/// r rows of the row-major n × r matrix with (greedily) maximal volume: a well-conditioned
+/// cold-start basis.
+pub(super) fn max_volume_rows(rows: &[f64], n: usize, r: usize) -> Vec<usize> {
+    let mut res = rows.to_vec();
+    let mut chosen = Vec::with_capacity(r);
+    for _ in 0..r {
+        let mut best = 0usize;
+        let mut best_v = -1.0;
+        for i in 0..n {
+            if chosen.contains(&i) {
+                continue;
+            }
+            let v = norm(&res[i * r..(i + 1) * r]);
+            if v > best_v {
+                best_v = v;
+                best = i;
+            }
+        }
+        chosen.push(best);
+        let pivot: Vec<f64> = res[best * r..(best + 1) * r].to_vec();
+        let pn = norm(&pivot);
+        if pn == 0.0 {
+            continue;
+        }
+        let unit: Vec<f64> = pivot.iter().map(|v| v / pn).collect();
+        for i in 0..n {
+            let row = &mut res[i * r..(i + 1) * r];
+            let h = dot(row, &unit);
+            for (a, u) in row.iter_mut().zip(&unit) {
+                *a -= h * u;
+            }
+        }
+    }
+    chosen
+}

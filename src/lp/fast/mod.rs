@@ -1,0 +1,705 @@
+//! The fast solver for Algorithm 1 (Peters & Klein 2015, Section 3.1): a revised primal simplex
+//! specialised to m+1 ≤ 9 dense equality rows and up to ~10^4 columns.
+//!
+//! The LP is min p·w s.t. Ā w = b̄, w ≥ 0 with p_i = [z_i < z_f], Ā = [1; b(z_i)], b̄ = [1; b].
+//!
+//! * **Orthonormalisation.** The feasible set {w ≥ 0 : Ā w = b̄} is unchanged when both Ā and b̄
+//!   are multiplied by the same invertible matrix. Once per table the n × (m+1) matrix
+//!   M = [1, b_1(z), …, b_m(z)] is factorised M = Q R by modified Gram–Schmidt with
+//!   reorthogonalisation; the solver works with the columns a_i = √n · Q_{i,·} (row i of Q, scaled
+//!   so that the first coordinate is 1 and every coordinate has RMS 1 over the grid) and moment
+//!   vectors c = √n · R^{-T} b̄. This keeps bases such as exp(20z) next to z numerically sane.
+//!   Numerically dependent functions (relative residual < 1e-10) are dropped and their moment
+//!   is checked for consistency instead.
+//! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
+//!   subgrid, the neighbours of z_f and of the support, the fine window around the best; a full
+//!   pass proves optimality) with the blocked SIMD kernels of [`super::pricing`], a Harris-style
+//!   ratio test, Bland's rule after repeated degenerate pivots, a refactorisation every 16
+//!   pivots and before the optimality-proving pass.
+//! * **Phase 1** uses a single artificial column: from any start basis B with x = B⁻¹c, the
+//!   artificial d = −Σ_{x_t<0} a_{B_t} replaces the most negative basic variable, which makes the
+//!   basis feasible; phase 1 then minimises the artificial's weight. Moments are infeasible when
+//!   that weight stays positive.
+//! * **Warm start.** The optimal basis of the previous problem is the start basis of the next one:
+//!   when the moments are unchanged (only z_f moves) it is primal feasible and phase 2 starts
+//!   at once; otherwise phase 1 starts from a nearby basis.
+//! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
+//!   case: the moments are those of a kernel's depth distribution). The moments are formed in
+//!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible
+//!   point: a crossover turns it into a basic feasible solution of no greater cost (support
+//!   columns of greatest volume as the basis, every other support point pushed to weight 0 or
+//!   into the basis by one ratio test), so phase 1 is skipped.
+//! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
+//!   original system in double-double arithmetic); weights that turn out infeasible trigger a
+//!   rerun in accurate mode (see `finish_optimal`).
+//! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), and as the
+//!   last resort the reference solver (counted in [`FastStats::fallbacks`]); never an endless loop.
+
+#![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
+
+mod linalg;
+mod price;
+mod refine;
+mod simplex;
+mod starts;
+
+use super::certify::{Certified, Certifier};
+use super::pricing::ColumnTable;
+use super::reference::ReferenceSolver;
+use super::scaled::{Found, ScaledSimplex};
+use super::{GridTable, MomentSolver, Solution, Status};
+use anyhow::{bail, Result};
+use linalg::{dot, invert, max_volume_rows, norm};
+
+/// Primal feasibility tolerance on weights (which sum to 1).
+const TOL_P: f64 = 1e-10;
+/// Primal feasibility accepted at a dual-feasible basis when nothing better is found.
+const TOL_P_LOOSE: f64 = 1e-9;
+/// Optimality tolerance on reduced costs (costs are 0 or 1, columns have RMS 1).
+const TOL_D: f64 = 1e-10;
+/// Smallest admissible pivot element.
+const TOL_PIV: f64 = 1e-9;
+/// Residual of the phase-1 optimum above which the moments are declared infeasible.
+const TOL_INF: f64 = 1e-9;
+/// Relative residual below which a basis function counts as dependent on the previous ones.
+const TOL_RANK: f64 = 1e-10;
+/// Relative tolerance of the consistency check of a dependent function's moment.
+const TOL_DEP: f64 = 1e-8;
+/// Largest condition number (Frobenius) of a basis accepted at refactorisation.
+const MAX_COND: f64 = 1e12;
+/// Accurate pivots ([`Certifier::improve`]) tried on a basis that does not certify.
+const IMPROVE_STEPS: usize = 4;
+/// Pivots between refactorisations of the basis inverse.
+const REFACTOR_EVERY: usize = 16;
+/// Consecutive degenerate pivots after which Bland's rule takes over.
+const DEGENERATE_LIMIT: usize = 20;
+
+/// Counters over the lifetime of a [`FastSolver`] (for benchmarks and tests).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct FastStats {
+    /// Problems solved.
+    pub solves: u64,
+    /// Simplex pivots (both phases).
+    pub pivots: u64,
+    /// Of which in phase 1.
+    pub phase1_pivots: u64,
+    /// Of which degenerate (step 0).
+    pub degenerate_pivots: u64,
+    /// Runs that perturbed the moments to leave a degenerate vertex.
+    pub perturbations: u64,
+    /// Full pricing passes (partial pricing found nothing, or Bland's rule).
+    pub full_pricing: u64,
+    /// Of which found an entering column that partial pricing missed.
+    pub partial_misses: u64,
+    /// Problems that needed phase 1 (start basis not primal feasible).
+    pub phase1: u64,
+    /// Problems reported infeasible.
+    pub infeasible: u64,
+    /// Optimal bases accepted with weights down to −1e-9 (clamped to 0): degenerate,
+    /// ill-conditioned final bases where neither polish nor rescue reached rounding level.
+    pub loose: u64,
+    /// Cold restarts after an iteration cap, a singular basis or a failed verification.
+    pub restarts: u64,
+    /// Problems handed to the reference solver after everything else failed.
+    pub fallbacks: u64,
+    /// Problems escalated to the scaled simplex ([`super::scaled`]): the fast answer was not
+    /// certified, or the fast runs did not converge, or phase 1 called them infeasible.
+    pub escalations: u64,
+    /// Problems returned as `Failed` (nothing settled them and the reference fallback is off).
+    pub failed: u64,
+    /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
+    pub improved: u64,
+    /// Solves started from a given distribution ([`MomentSolver::solve_distribution`]) by the
+    /// crossover.
+    pub hinted: u64,
+    /// Solves given a distribution whose moments equal the last solved problem's (another
+    /// fragment depth for the same texel): started from that problem's optimal basis, which
+    /// is primal feasible, instead of the crossover.
+    pub same_moments: u64,
+    /// Of which the start could not be turned into a basis (the usual start was used).
+    pub hint_rejected: u64,
+    /// Crossover pivots (start distribution → basic feasible solution).
+    pub crossover_pivots: u64,
+    /// Optima whose weights, refined against the LP as stated, were infeasible: solved again
+    /// with every basic solution refined.
+    pub accurate_retries: u64,
+}
+
+/// Index of the artificial column in a basis.
+const ART: usize = usize::MAX;
+
+enum Outcome {
+    Optimal,
+    Infeasible,
+    /// Numerical trouble or the iteration cap: retry from a cold basis.
+    Failed,
+    /// The final basis is slightly primal infeasible after refactorisation: run again from it.
+    Retry,
+    /// An optimum whose weights are not reliable (see `finish_optimal`): run again from it in
+    /// accurate mode; the current weights stand if that run fails.
+    RetryAccurate,
+}
+
+/// Fast exact solver for Algorithm 1; see the module documentation.
+pub struct FastSolver {
+    table: GridTable,
+    n: usize,
+    m: usize,
+    /// Numerical rank of [1, b_1..b_m] on the grid (= number of rows of the transformed LP).
+    r: usize,
+    /// Transformed columns, row-major: rows[i*r + k] = a_i[k].
+    rows: Vec<f64>,
+    /// For function j (0 = constant): coefficients R[k][j], k < r, at rcoef[j*r + k].
+    rcoef: Vec<f64>,
+    /// For function j: its position among the kept (independent) functions, if kept.
+    kept: Vec<Option<usize>>,
+    /// For function j: max |M_j| over the grid (scale of the consistency check).
+    fscale: Vec<f64>,
+    /// Well-conditioned cold-start basis.
+    b0: Vec<usize>,
+    /// cond_F of [1, b_1..b_m] on the grid (via R).
+    condition: f64,
+    /// Rounding-error bound on the weights of the last solve.
+    last_bound: f64,
+    /// The basis of the last successful factorisation, and whether `binv` is still exactly
+    /// that factorisation (no pivot since, no artificial column).
+    factored: Vec<usize>,
+    factored_ok: bool,
+    /// Last optimal basis (warm start), if any, and the transformed moments it was optimal for.
+    warm_basis: Option<Vec<usize>>,
+    last_c: Vec<f64>,
+    warm: bool,
+    stats: FastStats,
+    /// Checks every answer in the original coordinates.
+    cert: Certifier,
+    /// The escalation solver.
+    scaled: ScaledSimplex,
+    fallback: Option<ReferenceSolver>,
+    /// Hand problems nothing else settles to the reference solver (default) or report them
+    /// `Failed`.
+    use_fallback: bool,
+    // Workspace (no allocation per solve).
+    c: Vec<f64>,
+    u: Vec<f64>,
+    basis: Vec<usize>,
+    binv: Vec<f64>,
+    bmat: Vec<f64>,
+    x: Vec<f64>,
+    y: Vec<f64>,
+    alpha: Vec<f64>,
+    art: Vec<f64>,
+    s: Vec<f64>,
+    /// The transformed moments of the current problem (c may be perturbed during a run).
+    c0: Vec<f64>,
+    /// The moments of the current problem as given.
+    b_orig: Vec<f64>,
+    /// Refine every basic solution against the LP as stated (set when an optimum's weights
+    /// turned out infeasible on refinement; per solve).
+    accurate: bool,
+    x_backup: Vec<f64>,
+    /// Duals and weights before the last verification refactorisation.
+    yold: Vec<f64>,
+    xold: Vec<f64>,
+    /// max_i ‖a_i‖₂.
+    amax: f64,
+    /// is_basic[i]: grid column i is in the basis.
+    is_basic: Vec<bool>,
+    /// Coarse stride of partial pricing (1 = always full pricing).
+    stride: usize,
+    /// The columns in pricing blocks (all of them, and the coarse subgrid of partial pricing:
+    /// every `stride`-th point and the last one, at grid indices `coarse_idx`).
+    fine: ColumnTable,
+    coarse: ColumnTable,
+    coarse_idx: Vec<usize>,
+    ls_sup: Vec<usize>,
+    ls_a: Vec<f64>,
+    ls_q: Vec<f64>,
+    ls_r: Vec<f64>,
+    ls_w: Vec<f64>,
+    /// 1 / max_i |M_j(z_i)|: row equilibration of the original system.
+    oscale: Vec<f64>,
+    lo_rhs: Vec<f64>,
+    /// Crossover workspace: the start distribution, residuals, orthonormal directions and
+    /// basis positions of its support points.
+    hint: Vec<(usize, f64)>,
+    hint_res: Vec<f64>,
+    hint_u: Vec<f64>,
+    hint_pos: Vec<usize>,
+}
+
+impl FastSolver {
+    /// Prepare the solver for `table` (orthonormalisation and cold-start basis; O(n m²)).
+    pub fn new(table: GridTable) -> FastSolver {
+        let n = table.n();
+        let m = table.m();
+        let mm = m + 1;
+        // Columns of M = [1, b_1..b_m] on the grid.
+        let mut q: Vec<Vec<f64>> = Vec::with_capacity(mm);
+        let mut rcoef_full = vec![0.0; mm * mm];
+        let mut kept = vec![None; mm];
+        let mut fscale = vec![0.0; mm];
+        for j in 0..mm {
+            let mut v: Vec<f64> = if j == 0 {
+                vec![1.0; n]
+            } else {
+                (0..n).map(|i| table.row(i)[j - 1]).collect()
+            };
+            fscale[j] = v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
+            // Work on v·2^-e (exact) so that ‖v‖² cannot overflow (exp(400z) reaches 1e173).
+            let unit = super::dense::inv_pow2(fscale[j]);
+            v.iter_mut().for_each(|x| *x *= unit);
+            let norm0 = norm(&v);
+            let coef = &mut rcoef_full[j * mm..(j + 1) * mm];
+            for _pass in 0..2 {
+                for (k, qk) in q.iter().enumerate() {
+                    let h = dot(qk, &v);
+                    coef[k] += h;
+                    for (vi, qi) in v.iter_mut().zip(qk) {
+                        *vi -= h * qi;
+                    }
+                }
+            }
+            let nv = norm(&v);
+            if norm0 > 0.0 && nv > TOL_RANK * norm0 {
+                coef[q.len()] = nv;
+                kept[j] = Some(q.len());
+                for vi in v.iter_mut() {
+                    *vi /= nv;
+                }
+                q.push(v);
+            }
+            // R's column of the unscaled function.
+            coef.iter_mut().for_each(|c| *c /= unit);
+        }
+        let r = q.len();
+        let sn = (n as f64).sqrt();
+        let mut cols = vec![0.0; r * n];
+        let mut rows = vec![0.0; n * r];
+        for (k, qk) in q.iter().enumerate() {
+            for i in 0..n {
+                let a = sn * qk[i];
+                cols[k * n + i] = a;
+                rows[i * r + k] = a;
+            }
+        }
+        let mut rcoef = vec![0.0; mm * r];
+        for j in 0..mm {
+            rcoef[j * r..(j + 1) * r].copy_from_slice(&rcoef_full[j * mm..j * mm + r]);
+        }
+        let b0 = max_volume_rows(&rows, n, r);
+        let amax = (0..n)
+            .map(|i| norm(&rows[i * r..(i + 1) * r]))
+            .fold(0.0, f64::max);
+        // cond_F(R) over the kept functions (= condition of M on the grid).
+        let condition = {
+            let mut rk = vec![0.0; r * r];
+            let mut t = 0;
+            for j in 0..mm {
+                if let Some(tj) = kept[j] {
+                    for k in 0..r {
+                        rk[k * r + tj] = rcoef[j * r + k];
+                    }
+                    t += 1;
+                }
+            }
+            debug_assert_eq!(t, r);
+            let nr = norm(&rk);
+            let mut inv = vec![0.0; r * r];
+            if invert(&mut rk, &mut inv, r) {
+                nr * norm(&inv)
+            } else {
+                f64::INFINITY
+            }
+        };
+        let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
+        let cert_rows: Vec<usize> = (0..mm).filter(|&j| kept[j].is_some()).collect();
+        let mut solver = FastSolver {
+            n,
+            m,
+            r,
+            rows,
+            rcoef,
+            kept,
+            b0,
+            condition,
+            last_bound: 0.0,
+            factored: vec![usize::MAX; r],
+            factored_ok: false,
+            warm_basis: None,
+            last_c: vec![f64::NAN; r],
+            warm: true,
+            stats: FastStats::default(),
+            cert: Certifier::new(&table, cert_rows),
+            scaled: ScaledSimplex::default(),
+            fallback: None,
+            use_fallback: false,
+            c: vec![0.0; r],
+            u: vec![0.0; r],
+            basis: vec![0; r],
+            binv: vec![0.0; r * r],
+            bmat: vec![0.0; r * r],
+            x: vec![0.0; r],
+            y: vec![0.0; r],
+            alpha: vec![0.0; r],
+            art: vec![0.0; r],
+            s: vec![0.0; n],
+            c0: vec![0.0; r],
+            b_orig: vec![0.0; m],
+            accurate: false,
+            x_backup: vec![0.0; r],
+            yold: vec![0.0; r],
+            xold: vec![0.0; r],
+            amax,
+            is_basic: vec![false; n],
+            stride: 1,
+            fine,
+            coarse: ColumnTable::default(),
+            coarse_idx: Vec::new(),
+            ls_sup: vec![0; r],
+            ls_a: vec![0.0; r * r],
+            ls_q: vec![0.0; r * r],
+            ls_r: vec![0.0; r * r],
+            ls_w: vec![0.0; r],
+            oscale: fscale
+                .iter()
+                .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
+                .collect(),
+            lo_rhs: vec![0.0; mm],
+            fscale,
+            table,
+            hint: Vec::new(),
+            hint_res: Vec::new(),
+            hint_u: Vec::new(),
+            hint_pos: Vec::new(),
+        };
+        solver.set_partial_pricing(true);
+        solver
+    }
+
+    /// Enable or disable warm start from the previous optimal basis (on by default).
+    /// Whether problems that neither the fast runs nor the scaled simplex settle are also given
+    /// to the reference solver, whose support is then certified like any other basis (off by
+    /// default: the reference is an oracle for the tests, not a rescue). Without a certificate
+    /// the answer is `Failed` either way.
+    pub fn set_reference_fallback(&mut self, on: bool) {
+        self.use_fallback = on;
+    }
+
+    pub fn set_warm_start(&mut self, on: bool) {
+        self.warm = on;
+        if !on {
+            self.warm_basis = None;
+        }
+    }
+
+    /// The basis the next solve starts from (grid indices), if any.
+    pub fn warm_basis(&self) -> Option<&[usize]> {
+        self.warm_basis.as_deref()
+    }
+
+    /// Start the next solve from `basis` (rank() distinct grid indices), e.g. to test that any
+    /// start basis gives the same answer. Invalid bases are rejected.
+    pub fn set_warm_basis(&mut self, basis: &[usize]) -> Result<()> {
+        if basis.len() != self.r {
+            bail!("basis: expected {} indices, got {}", self.r, basis.len());
+        }
+        for (k, &i) in basis.iter().enumerate() {
+            if i >= self.n || basis[..k].contains(&i) {
+                bail!("basis: index {i} out of range or repeated");
+            }
+        }
+        self.warm = true;
+        self.warm_basis = Some(basis.to_vec());
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        Ok(())
+    }
+
+    /// Enable or disable partial pricing (coarse subgrid first; on by default for n ≥ 64).
+    pub fn set_partial_pricing(&mut self, on: bool) {
+        let n = self.n;
+        self.stride = if on && n >= 64 {
+            ((n as f64 / 2.0).sqrt() as usize).max(2)
+        } else {
+            1
+        };
+        self.coarse_idx = (0..n).step_by(self.stride).collect();
+        if self.coarse_idx.last() != Some(&(n - 1)) {
+            self.coarse_idx.push(n - 1);
+        }
+        let (fine, idx) = (&self.fine, &self.coarse_idx);
+        self.coarse = ColumnTable::new(self.r, idx.len(), |k, j| fine.entry(k, idx[j]));
+        for i in 0..n {
+            if self.is_basic[i] {
+                self.set_basic(i, true);
+            }
+        }
+    }
+
+    /// Forget the warm-start basis.
+    pub fn reset(&mut self) {
+        self.warm_basis = None;
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+    }
+
+    /// Numerical rank of [1, b_1, …, b_m] on the grid (m+1 unless functions are dependent).
+    pub fn rank(&self) -> usize {
+        self.r
+    }
+
+    /// Condition number (Frobenius) of the n × (m+1) matrix [1, b_1(z), …, b_m(z)] on the grid.
+    /// Above ~1e8 the candidate is numerically rank-deficient for double precision.
+    pub fn condition(&self) -> f64 {
+        self.condition
+    }
+
+    /// A first-order bound on how far the weights (and G) of the last optimal solve can move
+    /// when the moments are perturbed at the rounding level: ε · cond(M) · ‖B⁻¹‖_F · (1 + ‖c‖)
+    /// for the final basis B. Where this exceeds ~1e-10, G is not determined to 1e-9 by the
+    /// double-precision moments (clustered support on a fine grid), for any solver.
+    pub fn last_error_bound(&self) -> f64 {
+        self.last_bound
+    }
+
+    pub fn stats(&self) -> FastStats {
+        self.stats
+    }
+
+    pub fn table(&self) -> &GridTable {
+        &self.table
+    }
+
+    /// Transform b̄ = [1, b] to c = √n R^{-T} b̄; false if a dependent function's moment is
+    /// inconsistent (then no distribution on the grid has these moments).
+    fn transform(&mut self, moments: &[f64]) -> bool {
+        let r = self.r;
+        let mut done = 0usize;
+        for j in 0..=self.m {
+            let bj = if j == 0 { 1.0 } else { moments[j - 1] };
+            let coef = &self.rcoef[j * r..(j + 1) * r];
+            let mut acc = bj;
+            for k in 0..done {
+                acc -= coef[k] * self.u[k];
+            }
+            match self.kept[j] {
+                Some(t) => {
+                    self.u[t] = acc / coef[t];
+                    done = t + 1;
+                }
+                None => {
+                    let scale = self.fscale[j].max(bj.abs()).max(1e-300);
+                    if acc.abs() > TOL_DEP * scale {
+                        return false;
+                    }
+                }
+            }
+        }
+        let sn = (self.n as f64).sqrt();
+        for k in 0..r {
+            self.c[k] = sn * self.u[k];
+        }
+        true
+    }
+}
+
+impl MomentSolver for FastSolver {
+    fn solve(&mut self, moments: &[f64], zf: f64) -> Result<Solution> {
+        self.solve_inner(moments, zf, None, false)
+    }
+
+    fn table(&self) -> &GridTable {
+        &self.table
+    }
+
+    /// Moments in the orthonormalised coordinates straight from the distribution,
+    /// c = Σ w_i a_i / Σ w_i (no cancellation however badly scaled the functions are), and the
+    /// distribution itself as the phase-1-free start (see [`FastSolver::crossover`]).
+    fn solve_distribution(&mut self, dist: &[(u32, f64)], zf: f64) -> Result<Solution> {
+        // Validates the distribution; the moments in the original coordinates serve the
+        // reference fallback.
+        let moments = super::distribution_moments(&self.table, dist)?;
+        let r = self.r;
+        let mut total = 0.0;
+        self.c.iter_mut().for_each(|v| *v = 0.0);
+        for &(i, w) in dist {
+            let i = i as usize;
+            total += w;
+            for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
+                *ck += w * ak;
+            }
+        }
+        self.c.iter_mut().for_each(|v| *v /= total);
+        self.solve_inner(&moments, zf, Some(dist), true)
+    }
+}
+
+/// The fast solver's own verdict, kept for when nothing certifies.
+enum Legacy {
+    Answer(Vec<usize>),
+    Infeasible,
+    Reference,
+}
+
+/// What the simplex attempts of [`FastSolver::attempts`] ended with.
+enum Verdict {
+    /// `self.basis` is optimal as far as the fast solver can tell (to be certified).
+    Optimal,
+    /// Phase 1 left the artificial positive (to be confirmed by a Farkas ray).
+    Infeasible,
+    /// No convergence from any start.
+    Failed,
+}
+
+impl FastSolver {
+    /// The contract ([`super::certify`]): a fast answer is returned only with its certificate;
+    /// otherwise the problem is escalated to the scaled simplex, whose answer is certified the
+    /// same way; what neither settles is `Failed` with the reason.
+    fn solve_inner(
+        &mut self,
+        moments: &[f64],
+        zf: f64,
+        hint: Option<&[(u32, f64)]>,
+        c_given: bool,
+    ) -> Result<Solution> {
+        if moments.len() != self.m {
+            bail!("expected {} moments, got {}", self.m, moments.len());
+        }
+        if let Some(j) = moments.iter().position(|v| !v.is_finite()) {
+            bail!("moment {} is not finite ({})", j + 1, moments[j]);
+        }
+        if zf.is_nan() {
+            bail!("z_f is NaN");
+        }
+        self.stats.solves += 1;
+        self.accurate = false;
+        self.b_orig.copy_from_slice(moments);
+        let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        let verdict = if c_given || self.transform(moments) {
+            self.c0.copy_from_slice(&self.c);
+            self.attempts(kf, hint)
+        } else {
+            Verdict::Infeasible
+        };
+        // The fast solver's verdict: its basis is certified, improved or escalated below.
+        let mut why = String::new();
+        let legacy = match verdict {
+            Verdict::Optimal => {
+                self.remember_optimal();
+                let fast_basis = self.basis.clone();
+                match self.cert.optimal(moments, kf, &fast_basis) {
+                    Ok(c) => return Ok(certified(c)),
+                    Err(e) => {
+                        why = e;
+                        Legacy::Answer(fast_basis)
+                    }
+                }
+            }
+            Verdict::Infeasible => Legacy::Infeasible,
+            Verdict::Failed => Legacy::Reference,
+        };
+        if let Legacy::Answer(fast_basis) = &legacy {
+            let mut basis = fast_basis.clone();
+            if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                self.stats.improved += 1;
+                return Ok(certified(c));
+            }
+        }
+        // A start distribution with at most r atoms is itself a basic feasible solution: the
+        // accurate pivots from it never leave the feasible set.
+        if let Some(mut basis) = hint.and_then(|h| self.support_basis(h)) {
+            if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                self.stats.improved += 1;
+                return Ok(certified(c));
+            }
+        }
+        let start = match &legacy {
+            Legacy::Answer(b) => Some(b.clone()),
+            _ => None,
+        };
+        let sol = self.escalate(moments, kf, start.as_deref());
+        if sol.status != Status::Failed {
+            return Ok(sol);
+        }
+        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`). The
+        // reference, when enabled, is one more source of a basis to certify, not a rescue.
+        self.stats.failed += 1;
+        let fast = match &legacy {
+            Legacy::Answer(..) => format!("fast optimum not certified ({why})"),
+            Legacy::Infeasible => {
+                "phase 1 found no feasible point, but no Farkas ray certifies it".into()
+            }
+            Legacy::Reference => "the simplex did not converge".into(),
+        };
+        let escalation = sol.reason.unwrap_or_default();
+        if self.use_fallback {
+            if let Some(c) = self.reference_certified(moments, zf, kf) {
+                self.stats.failed -= 1;
+                self.stats.fallbacks += 1;
+                return Ok(c);
+            }
+        }
+        Ok(Solution::failed(format!("{fast}; {escalation}")))
+    }
+
+    /// The reference's answer, if its support (completed to a basis) certifies.
+    fn reference_certified(&mut self, moments: &[f64], zf: f64, kf: usize) -> Option<Solution> {
+        let table = &self.table;
+        let fb = self
+            .fallback
+            .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
+        let sol = fb.solve(moments, zf).ok()?;
+        if sol.status == Status::Infeasible {
+            return None;
+        }
+        let grid = self.table.grid();
+        let dist: Vec<(u32, f64)> = sol
+            .support
+            .iter()
+            .map(|&(z, w)| (grid.nearest(z) as u32, w))
+            .collect();
+        let mut basis = self.support_basis(&dist)?;
+        let c = self
+            .cert
+            .improve(moments, kf, &mut basis, IMPROVE_STEPS)
+            .ok()?;
+        Some(certified(c))
+    }
+
+    /// The scaled simplex on the problem, from `start` if given; its answer certified.
+    fn escalate(&mut self, moments: &[f64], kf: usize, start: Option<&[usize]>) -> Solution {
+        self.stats.escalations += 1;
+        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        self.cert.set_moments(moments);
+        let pivots = self.scaled.pivots;
+        let found = self.scaled.solve(&self.cert, kf, start);
+        self.stats.pivots += self.scaled.pivots - pivots;
+        let sol = match found {
+            Found::Optimal(mut basis) => {
+                match self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+                    Ok(c) => certified(c),
+                    Err(e) => {
+                        Solution::failed(format!("scaled simplex optimum not certified: {e}"))
+                    }
+                }
+            }
+            Found::Infeasible(y) => match self.cert.infeasible(moments, &y) {
+                Ok(_) => Solution::infeasible(),
+                Err(e) => Solution::failed(format!("phase 1 infeasible, but {e}")),
+            },
+            Found::Failed(e) => Solution::failed(e),
+        };
+        if sol.status == Status::Infeasible {
+            self.stats.infeasible += 1;
+        }
+        sol
+    }
+}
+
+/// The solution of a certified answer.
+fn certified(c: Certified) -> Solution {
+    Solution {
+        status: Status::Optimal,
+        g: c.g,
+        support: c.support,
+        reason: None,
+    }
+}

@@ -1,0 +1,238 @@
+//! Pricing: the entering column of a simplex step. Partial pricing (coarse subgrid, the
+//! neighbours of z_f and of the support, the fine window around the best), the full pass that
+//! proves optimality, Bland's rule, and the dense Dantzig kernel (AVX2/FMA or generic).
+
+use super::{FastSolver, ART, TOL_D};
+use crate::lp::pricing::ColumnTable;
+
+impl FastSolver {
+    /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point and the last
+    /// one), next to z_f and next to the current support points, then on the whole fine window
+    /// between the coarse neighbours of the best of these. Reduced costs are smooth in z on
+    /// either side of z_f, so this usually finds a good entering column at a fraction of a full
+    /// pass. Returns (usize::MAX, −TOL_D) when it finds no negative reduced cost (then a full
+    /// pass decides).
+    pub(super) fn price_partial(&self, kf: usize) -> (usize, f64) {
+        let (n, r, st) = (self.n, self.r, self.stride);
+        let y = &self.y[..r];
+        let none = (usize::MAX, -TOL_D);
+        // Coarse subgrid.
+        let coarse = &self.coarse;
+        // Coarse points below kf: j·st < kf for the regular ones, and the extra last point
+        // n − 1 only when kf = n.
+        let nc = self.coarse_idx.len();
+        let regular = if (nc - 1) * st == n - 1 { nc } else { nc - 1 };
+        let csplit = kf.div_ceil(st).min(regular) + (regular < nc && kf == n) as usize;
+        debug_assert_eq!(csplit, self.coarse_idx.partition_point(|&i| i < kf));
+        let cb = coarse.scan(y, csplit, 0, coarse.blocks(), none);
+        let mut best = if cb.0 == usize::MAX {
+            none
+        } else {
+            (self.coarse_idx[cb.0], cb.1)
+        };
+        // Narrow dips of the reduced cost appear next to the current support points and at
+        // the step at z_f: scan a few neighbours of each (whole blocks, overlaps merged).
+        const W: usize = 3;
+        let mut ranges = [(0usize, 0usize); 10];
+        let mut nr = 0;
+        ranges[nr] = self.fine.block_range(kf.saturating_sub(W), kf + W);
+        nr += 1;
+        for &bt in &self.basis {
+            if bt != ART && nr < ranges.len() {
+                ranges[nr] = self.fine.block_range(bt.saturating_sub(W), bt + W + 1);
+                nr += 1;
+            }
+        }
+        // Support points come in neighbouring pairs: scan each distinct block range once.
+        let mut distinct = 0;
+        for a in 0..nr {
+            if !ranges[..distinct].contains(&ranges[a]) {
+                ranges[distinct] = ranges[a];
+                distinct += 1;
+            }
+        }
+        best = self.fine.scan_ranges(y, kf, &ranges[..distinct], best);
+        if best.0 == usize::MAX {
+            return best;
+        }
+        // The reduced cost is smooth between coarse points: the minimum of the whole fine
+        // window around the best point is the entering column.
+        let c = best.0;
+        let window = self
+            .fine
+            .block_range(c.saturating_sub(st - 1), (c + st).min(n));
+        self.scan_fine(y, kf, window, best)
+    }
+
+    /// Full pricing: the non-basic column with the lowest reduced cost, or (usize::MAX, 0) when
+    /// none is below −TOL_D / 4 (basic columns, whose reduced cost is 0 up to rounding, then
+    /// never come out lowest).
+    pub(super) fn price_full(&self, kf: usize) -> (usize, f64) {
+        let y = &self.y[..self.r];
+        let got = self.scan_fine(y, kf, (0, self.fine.blocks()), (usize::MAX, -0.25 * TOL_D));
+        if got.0 == usize::MAX {
+            (usize::MAX, 0.0)
+        } else {
+            got
+        }
+    }
+
+    /// [`ColumnTable::scan`] of the fine table over a block range (basic columns excluded).
+    fn scan_fine(
+        &self,
+        y: &[f64],
+        kf: usize,
+        (blo, bhi): (usize, usize),
+        best: (usize, f64),
+    ) -> (usize, f64) {
+        self.fine.scan(y, kf, blo, bhi, best)
+    }
+
+    /// Mark grid column i basic (excluded from pricing) or not.
+    pub(super) fn set_basic(&mut self, i: usize, on: bool) {
+        self.is_basic[i] = on;
+        self.fine.set_excluded(i, on);
+        let st = self.stride;
+        let nc = self.coarse_idx.len();
+        if i.is_multiple_of(st) {
+            self.coarse.set_excluded(i / st, on);
+        } else if i == self.n - 1 {
+            self.coarse.set_excluded(nc - 1, on);
+        }
+    }
+}
+
+/// Dantzig pricing: s_i = y·a_i for every column; returns the column with the most negative
+/// reduced cost d_i = [i < kf] − s_i and that reduced cost.
+/// Basic columns are excluded (their reduced cost is 0 in exact arithmetic).
+pub(super) fn price(
+    table: &ColumnTable,
+    n: usize,
+    r: usize,
+    y: &[f64],
+    kf: usize,
+    basis: &[usize],
+    s: &mut [f64],
+) -> (usize, f64) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports the features enabled on `price_avx2`.
+            return unsafe { price_avx2(table, n, r, y, kf, basis, s) };
+        }
+    }
+    price_generic::<false>(table, n, r, y, kf, basis, s)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn price_avx2(
+    table: &ColumnTable,
+    n: usize,
+    r: usize,
+    y: &[f64],
+    kf: usize,
+    basis: &[usize],
+    s: &mut [f64],
+) -> (usize, f64) {
+    price_generic::<true>(table, n, r, y, kf, basis, s)
+}
+
+#[inline(always)]
+fn price_generic<const FMA: bool>(
+    table: &ColumnTable,
+    n: usize,
+    r: usize,
+    y: &[f64],
+    kf: usize,
+    basis: &[usize],
+    s: &mut [f64],
+) -> (usize, f64) {
+    let (cols, ld) = table.rows();
+    let s = &mut s[..n];
+    let y0 = y[0];
+    for (si, &c) in s.iter_mut().zip(&cols[..n]) {
+        *si = y0 * c;
+    }
+    for k in 1..r {
+        let yk = y[k];
+        for (si, &c) in s.iter_mut().zip(&cols[k * ld..k * ld + n]) {
+            *si = if FMA {
+                yk.mul_add(c, *si)
+            } else {
+                yk * c + *si
+            };
+        }
+    }
+    for &bt in basis {
+        if bt < n {
+            s[bt] = if bt < kf { 1.0 } else { 0.0 };
+        }
+    }
+    let (il, sl) = argmax(&s[..kf]);
+    let (ir, sr) = argmax(&s[kf..]);
+    let dl = 1.0 - sl;
+    let dr = -sr;
+    if dl <= dr {
+        (il, dl)
+    } else {
+        (kf + ir, dr)
+    }
+}
+
+/// Index and value of the maximum (first among equals; (0, −∞) when empty).
+#[inline(always)]
+fn argmax(s: &[f64]) -> (usize, f64) {
+    const L: usize = 8;
+    let mut bv = [f64::NEG_INFINITY; L];
+    let mut bi = [0usize; L];
+    let chunks = s.len() / L;
+    for c in 0..chunks {
+        let base = c * L;
+        let ch = &s[base..base + L];
+        for l in 0..L {
+            if ch[l] > bv[l] {
+                bv[l] = ch[l];
+                bi[l] = base + l;
+            }
+        }
+    }
+    for (i, &v) in s.iter().enumerate().skip(chunks * L) {
+        let l = i % L;
+        if v > bv[l] {
+            bv[l] = v;
+            bi[l] = i;
+        }
+    }
+    let mut best = (0usize, f64::NEG_INFINITY);
+    for l in 0..L {
+        if bv[l] > best.1 || (bv[l] == best.1 && bi[l] < best.0) {
+            best = (bi[l], bv[l]);
+        }
+    }
+    best
+}
+
+/// Bland's rule: the first column with a negative reduced cost (after computing s).
+pub(super) fn price_bland(
+    table: &ColumnTable,
+    n: usize,
+    r: usize,
+    y: &[f64],
+    kf: usize,
+    basis: &[usize],
+    s: &mut [f64],
+) -> (usize, f64) {
+    let (iq, dq) = price(table, n, r, y, kf, basis, s);
+    if dq >= -TOL_D {
+        return (iq, dq);
+    }
+    for (i, &si) in s[..n].iter().enumerate() {
+        let d = if i < kf { 1.0 - si } else { -si };
+        if d < -TOL_D {
+            return (i, d);
+        }
+    }
+    (iq, dq)
+}

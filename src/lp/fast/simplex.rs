@@ -1,0 +1,566 @@
+//! The revised primal simplex loop: basis factorisation and basic solution, duals, the
+//! iteration (pricing, optimality checks of either phase, Harris ratio test, pivot), degenerate
+//! perturbation, and the bounded "refactorise, else rescue, else fail" recovery.
+
+use super::linalg::{invert, mat_vec, norm};
+use super::price::{price, price_bland};
+use super::{
+    FastSolver, Outcome, ART, DEGENERATE_LIMIT, MAX_COND, REFACTOR_EVERY, TOL_D, TOL_INF, TOL_P,
+    TOL_PIV, TOL_P_LOOSE,
+};
+
+/// Rescues ([`FastSolver::rescue`]) allowed per run.
+const MAX_RESCUES: usize = 3;
+
+/// The state of one simplex run ([`FastSolver::run`]) between iterations.
+struct Run {
+    /// Number of grid points below z_f.
+    kf: usize,
+    /// Bland's rule throughout.
+    bland_always: bool,
+    /// Phase 1: the artificial column is in the basis, at `art_pos`, with norm `art_norm`.
+    phase1: bool,
+    art_pos: usize,
+    art_norm: f64,
+    /// ‖c‖ at the start (scale of the infeasibility test).
+    c_norm: f64,
+    /// Pivots since the last refactorisation.
+    since_refactor: usize,
+    /// Consecutive degenerate pivots.
+    degenerate: usize,
+    /// The current basis was refactorised at this optimum (the pricing pass used fresh duals).
+    verified: bool,
+    /// Rescues so far.
+    rescues: usize,
+    /// c is perturbed (see [`FastSolver::perturb`]).
+    perturbed: bool,
+}
+
+/// How an iteration of [`FastSolver::run`] ends early.
+enum Jump {
+    /// Go on with the next iteration.
+    Next,
+    /// The run ends with this outcome.
+    End(Outcome),
+}
+
+impl FastSolver {
+    /// Column i of the transformed LP (i == ART: the artificial column).
+    #[inline]
+    fn column(&self, i: usize) -> &[f64] {
+        if i == ART {
+            &self.art
+        } else {
+            &self.rows[i * self.r..(i + 1) * self.r]
+        }
+    }
+
+    /// Recompute the basis inverse from scratch (Gauss–Jordan, partial pivoting) and
+    /// x = B⁻¹ c. False if the basis is numerically singular.
+    pub(super) fn refactor(&mut self) -> bool {
+        let ok = self.factor();
+        if ok {
+            self.basic_solution();
+        }
+        ok
+    }
+
+    /// Basis inverse only (see [`Self::refactor`]); false if numerically singular.
+    pub(super) fn factor(&mut self) -> bool {
+        let r = self.r;
+        // bmat[k][t] = a_{B_t}[k]
+        for t in 0..r {
+            let bt = self.basis[t];
+            for k in 0..r {
+                let v = self.column(bt)[k];
+                self.bmat[k * r + t] = v;
+            }
+        }
+        let bnorm = norm(&self.bmat);
+        // Numerically singular for our purposes: weights from such a basis carry errors of
+        // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
+        let ok = invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND;
+        self.factored.copy_from_slice(&self.basis);
+        self.factored_ok = ok && !self.basis.contains(&ART);
+        ok
+    }
+
+    /// x = B⁻¹ c with two steps of iterative refinement.
+    fn basic_solution(&mut self) {
+        let r = self.r;
+        {
+            mat_vec(&self.binv, &self.c, &mut self.x, r);
+            // Two steps of iterative refinement: x += B⁻¹ (c − B x). The explicit inverse of an
+            // ill-conditioned basis (neighbouring grid points) is accurate to cond·ε only.
+            for _ in 0..2 {
+                for k in 0..r {
+                    self.alpha[k] = self.c[k];
+                }
+                for t in 0..r {
+                    let xt = self.x[t];
+                    let bt = self.basis[t];
+                    let col = if bt == ART {
+                        &self.art[..]
+                    } else {
+                        &self.rows[bt * r..(bt + 1) * r]
+                    };
+                    for (ak, ck) in self.alpha.iter_mut().zip(col) {
+                        *ak -= ck * xt;
+                    }
+                }
+                // self.y is free here as scratch.
+                mat_vec(&self.binv, &self.alpha, &mut self.y, r);
+                for t in 0..r {
+                    self.x[t] += self.y[t];
+                }
+            }
+        }
+        if self.accurate && self.c == self.c0 {
+            // Accurate mode (see `finish_optimal`): against the LP as stated.
+            let _ = self.refine_steps();
+        }
+    }
+
+    /// y = c_Bᵀ B⁻¹ for costs cost(B_t).
+    fn duals(&mut self, phase1: bool, kf: usize) {
+        let r = self.r;
+        self.y.iter_mut().for_each(|v| *v = 0.0);
+        for t in 0..r {
+            let bt = self.basis[t];
+            let cost = if phase1 {
+                (bt == ART) as u8 as f64
+            } else {
+                (bt < kf) as u8 as f64
+            };
+            if cost != 0.0 {
+                let row = &self.binv[t * r..(t + 1) * r];
+                for (yk, bk) in self.y.iter_mut().zip(row) {
+                    *yk += cost * bk;
+                }
+            }
+        }
+    }
+
+    /// One simplex run from `self.basis`. `kf` = number of grid points below z_f.
+    pub(super) fn run(&mut self, kf: usize, bland_always: bool) -> Outcome {
+        if self.factored_ok && self.basis == self.factored {
+            // B⁻¹ is still the fresh factorisation of this basis (the warm start after a
+            // problem that ended on it): only the weights are new.
+            self.basic_solution();
+        } else if !self.refactor() {
+            return Outcome::Failed;
+        }
+        let mut st = Run {
+            kf,
+            bland_always,
+            phase1: false,
+            art_pos: 0,
+            art_norm: 0.0,
+            c_norm: 0.0,
+            since_refactor: 0,
+            degenerate: 0,
+            verified: false,
+            rescues: 0,
+            perturbed: false,
+        };
+        if !self.start_phase1(&mut st) {
+            return Outcome::Failed;
+        }
+        st.c_norm = norm(&self.c);
+        let cap = 200 + 20 * self.r + self.n / 16;
+        for _iter in 0..cap {
+            if let Err(Jump::End(outcome)) = self.iteration(&mut st) {
+                return outcome;
+            }
+        }
+        Outcome::Failed
+    }
+
+    /// Phase 1 set-up with a single artificial column: d = −Σ_{x_t<0} a_{B_t} replaces the most
+    /// negative basic weight (nothing to do when the start is primal feasible); false if the
+    /// new basis is singular.
+    fn start_phase1(&mut self, st: &mut Run) -> bool {
+        let r = self.r;
+        let mut worst = None;
+        let mut worst_v = -TOL_P;
+        for t in 0..r {
+            if self.x[t] < worst_v {
+                worst_v = self.x[t];
+                worst = Some(t);
+            }
+        }
+        let Some(ts) = worst else {
+            return true;
+        };
+        self.stats.phase1 += 1;
+        self.art.iter_mut().for_each(|v| *v = 0.0);
+        for t in 0..r {
+            if self.x[t] < -TOL_P {
+                let bt = self.basis[t];
+                for k in 0..r {
+                    self.art[k] -= self.rows[bt * r + k];
+                }
+            }
+        }
+        st.art_norm = norm(&self.art);
+        self.set_basic(self.basis[ts], false);
+        self.basis[ts] = ART;
+        st.art_pos = ts;
+        st.phase1 = true;
+        self.refactor()
+    }
+
+    /// One iteration of [`Self::run`]: periodic refactorisation, pricing, and either the
+    /// optimality checks of the current phase or a ratio test and pivot.
+    fn iteration(&mut self, st: &mut Run) -> Result<(), Jump> {
+        if st.since_refactor >= REFACTOR_EVERY {
+            // A numerically singular basis (clustered grid points) is rebuilt well-conditioned
+            // around the current weights.
+            self.refactor_or_rescue(st)?;
+        }
+        if st.degenerate >= DEGENERATE_LIMIT && !st.perturbed {
+            self.perturb(st);
+        }
+        let bland = st.bland_always || st.degenerate >= DEGENERATE_LIMIT;
+        let (q, dq) = self.price_step(st, bland)?;
+        if dq >= -TOL_D {
+            return self.at_optimum(st, dq);
+        }
+        st.verified = false;
+        self.load_alpha(q);
+        let l = self.ratio_test(bland).ok_or(Jump::End(Outcome::Failed))?;
+        self.pivot_step(st, l, q, dq);
+        Ok(())
+    }
+
+    /// Refactorise, else rescue (at most `MAX_RESCUES` per run), else fail. After a rescue the
+    /// run goes on in phase 2 from the rescued basis with the next iteration.
+    fn refactor_or_rescue(&mut self, st: &mut Run) -> Result<(), Jump> {
+        if self.refactor() {
+            st.since_refactor = 0;
+            return Ok(());
+        }
+        self.rescue_or(st, Outcome::Failed)
+    }
+
+    /// Rescue (at most `MAX_RESCUES` per run; then `Jump::Next`), else end the run with
+    /// `outcome`.
+    fn rescue_or(&mut self, st: &mut Run, outcome: Outcome) -> Result<(), Jump> {
+        if self.try_rescue(st) {
+            Err(Jump::Next)
+        } else {
+            Err(Jump::End(outcome))
+        }
+    }
+
+    /// [`Self::rescue`] if the run has rescues left; on success the run state is that of a
+    /// fresh phase-2 factorisation.
+    fn try_rescue(&mut self, st: &mut Run) -> bool {
+        if st.rescues < MAX_RESCUES && self.rescue() {
+            st.rescues += 1;
+            st.phase1 = false;
+            st.since_refactor = 0;
+            st.verified = false;
+            return true;
+        }
+        false
+    }
+
+    /// Stalling on a degenerate vertex (moments on the boundary of the moment space): perturb
+    /// c = B x into c + B δ with small distinct δ_t > 0, which makes the vertex non-degenerate;
+    /// the true c is restored at the optimum.
+    fn perturb(&mut self, st: &mut Run) {
+        let r = self.r;
+        for t in 0..r {
+            let bt = self.basis[t];
+            if bt == ART {
+                continue; // never feed the artificial: c stays feasible iff it was
+            }
+            let dt = 1e-7 * (1.0 + t as f64 / r as f64);
+            self.x[t] += dt;
+            for k in 0..r {
+                self.c[k] += dt * self.rows[bt * r + k];
+            }
+        }
+        st.perturbed = true;
+        st.degenerate = 0;
+        self.stats.perturbations += 1;
+    }
+
+    /// Duals and the entering column (q, d_q): partial pricing first; a full pass (after a
+    /// fresh factorisation) or Bland's rule when it finds nothing.
+    fn price_step(&mut self, st: &mut Run, bland: bool) -> Result<(usize, f64), Jump> {
+        let (n, r) = (self.n, self.r);
+        self.duals(st.phase1, st.kf);
+        let kf_eff = if st.phase1 { 0 } else { st.kf };
+        let partial = if bland || self.stride <= 1 {
+            (usize::MAX, 0.0)
+        } else {
+            self.price_partial(kf_eff)
+        };
+        if partial.0 == usize::MAX && !bland && !st.verified && st.since_refactor > 0 {
+            // About to prove optimality with a full pass: refactorise first, so that the
+            // pass prices with fresh duals (the updated ones of an ill-conditioned basis
+            // can be off by far more than the tolerance, and a pass with them would have
+            // to be repeated).
+            self.yold.copy_from_slice(&self.y);
+            self.xold.copy_from_slice(&self.x);
+            self.refactor_or_rescue(st)?;
+            st.verified = true;
+            self.duals(st.phase1, st.kf);
+        }
+        if partial.0 == usize::MAX {
+            self.stats.full_pricing += 1;
+        }
+        let (q, dq) = if partial.0 != usize::MAX {
+            partial
+        } else if bland {
+            price_bland(&self.fine, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
+        } else {
+            self.price_full(kf_eff)
+        };
+        if partial.0 == usize::MAX && dq < -TOL_D {
+            self.stats.partial_misses += 1;
+        }
+        Ok((q, dq))
+    }
+
+    /// No entering column (d_q ≥ −TOL_D): verify with a fresh factorisation, then end phase 1,
+    /// restore perturbed moments, or settle the phase-2 optimum.
+    fn at_optimum(&mut self, st: &mut Run, dq: f64) -> Result<(), Jump> {
+        if !st.verified && st.since_refactor > 0 {
+            self.verify_optimum(st, dq)?;
+        }
+        if st.phase1 {
+            return self.end_phase1(st);
+        }
+        if st.perturbed {
+            // Restore the true moments at this (dual-feasible) basis and continue.
+            self.c.copy_from_slice(&self.c0);
+            st.perturbed = false;
+            st.verified = false;
+            return self.refactor_or_rescue(st);
+        }
+        let outcome = self.phase2_optimum(st)?;
+        Err(Jump::End(outcome))
+    }
+
+    /// Refactorise at an apparent optimum. If the fresh duals moved so little that no reduced
+    /// cost can have crossed the tolerance, the pricing pass stands (`Ok`); otherwise price
+    /// again (`Jump::Next`).
+    fn verify_optimum(&mut self, st: &mut Run, dq: f64) -> Result<(), Jump> {
+        self.yold.copy_from_slice(&self.y);
+        self.xold.copy_from_slice(&self.x);
+        self.refactor_or_rescue(st)?;
+        st.verified = true;
+        self.duals(st.phase1, st.kf);
+        let dy: f64 = self
+            .y
+            .iter()
+            .zip(&self.yold)
+            .map(|(a, b)| (a - b) * (a - b))
+            .sum::<f64>()
+            .sqrt();
+        if dy * self.amax > 0.5 * TOL_D || dq < -0.5 * TOL_D {
+            return Err(Jump::Next);
+        }
+        Ok(())
+    }
+
+    /// Phase-1 optimum: infeasible moments if the artificial keeps a positive weight (decided on
+    /// the true moments, after a rescue if one is left), else drive the artificial out.
+    fn end_phase1(&mut self, st: &mut Run) -> Result<(), Jump> {
+        let xa = self.x[st.art_pos].max(0.0);
+        let positive = xa * st.art_norm > TOL_INF * (1.0 + st.c_norm);
+        if positive && st.perturbed {
+            // Decide feasibility on the true moments.
+            self.c.copy_from_slice(&self.c0);
+            st.perturbed = false;
+            st.verified = false;
+            if !self.refactor() {
+                return Err(Jump::End(Outcome::Failed));
+            }
+            st.since_refactor = 0;
+            return Ok(());
+        }
+        if positive {
+            return self.rescue_or(st, Outcome::Infeasible);
+        }
+        self.drive_out_artificial(st)
+    }
+
+    /// Feasible: drive the (zero) artificial out of the basis. With the phase-1 duals,
+    /// s = row art_pos of B⁻¹A; pick the largest pivot element.
+    fn drive_out_artificial(&mut self, st: &mut Run) -> Result<(), Jump> {
+        let (n, r) = (self.n, self.r);
+        price(&self.fine, n, r, &self.y, 0, &self.basis, &mut self.s);
+        let mut best = None;
+        let mut best_v = TOL_PIV;
+        for i in 0..n {
+            let v = self.s[i].abs();
+            if v > best_v {
+                best_v = v;
+                best = Some(i);
+            }
+        }
+        let Some(j) = best else {
+            return Err(Jump::End(Outcome::Failed));
+        };
+        self.x[st.art_pos] = 0.0;
+        self.load_alpha(j);
+        self.pivot(st.art_pos, j, 0.0);
+        st.since_refactor += 1;
+        st.phase1 = false;
+        st.verified = false;
+        Ok(())
+    }
+
+    /// Phase 2 optimum. Any non-negative w on the basic columns with B w = c is optimal too
+    /// (complementary slackness); prefer the well-conditioned one on the clearly positive
+    /// weights, else the basic solution if it is feasible. `Outcome::Retry` when the weights
+    /// stay infeasible; the run goes on (`Jump::Next`) after a rescue.
+    fn phase2_optimum(&mut self, st: &mut Run) -> Result<Outcome, Jump> {
+        if self.x.iter().all(|&v| v >= -TOL_P) {
+            // With every weight clearly positive the least squares of the polish is
+            // the square system the refined basic solution already solved.
+            if self.x.iter().any(|&v| v <= 1e-8) {
+                self.polish();
+            }
+            return Ok(self.finish_optimal());
+        }
+        if self.polish() {
+            return Ok(self.finish_optimal());
+        }
+        if self.try_rescue(st) {
+            return Err(Jump::Next);
+        }
+        // The updated weights drifted on an ill-conditioned basis: rebuild from the
+        // weights before the refactorisation (validated by least squares in rescue).
+        if st.rescues < MAX_RESCUES {
+            self.x.copy_from_slice(&self.xold);
+            if self.try_rescue(st) {
+                return Err(Jump::Next);
+            }
+            if !self.refactor() {
+                return Ok(Outcome::Failed);
+            }
+        }
+        if self.x.iter().all(|&v| v >= -TOL_P_LOOSE) {
+            // Dual feasible and primal feasible to 1e-9: as good as the data allow
+            // on this degenerate, ill-conditioned basis.
+            self.stats.loose += 1;
+            return Ok(Outcome::Optimal);
+        }
+        Ok(Outcome::Retry)
+    }
+
+    /// Ratio test (Harris two-pass; Bland: smallest basis index among ties) for the entering
+    /// column in `alpha`: the leaving basis position, None for an unbounded direction
+    /// (impossible for this LP, whose objective is ≥ 0: numerical trouble).
+    fn ratio_test(&self, bland: bool) -> Option<usize> {
+        let r = self.r;
+        let mut theta_max = f64::INFINITY;
+        for t in 0..r {
+            let a = self.alpha[t];
+            if a > TOL_PIV {
+                let v = (self.x[t].max(0.0) + TOL_P) / a;
+                if v < theta_max {
+                    theta_max = v;
+                }
+            }
+        }
+        if !theta_max.is_finite() {
+            return None;
+        }
+        let mut l = usize::MAX;
+        let mut best = 0.0;
+        for t in 0..r {
+            let a = self.alpha[t];
+            if a > TOL_PIV && self.x[t].max(0.0) / a <= theta_max {
+                let better = if bland {
+                    l == usize::MAX || self.basis[t] < self.basis[l]
+                } else {
+                    a > best
+                };
+                if better {
+                    best = a;
+                    l = t;
+                }
+            }
+        }
+        Some(l)
+    }
+
+    /// Pivot column q into basis position l (reduced cost dq), counting degenerate steps;
+    /// phase 1 ends when the artificial leaves.
+    fn pivot_step(&mut self, st: &mut Run, l: usize, q: usize, dq: f64) {
+        let theta = (self.x[l].max(0.0) / self.alpha[l]).max(0.0);
+        if theta * (-dq) <= 1e-14 {
+            st.degenerate += 1;
+            self.stats.degenerate_pivots += 1;
+        } else {
+            st.degenerate = 0;
+        }
+        let leaving = self.basis[l];
+        self.pivot(l, q, theta);
+        self.stats.pivots += 1;
+        if st.phase1 {
+            self.stats.phase1_pivots += 1;
+        }
+        st.since_refactor += 1;
+        if st.phase1 && leaving == ART {
+            st.phase1 = false;
+        }
+    }
+
+    /// alpha = B⁻¹ a_j.
+    pub(super) fn load_alpha(&mut self, j: usize) {
+        let r = self.r;
+        let col = &self.rows[j * r..(j + 1) * r];
+        mat_vec(&self.binv, col, &mut self.alpha, r);
+    }
+
+    /// Exchange basis position l for column q with step theta (alpha already loaded).
+    fn pivot(&mut self, l: usize, q: usize, theta: f64) {
+        for t in 0..self.r {
+            self.x[t] -= theta * self.alpha[t];
+        }
+        self.x[l] = theta;
+        self.exchange(l, q);
+    }
+
+    /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
+    pub(super) fn exchange(&mut self, l: usize, q: usize) {
+        let r = self.r;
+        let al = self.alpha[l];
+        for k in 0..r {
+            self.binv[l * r + k] /= al;
+        }
+        for t in 0..r {
+            if t != l {
+                let f = self.alpha[t];
+                if f != 0.0 {
+                    for k in 0..r {
+                        self.binv[t * r + k] -= f * self.binv[l * r + k];
+                    }
+                }
+            }
+        }
+        self.factored_ok = false;
+        if self.basis[l] != ART {
+            self.set_basic(self.basis[l], false);
+        }
+        self.set_basic(q, true);
+        self.basis[l] = q;
+    }
+
+    /// Set the basic flags of the current basis' real columns.
+    pub(super) fn mark_basic(&mut self, on: bool) {
+        for t in 0..self.r {
+            let bt = self.basis[t];
+            if bt != ART {
+                self.set_basic(bt, on);
+            }
+        }
+    }
+}

@@ -1,0 +1,373 @@
+//! Where a simplex run starts: the sequence of attempts (given distribution, warm basis, cold
+//! basis, Bland's rule), the crossover from a known distribution to a basic feasible solution,
+//! and the warm-start memory of the last optimum.
+
+use super::linalg::{complete_basis, dot, norm};
+use super::{FastSolver, Outcome, Verdict, REFACTOR_EVERY};
+
+/// The basis a simplex attempt starts from.
+#[derive(Clone, Copy)]
+enum Start {
+    /// The crossover from the given distribution.
+    Hint,
+    /// The last optimal basis.
+    Warm,
+    /// The well-conditioned cold-start basis.
+    Cold,
+    /// The basis the previous attempt ended on.
+    Current,
+}
+
+/// Smallest pivot element of a crossover step.
+const PIV: f64 = 1e-8;
+
+impl FastSolver {
+    /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
+    /// (two cold runs, the second with Bland's rule throughout).
+    pub(super) fn attempts(&mut self, kf: usize, hint: Option<&[(u32, f64)]>) -> Verdict {
+        let warm_or_cold = if self.warm && self.warm_basis.is_some() {
+            Start::Warm
+        } else {
+            Start::Cold
+        };
+        // The same moments as the last solved problem (another fragment depth for the same
+        // texel): its optimal basis is primal feasible here, a better start than the crossover.
+        let same_moments = matches!(warm_or_cold, Start::Warm) && self.last_c == self.c0;
+        if hint.is_some() && same_moments {
+            self.stats.same_moments += 1;
+        }
+        let mut start = if hint.is_some() && !same_moments {
+            Start::Hint
+        } else {
+            warm_or_cold
+        };
+        let mut cold_runs = 0;
+        let mut stash: Option<Vec<usize>> = None;
+        for _attempt in 0..6 {
+            if let Start::Hint = start {
+                self.c.copy_from_slice(&self.c0);
+                if !self.crossover(hint.unwrap_or(&[]), kf) {
+                    // Unusable start (numerically dependent support): the usual way.
+                    self.stats.hint_rejected += 1;
+                    start = warm_or_cold;
+                }
+            }
+            self.load_start(start, &mut cold_runs);
+            // The second cold run uses Bland's rule throughout.
+            self.c.copy_from_slice(&self.c0);
+            match self.run(kf, cold_runs >= 2) {
+                Outcome::RetryAccurate => {
+                    self.stats.restarts += 1;
+                    // The answer to certify if the accurate run fails.
+                    stash = Some(self.basis.clone());
+                    start = Start::Current;
+                }
+                Outcome::Optimal => return Verdict::Optimal,
+                Outcome::Infeasible => return Verdict::Infeasible,
+                Outcome::Retry => {
+                    self.stats.restarts += 1;
+                    start = Start::Current;
+                }
+                Outcome::Failed => {
+                    self.stats.restarts += 1;
+                    if cold_runs >= 2 || stash.is_some() {
+                        break;
+                    }
+                    start = if matches!(start, Start::Hint) {
+                        warm_or_cold
+                    } else {
+                        Start::Cold
+                    };
+                }
+            }
+        }
+        self.stashed_verdict(stash)
+    }
+
+    /// Put the basis of `start` in place (the crossover has already placed the hint's);
+    /// counts cold runs.
+    fn load_start(&mut self, start: Start, cold_runs: &mut usize) {
+        match start {
+            Start::Hint | Start::Current => {}
+            Start::Warm => {
+                self.mark_basic(false);
+                let wb = self.warm_basis.as_ref().expect("warm basis");
+                self.basis.copy_from_slice(wb);
+                self.mark_basic(true);
+            }
+            Start::Cold => {
+                self.mark_basic(false);
+                self.basis.copy_from_slice(&self.b0);
+                self.mark_basic(true);
+                *cold_runs += 1;
+            }
+        }
+    }
+
+    /// When the attempts ran out: the optimum stashed before an accurate rerun, if any.
+    fn stashed_verdict(&mut self, stash: Option<Vec<usize>>) -> Verdict {
+        match stash {
+            Some(basis) => {
+                self.stats.loose += 1;
+                self.mark_basic(false);
+                self.basis.copy_from_slice(&basis);
+                self.mark_basic(true);
+                Verdict::Optimal
+            }
+            None => Verdict::Failed,
+        }
+    }
+
+    /// After a certified fast optimum: its basis is the next warm start.
+    pub(super) fn remember_optimal(&mut self) {
+        self.last_bound = f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
+        if self.warm {
+            match &mut self.warm_basis {
+                Some(wb) => wb.copy_from_slice(&self.basis),
+                None => self.warm_basis = Some(self.basis.clone()),
+            }
+            self.last_c.copy_from_slice(&self.c0);
+        }
+    }
+
+    /// The support of a distribution with at most r atoms, completed to r columns from the
+    /// cold-start basis (None for larger supports).
+    pub(super) fn support_basis(&self, dist: &[(u32, f64)]) -> Option<Vec<usize>> {
+        let mut basis: Vec<usize> = Vec::with_capacity(self.r);
+        for &(i, w) in dist {
+            let i = i as usize;
+            if w > 0.0 && !basis.contains(&i) {
+                if basis.len() == self.r {
+                    return None;
+                }
+                basis.push(i);
+            }
+        }
+        let rows = &self.rows;
+        complete_basis(rows, self.n, self.r, &basis)
+    }
+
+    /// Crossover from a known distribution `start` = [(grid index, weight)] with these moments
+    /// (e.g. the filtered depth distribution of a kernel) to a basis whose basic solution is
+    /// feasible and costs no more. The basis is the support columns of greatest volume (greedy
+    /// Gram–Schmidt), completed from the cold-start basis; every other support point is then
+    /// pushed out, to weight 0 or into the basis, in the direction that does not increase
+    /// Σ_{z_i<z_f} w_i (one ratio test and exchange each). This replaces phase 1. False when
+    /// the start is unusable (then the caller starts as usual); `run` re-verifies feasibility
+    /// from the true moments in any case, so a wrong start cannot change the answer.
+    fn crossover(&mut self, start: &[(u32, f64)], kf: usize) -> bool {
+        self.stats.hinted += 1;
+        if !self.load_hint(start) {
+            return false;
+        }
+        self.mark_basic(false);
+        let chosen = self.choose_support();
+        let chosen = self.complete_from_cold(chosen);
+        if chosen < self.r {
+            return false;
+        }
+        self.mark_basic(true);
+        if !self.factor() {
+            return false;
+        }
+        self.push_out_superbasic(kf)
+    }
+
+    /// The start's positive atoms into `hint`, their columns into `hint_res`, and every atom
+    /// superbasic in `hint_pos`; false for an invalid or empty start.
+    fn load_hint(&mut self, start: &[(u32, f64)]) -> bool {
+        let (n, r) = (self.n, self.r);
+        self.hint.clear();
+        for &(i, w) in start {
+            let i = i as usize;
+            if i >= n || !w.is_finite() || w < 0.0 {
+                return false;
+            }
+            if w > 0.0 {
+                self.hint.push((i, w));
+            }
+        }
+        let s = self.hint.len();
+        if s == 0 {
+            return false;
+        }
+        // Greedy maximal volume among the support columns: residuals after projecting out the
+        // chosen ones (modified Gram–Schmidt on copies).
+        self.hint_res.clear();
+        for &(i, _) in &self.hint {
+            self.hint_res
+                .extend_from_slice(&self.rows[i * r..(i + 1) * r]);
+        }
+        self.hint_u.clear();
+        // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
+        self.hint_pos.clear();
+        self.hint_pos.resize(s, usize::MAX);
+        true
+    }
+
+    /// Greedy maximal volume: the support column with the largest residual (relative size
+    /// ≥ 1e-5) enters the basis with its weight, and is projected out of the others' residuals;
+    /// returns the number of basis positions filled.
+    fn choose_support(&mut self) -> usize {
+        let (r, s) = (self.r, self.hint.len());
+        let mut chosen = 0usize;
+        while chosen < r {
+            let mut best = usize::MAX;
+            let mut best_v = 0.0;
+            for k in 0..s {
+                if self.hint_pos[k] != usize::MAX {
+                    continue;
+                }
+                let v = dot(
+                    &self.hint_res[k * r..(k + 1) * r],
+                    &self.hint_res[k * r..(k + 1) * r],
+                );
+                if v > best_v {
+                    best_v = v;
+                    best = k;
+                }
+            }
+            // Relative to the column norm (RMS 1 over the grid, first coordinate 1).
+            if best == usize::MAX || best_v.sqrt() < 1e-5 {
+                break;
+            }
+            let inv = 1.0 / best_v.sqrt();
+            let u: Vec<f64> = self.hint_res[best * r..(best + 1) * r]
+                .iter()
+                .map(|v| v * inv)
+                .collect();
+            for k in 0..s {
+                if self.hint_pos[k] == usize::MAX && k != best {
+                    let row = &mut self.hint_res[k * r..(k + 1) * r];
+                    let h = dot(row, &u);
+                    for (a, b) in row.iter_mut().zip(&u) {
+                        *a -= h * b;
+                    }
+                }
+            }
+            self.hint_u.extend_from_slice(&u);
+            self.hint_pos[best] = chosen;
+            self.basis[chosen] = self.hint[best].0;
+            self.x[chosen] = self.hint[best].1;
+            chosen += 1;
+        }
+        chosen
+    }
+
+    /// Complete the first `chosen` basis positions from the cold-start basis (which spans R^r)
+    /// with zero weights: columns independent of the span so far (relative residual > 1e-5);
+    /// returns the number of positions filled.
+    fn complete_from_cold(&mut self, mut chosen: usize) -> usize {
+        let r = self.r;
+        let mut t0 = 0;
+        while chosen < r && t0 < r {
+            let i = self.b0[t0];
+            t0 += 1;
+            if self.basis[..chosen].contains(&i) {
+                continue;
+            }
+            let mut v = self.rows[i * r..(i + 1) * r].to_vec();
+            let n0 = norm(&v);
+            for _pass in 0..2 {
+                for u in self.hint_u.chunks(r) {
+                    let h = dot(&v, u);
+                    for (a, b) in v.iter_mut().zip(u) {
+                        *a -= h * b;
+                    }
+                }
+            }
+            let nv = norm(&v);
+            if nv <= 1e-5 * n0 {
+                continue;
+            }
+            v.iter_mut().for_each(|a| *a /= nv);
+            self.hint_u.extend_from_slice(&v);
+            self.basis[chosen] = i;
+            self.x[chosen] = 0.0;
+            chosen += 1;
+        }
+        chosen
+    }
+
+    /// Push every superbasic support point out of the interior (refactorising every
+    /// `REFACTOR_EVERY` exchanges); false on a singular basis.
+    fn push_out_superbasic(&mut self, kf: usize) -> bool {
+        let mut since = 0usize;
+        for k in 0..self.hint.len() {
+            if self.hint_pos[k] != usize::MAX {
+                continue;
+            }
+            let (j, w) = self.hint[k];
+            if self.is_basic[j] {
+                // A completion column of the cold basis is also in the support: give it the
+                // weight (same column, same point of the feasible set).
+                let Some(t) = self.basis.iter().position(|&b| b == j) else {
+                    return false;
+                };
+                self.x[t] += w;
+                continue;
+            }
+            if self.push_out(j, w, kf) {
+                self.stats.crossover_pivots += 1;
+                since += 1;
+                if since >= REFACTOR_EVERY {
+                    if !self.factor() {
+                        return false;
+                    }
+                    since = 0;
+                }
+            }
+        }
+        true
+    }
+
+    /// Move the superbasic point j (weight w) to weight 0, or into the basis when a basic
+    /// weight reaches 0 first, in the direction whose reduced cost d_j does not increase the
+    /// cost; true when the basis changed.
+    fn push_out(&mut self, j: usize, w: f64, kf: usize) -> bool {
+        let r = self.r;
+        self.load_alpha(j);
+        let mut dj = (j < kf) as u8 as f64;
+        for t in 0..r {
+            if self.basis[t] < kf {
+                dj -= self.alpha[t];
+            }
+        }
+        // Decreasing w_j moves the basic weights by +t·α; increasing by −t·α.
+        let mut decrease = dj >= 0.0;
+        if !decrease && !self.alpha[..r].iter().any(|&a| a > PIV) {
+            decrease = true;
+        }
+        let (step, l) = self.push_ratio(decrease, w);
+        let sign = if decrease { 1.0 } else { -1.0 };
+        for t in 0..r {
+            self.x[t] += sign * step * self.alpha[t];
+        }
+        if l == usize::MAX {
+            return false;
+        }
+        let wl = if decrease { w - step } else { w + step };
+        self.exchange(l, j);
+        self.x[l] = wl;
+        true
+    }
+
+    /// Ratio test of [`Self::push_out`]: the step (at most w when decreasing) and the basis
+    /// position whose weight reaches 0 first (usize::MAX if none).
+    fn push_ratio(&self, decrease: bool, w: f64) -> (f64, usize) {
+        let mut step = if decrease { w } else { f64::INFINITY };
+        let mut l = usize::MAX;
+        for t in 0..self.r {
+            let a = self.alpha[t];
+            let a = if decrease { -a } else { a };
+            if a > PIV {
+                let v = self.x[t].max(0.0) / a;
+                if v < step {
+                    step = v;
+                    l = t;
+                }
+            }
+        }
+        (step, l)
+    }
+}
