@@ -143,27 +143,8 @@ pub(super) fn complete_basis(
 ) -> Option<Vec<usize>> {
     let mut basis: Vec<usize> = cols.to_vec();
     let mut q: Vec<Vec<f64>> = Vec::with_capacity(r);
-    let add = |v: &[f64], q: &mut Vec<Vec<f64>>| -> bool {
-        let mut v = v.to_vec();
-        let n0 = norm(&v);
-        for _ in 0..2 {
-            for qi in q.iter() {
-                let h = dot(qi, &v);
-                for (a, b) in v.iter_mut().zip(qi) {
-                    *a -= h * b;
-                }
-            }
-        }
-        let nv = norm(&v);
-        if nv.is_nan() || nv <= 1e-10 * n0 {
-            return false;
-        }
-        v.iter_mut().for_each(|a| *a /= nv);
-        q.push(v);
-        true
-    };
     for &i in cols {
-        if !add(&rows[i * r..(i + 1) * r], &mut q) {
+        if !push_orthonormal(&rows[i * r..(i + 1) * r], &mut q) {
             return None;
         }
     }
@@ -186,12 +167,34 @@ pub(super) fn complete_basis(
             }
         }
         let i = best?;
-        if !add(&rows[i * r..(i + 1) * r], &mut q) {
+        if !push_orthonormal(&rows[i * r..(i + 1) * r], &mut q) {
             return None;
         }
         basis.push(i);
     }
     Some(basis)
+}
+
+/// Append to the orthonormal vectors `q` the normalised component of v orthogonal to them (two
+/// Gram–Schmidt passes); false when it is below 1e-10 ‖v‖ (v dependent on q).
+fn push_orthonormal(v: &[f64], q: &mut Vec<Vec<f64>>) -> bool {
+    let mut v = v.to_vec();
+    let n0 = norm(&v);
+    for _ in 0..2 {
+        for qi in q.iter() {
+            let h = dot(qi, &v);
+            for (a, b) in v.iter_mut().zip(qi) {
+                *a -= h * b;
+            }
+        }
+    }
+    let nv = norm(&v);
+    if nv.is_nan() || nv <= 1e-10 * n0 {
+        return false;
+    }
+    v.iter_mut().for_each(|a| *a /= nv);
+    q.push(v);
+    true
 }
 
 /// r rows of the row-major n × r matrix with (greedily) maximal volume: a well-conditioned

@@ -38,6 +38,7 @@
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
 mod linalg;
+mod ortho;
 mod price;
 mod refine;
 mod simplex;
@@ -49,7 +50,8 @@ use super::reference::ReferenceSolver;
 use super::scaled::{Found, ScaledSimplex};
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
-use linalg::{dot, invert, max_volume_rows, norm};
+use linalg::{max_volume_rows, norm};
+use ortho::{orthonormalise, r_condition, Ortho};
 
 /// Primal feasibility tolerance on weights (which sum to 1).
 const TOL_P: f64 = 1e-10;
@@ -233,84 +235,19 @@ impl FastSolver {
         let n = table.n();
         let m = table.m();
         let mm = m + 1;
-        // Columns of M = [1, b_1..b_m] on the grid.
-        let mut q: Vec<Vec<f64>> = Vec::with_capacity(mm);
-        let mut rcoef_full = vec![0.0; mm * mm];
-        let mut kept = vec![None; mm];
-        let mut fscale = vec![0.0; mm];
-        for j in 0..mm {
-            let mut v: Vec<f64> = if j == 0 {
-                vec![1.0; n]
-            } else {
-                (0..n).map(|i| table.row(i)[j - 1]).collect()
-            };
-            fscale[j] = v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-            // Work on v·2^-e (exact) so that ‖v‖² cannot overflow (exp(400z) reaches 1e173).
-            let unit = super::dense::inv_pow2(fscale[j]);
-            v.iter_mut().for_each(|x| *x *= unit);
-            let norm0 = norm(&v);
-            let coef = &mut rcoef_full[j * mm..(j + 1) * mm];
-            for _pass in 0..2 {
-                for (k, qk) in q.iter().enumerate() {
-                    let h = dot(qk, &v);
-                    coef[k] += h;
-                    for (vi, qi) in v.iter_mut().zip(qk) {
-                        *vi -= h * qi;
-                    }
-                }
-            }
-            let nv = norm(&v);
-            if norm0 > 0.0 && nv > TOL_RANK * norm0 {
-                coef[q.len()] = nv;
-                kept[j] = Some(q.len());
-                for vi in v.iter_mut() {
-                    *vi /= nv;
-                }
-                q.push(v);
-            }
-            // R's column of the unscaled function.
-            coef.iter_mut().for_each(|c| *c /= unit);
-        }
-        let r = q.len();
-        let sn = (n as f64).sqrt();
-        let mut cols = vec![0.0; r * n];
-        let mut rows = vec![0.0; n * r];
-        for (k, qk) in q.iter().enumerate() {
-            for i in 0..n {
-                let a = sn * qk[i];
-                cols[k * n + i] = a;
-                rows[i * r + k] = a;
-            }
-        }
-        let mut rcoef = vec![0.0; mm * r];
-        for j in 0..mm {
-            rcoef[j * r..(j + 1) * r].copy_from_slice(&rcoef_full[j * mm..j * mm + r]);
-        }
+        let Ortho {
+            r,
+            rows,
+            cols,
+            rcoef,
+            kept,
+            fscale,
+        } = orthonormalise(&table);
         let b0 = max_volume_rows(&rows, n, r);
         let amax = (0..n)
             .map(|i| norm(&rows[i * r..(i + 1) * r]))
             .fold(0.0, f64::max);
-        // cond_F(R) over the kept functions (= condition of M on the grid).
-        let condition = {
-            let mut rk = vec![0.0; r * r];
-            let mut t = 0;
-            for j in 0..mm {
-                if let Some(tj) = kept[j] {
-                    for k in 0..r {
-                        rk[k * r + tj] = rcoef[j * r + k];
-                    }
-                    t += 1;
-                }
-            }
-            debug_assert_eq!(t, r);
-            let nr = norm(&rk);
-            let mut inv = vec![0.0; r * r];
-            if invert(&mut rk, &mut inv, r) {
-                nr * norm(&inv)
-            } else {
-                f64::INFINITY
-            }
-        };
+        let condition = r_condition(&rcoef, &kept, r);
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
         let cert_rows: Vec<usize> = (0..mm).filter(|&j| kept[j].is_some()).collect();
         let mut solver = FastSolver {
@@ -376,7 +313,6 @@ impl FastSolver {
         solver
     }
 
-    /// Enable or disable warm start from the previous optimal basis (on by default).
     /// Whether problems that neither the fast runs nor the scaled simplex settle are also given
     /// to the reference solver, whose support is then certified like any other basis (off by
     /// default: the reference is an oracle for the tests, not a rescue). Without a certificate
@@ -385,6 +321,7 @@ impl FastSolver {
         self.use_fallback = on;
     }
 
+    /// Enable or disable warm start from the previous optimal basis (on by default).
     pub fn set_warm_start(&mut self, on: bool) {
         self.warm = on;
         if !on {
@@ -467,38 +404,6 @@ impl FastSolver {
     pub fn table(&self) -> &GridTable {
         &self.table
     }
-
-    /// Transform b̄ = [1, b] to c = √n R^{-T} b̄; false if a dependent function's moment is
-    /// inconsistent (then no distribution on the grid has these moments).
-    fn transform(&mut self, moments: &[f64]) -> bool {
-        let r = self.r;
-        let mut done = 0usize;
-        for j in 0..=self.m {
-            let bj = if j == 0 { 1.0 } else { moments[j - 1] };
-            let coef = &self.rcoef[j * r..(j + 1) * r];
-            let mut acc = bj;
-            for k in 0..done {
-                acc -= coef[k] * self.u[k];
-            }
-            match self.kept[j] {
-                Some(t) => {
-                    self.u[t] = acc / coef[t];
-                    done = t + 1;
-                }
-                None => {
-                    let scale = self.fscale[j].max(bj.abs()).max(1e-300);
-                    if acc.abs() > TOL_DEP * scale {
-                        return false;
-                    }
-                }
-            }
-        }
-        let sn = (self.n as f64).sqrt();
-        for k in 0..r {
-            self.c[k] = sn * self.u[k];
-        }
-        true
-    }
 }
 
 impl MomentSolver for FastSolver {
@@ -534,9 +439,23 @@ impl MomentSolver for FastSolver {
 
 /// The fast solver's own verdict, kept for when nothing certifies.
 enum Legacy {
-    Answer(Vec<usize>),
+    /// An optimal basis that did not certify, and why.
+    Answer(Vec<usize>, String),
     Infeasible,
     Reference,
+}
+
+impl Legacy {
+    /// Why this verdict is not an answer (for the reason of a `Failed` solution).
+    fn reason(&self) -> String {
+        match self {
+            Legacy::Answer(_, why) => format!("fast optimum not certified ({why})"),
+            Legacy::Infeasible => {
+                "phase 1 found no feasible point, but no Farkas ray certifies it".into()
+            }
+            Legacy::Reference => "the simplex did not converge".into(),
+        }
+    }
 }
 
 /// What the simplex attempts of [`FastSolver::attempts`] ended with.
@@ -560,15 +479,7 @@ impl FastSolver {
         hint: Option<&[(u32, f64)]>,
         c_given: bool,
     ) -> Result<Solution> {
-        if moments.len() != self.m {
-            bail!("expected {} moments, got {}", self.m, moments.len());
-        }
-        if let Some(j) = moments.iter().position(|v| !v.is_finite()) {
-            bail!("moment {} is not finite ({})", j + 1, moments[j]);
-        }
-        if zf.is_nan() {
-            bail!("z_f is NaN");
-        }
+        self.check_problem(moments, zf)?;
         self.stats.solves += 1;
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
@@ -579,24 +490,72 @@ impl FastSolver {
         } else {
             Verdict::Infeasible
         };
-        // The fast solver's verdict: its basis is certified, improved or escalated below.
-        let mut why = String::new();
+        let legacy = match self.certify_fast(verdict, moments, kf, hint) {
+            Ok(sol) => return Ok(sol),
+            Err(legacy) => legacy,
+        };
+        let start = match &legacy {
+            Legacy::Answer(b, _) => Some(b.clone()),
+            _ => None,
+        };
+        let sol = self.escalate(moments, kf, start.as_deref());
+        if sol.status != Status::Failed {
+            return Ok(sol);
+        }
+        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`). The
+        // reference, when enabled, is one more source of a basis to certify, not a rescue.
+        self.stats.failed += 1;
+        let escalation = sol.reason.unwrap_or_default();
+        if self.use_fallback {
+            if let Some(c) = self.reference_certified(moments, zf, kf) {
+                self.stats.failed -= 1;
+                self.stats.fallbacks += 1;
+                return Ok(c);
+            }
+        }
+        Ok(Solution::failed(format!(
+            "{}; {escalation}",
+            legacy.reason()
+        )))
+    }
+
+    /// A one-line error for malformed moments or z_f, before any work.
+    fn check_problem(&self, moments: &[f64], zf: f64) -> Result<()> {
+        if moments.len() != self.m {
+            bail!("expected {} moments, got {}", self.m, moments.len());
+        }
+        if let Some(j) = moments.iter().position(|v| !v.is_finite()) {
+            bail!("moment {} is not finite ({})", j + 1, moments[j]);
+        }
+        if zf.is_nan() {
+            bail!("z_f is NaN");
+        }
+        Ok(())
+    }
+
+    /// The fast solver's verdict certified (`Ok`): its optimal basis as it stands or after
+    /// accurate pivots, else the support of the start distribution after accurate pivots.
+    /// Otherwise the verdict to escalate (`Err`).
+    fn certify_fast(
+        &mut self,
+        verdict: Verdict,
+        moments: &[f64],
+        kf: usize,
+        hint: Option<&[(u32, f64)]>,
+    ) -> Result<Solution, Legacy> {
         let legacy = match verdict {
             Verdict::Optimal => {
                 self.remember_optimal();
                 let fast_basis = self.basis.clone();
                 match self.cert.optimal(moments, kf, &fast_basis) {
                     Ok(c) => return Ok(certified(c)),
-                    Err(e) => {
-                        why = e;
-                        Legacy::Answer(fast_basis)
-                    }
+                    Err(e) => Legacy::Answer(fast_basis, e),
                 }
             }
             Verdict::Infeasible => Legacy::Infeasible,
             Verdict::Failed => Legacy::Reference,
         };
-        if let Legacy::Answer(fast_basis) = &legacy {
+        if let Legacy::Answer(fast_basis, _) = &legacy {
             let mut basis = fast_basis.clone();
             if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
                 self.stats.improved += 1;
@@ -611,33 +570,7 @@ impl FastSolver {
                 return Ok(certified(c));
             }
         }
-        let start = match &legacy {
-            Legacy::Answer(b) => Some(b.clone()),
-            _ => None,
-        };
-        let sol = self.escalate(moments, kf, start.as_deref());
-        if sol.status != Status::Failed {
-            return Ok(sol);
-        }
-        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`). The
-        // reference, when enabled, is one more source of a basis to certify, not a rescue.
-        self.stats.failed += 1;
-        let fast = match &legacy {
-            Legacy::Answer(..) => format!("fast optimum not certified ({why})"),
-            Legacy::Infeasible => {
-                "phase 1 found no feasible point, but no Farkas ray certifies it".into()
-            }
-            Legacy::Reference => "the simplex did not converge".into(),
-        };
-        let escalation = sol.reason.unwrap_or_default();
-        if self.use_fallback {
-            if let Some(c) = self.reference_certified(moments, zf, kf) {
-                self.stats.failed -= 1;
-                self.stats.fallbacks += 1;
-                return Ok(c);
-            }
-        }
-        Ok(Solution::failed(format!("{fast}; {escalation}")))
+        Err(legacy)
     }
 
     /// The reference's answer, if its support (completed to a basis) certifies.

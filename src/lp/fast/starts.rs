@@ -25,22 +25,7 @@ impl FastSolver {
     /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
     /// (two cold runs, the second with Bland's rule throughout).
     pub(super) fn attempts(&mut self, kf: usize, hint: Option<&[(u32, f64)]>) -> Verdict {
-        let warm_or_cold = if self.warm && self.warm_basis.is_some() {
-            Start::Warm
-        } else {
-            Start::Cold
-        };
-        // The same moments as the last solved problem (another fragment depth for the same
-        // texel): its optimal basis is primal feasible here, a better start than the crossover.
-        let same_moments = matches!(warm_or_cold, Start::Warm) && self.last_c == self.c0;
-        if hint.is_some() && same_moments {
-            self.stats.same_moments += 1;
-        }
-        let mut start = if hint.is_some() && !same_moments {
-            Start::Hint
-        } else {
-            warm_or_cold
-        };
+        let (mut start, warm_or_cold) = self.first_start(hint.is_some());
         let mut cold_runs = 0;
         let mut stash: Option<Vec<usize>> = None;
         for _attempt in 0..6 {
@@ -82,6 +67,28 @@ impl FastSolver {
             }
         }
         self.stashed_verdict(stash)
+    }
+
+    /// The first start of [`Self::attempts`] and the usual one (warm when there is a warm
+    /// basis, else cold).
+    fn first_start(&mut self, hint: bool) -> (Start, Start) {
+        let warm_or_cold = if self.warm && self.warm_basis.is_some() {
+            Start::Warm
+        } else {
+            Start::Cold
+        };
+        // The same moments as the last solved problem (another fragment depth for the same
+        // texel): its optimal basis is primal feasible here, a better start than the crossover.
+        let same_moments = matches!(warm_or_cold, Start::Warm) && self.last_c == self.c0;
+        if hint && same_moments {
+            self.stats.same_moments += 1;
+        }
+        let start = if hint && !same_moments {
+            Start::Hint
+        } else {
+            warm_or_cold
+        };
+        (start, warm_or_cold)
     }
 
     /// Put the basis of `start` in place (the crossover has already placed the hint's);
