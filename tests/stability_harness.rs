@@ -96,3 +96,35 @@ fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
     let (cells, _, _) = stability::heat_map(&r.points, 0, Mode::F64, 8, 8);
     assert!(cells.iter().flatten().flatten().all(|&v| v == 1.0));
 }
+
+/// Issue 12: the certified LP settles the oracle on every stress input (boundary moment vectors
+/// of ≤ m/2 Diracs, clusters within 1e-4, z_f at and next to a support point) for power,
+/// exponential and trigonometric bases, and Markov's bound (the `esm` closed form) never lies
+/// above the sharp bound of its own basis exp(80(z−1)) on [0,1].
+#[test]
+fn certified_oracle_settles_every_input_and_markov_stays_below_it() {
+    let cfg = Config {
+        samples: 1000,
+        seed: 7,
+        ..Config::default()
+    };
+    let samples = stability::generate(&cfg);
+    let names = ["esm", "evsm", "vsm", "hamburger4", "hamburger6", "tmsm"];
+    let techs: Vec<Entry> = names
+        .iter()
+        .map(|n| Entry {
+            name: n.to_string(),
+            t32: momentlab::technique::by_name(n).unwrap(),
+            t16: momentlab::technique::by_name(n).unwrap(),
+        })
+        .collect();
+    let r = stability::run(&cfg, &techs, &samples, &|_| {}).unwrap();
+    for (t, name) in names.iter().enumerate() {
+        let f64_row = &r.by_mode[t].iter().find(|e| e.0 == Mode::F64).unwrap().1;
+        assert_eq!(f64_row.count, 1000, "{name}");
+        assert_eq!(f64_row.oracle_failures, 0, "{name}: oracle failures");
+        if *name == "esm" {
+            assert_eq!(f64_row.over_share, 0.0, "Markov above the sharp bound");
+        }
+    }
+}

@@ -14,7 +14,10 @@
 //!   L = y·b̄ + min(0, min_i d_i), d_i = p_i − y·ā_i (p_i = [z_i < z_f]), with |G − L| ≤ 1e-9
 //!   (or the tighter Σ_i u_i min(0, d_i) with u_i the bound on w_i from sign-definite rows):
 //!   every distribution with exactly these moments has mass ≥ L ≥ G − 1e-9 below z_f. The d_i
-//!   are computed in f64 and lowered by their rounding bound.
+//!   are computed in f64 and lowered by their rounding bound; the duals are double-double
+//!   (y + y_lo). When L > G + 1e-9 (huge duals near the boundary of the moment space), G must
+//!   instead match L′ = L + y·ρ to 1e-9, the bound for the support's own moments b̄ + ρ (ρ its
+//!   residual, within the tolerance above).
 //! * **infeasible**: a Farkas ray y with y·b̄ < min_i y·ā_i − 1e-9 (|min_i y·ā_i| + Σ_j |y_j| σ_j):
 //!   then no distribution reproduces the moments even to the tolerance above.
 //!
@@ -111,6 +114,11 @@ pub struct Certifier {
     /// x before clamping to ≥ 0.
     xraw: Vec<f64>,
     y: Vec<f64>,
+    /// Low parts of the duals: y + ylo is the double-double dual vector (0 for Farkas rays).
+    ylo: Vec<f64>,
+    /// Rounding factor of the f64 reduced costs for the current duals: γ plus the relative
+    /// size of ylo (the f64 pass leaves the low parts out).
+    gamma: f64,
     tmp: Vec<f64>,
     d: Vec<f64>,
     e: Vec<f64>,
@@ -179,6 +187,8 @@ impl Certifier {
             x: vec![0.0; r],
             xraw: vec![0.0; r],
             y: vec![0.0; r],
+            ylo: vec![0.0; r],
+            gamma: GAMMA,
             tmp: vec![0.0; r],
             d: vec![0.0; n],
             e: vec![0.0; n],
@@ -397,11 +407,11 @@ impl Certifier {
         let mut best: Option<(usize, f64)> = None;
         'scan: for lo in (0..self.n).step_by(row_kernels::BLOCK) {
             let hi = (lo + row_kernels::BLOCK).min(self.n);
-            if !row_kernels::any_below(&self.d[lo..hi], &self.e[lo..hi], GAMMA) {
+            if !row_kernels::any_below(&self.d[lo..hi], &self.e[lo..hi], self.gamma) {
                 continue;
             }
             for i in lo..hi {
-                let low = self.d[i] - GAMMA * self.e[i];
+                let low = self.d[i] - self.gamma * self.e[i];
                 if low < 0.0 && !basis.contains(&i) {
                     let v = low * self.cap(i);
                     if best.is_none_or(|(_, v0)| v < v0) {
@@ -497,6 +507,7 @@ impl Certifier {
         if y.len() != r || y.iter().any(|v| !v.is_finite()) {
             return Err("Farkas ray of the wrong size or not finite".into());
         }
+        self.ylo.iter_mut().for_each(|v| *v = 0.0);
         self.reduced(y, None);
         let lo = self.min_lower();
         let yb = -residual2(0.0, (0..r).map(|k| (y[k], self.bbar[self.rows[k]])));
@@ -679,18 +690,26 @@ impl Certifier {
             self.y[t] = cost(t);
         }
         self.solve(true, Which::Y);
-        for _ in 0..2 {
+        for step in 0..3 {
             for t in 0..r {
                 let terms = (0..r).map(|k| (self.a[k * r + t], self.y[k]));
                 self.tmp[t] = residual2(cost(t), terms);
             }
             self.solve(true, Which::Tmp);
+            // The last correction is kept apart: y + ylo in double-double. Near the boundary of
+            // the moment space |y| reaches 1e9, and the f64 y alone leaves reduced costs of
+            // ε|y| ≈ 1e-7 on the basis columns.
             for k in 0..r {
-                self.y[k] += self.tmp[k];
+                if step < 2 {
+                    self.y[k] += self.tmp[k];
+                } else {
+                    self.ylo[k] = self.tmp[k];
+                }
             }
         }
         for k in 0..r {
             self.y[k] *= self.scale[self.rows[k]];
+            self.ylo[k] *= self.scale[self.rows[k]];
         }
     }
 
@@ -702,7 +721,7 @@ impl Certifier {
             .map(|k| {
                 let j = self.rows[k];
                 let terms = (0..r).map(|t| (self.entry(j, basis[t]), self.x[t]));
-                -self.y[k] * residual2(self.bbar[j], terms)
+                -(self.y[k] + self.ylo[k]) * residual2(self.bbar[j], terms)
             })
             .sum()
     }
@@ -712,7 +731,11 @@ impl Certifier {
         let r = self.rows.len();
         let y = std::mem::take(&mut self.y);
         self.reduced(&y, Some(kf));
-        let yb = -residual2(0.0, (0..r).map(|k| (y[k], self.bbar[self.rows[k]])));
+        let bb = |k: usize| self.bbar[self.rows[k]];
+        let terms = (0..r)
+            .map(|k| (y[k], bb(k)))
+            .chain((0..r).map(|k| (self.ylo[k], bb(k))));
+        let yb = -residual2(0.0, terms);
         self.y = y;
         self.duals_fresh = true;
         yb + self.min_lower().min(0.0).max(self.capped_lower())
@@ -727,11 +750,11 @@ impl Certifier {
         let mut sum = 0.0;
         for lo in (0..self.n).step_by(row_kernels::BLOCK) {
             let hi = (lo + row_kernels::BLOCK).min(self.n);
-            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], GAMMA) {
+            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], self.gamma) {
                 continue;
             }
             for i in lo..hi {
-                let v = d[i] - GAMMA * e[i];
+                let v = d[i] - self.gamma * e[i];
                 if v < 0.0 {
                     sum += self.cap(i) * v;
                 }
@@ -743,6 +766,19 @@ impl Certifier {
     /// d_i = p_i − y·ā_i (p = 0 when `kf` is None) and the magnitudes e_i = |p_i| + Σ|y_j ā_ji|.
     fn reduced(&mut self, y: &[f64], kf: Option<usize>) {
         let n = self.n;
+        let ylo = &self.ylo;
+        // |ylo_k| ≤ τ |y_k|: the f64 pass below (high parts only) is within (γ + τ) e_i.
+        let tau = y.iter().zip(ylo).fold(0.0f64, |t, (h, l)| {
+            if *l == 0.0 {
+                t
+            } else if *h == 0.0 {
+                f64::INFINITY
+            } else {
+                t.max((l / h).abs())
+            }
+        });
+        self.gamma = GAMMA + 2.0 * tau;
+        let gamma = self.gamma;
         let (d, e) = (&mut self.d, &mut self.e);
         // Farkas: d holds y·ā_i (the sign is flipped at the end).
         let y0 = y[0];
@@ -760,17 +796,16 @@ impl Certifier {
         let (rows, fcols) = (&self.rows, &self.fcols);
         for lo in (0..n).step_by(row_kernels::BLOCK) {
             let hi = (lo + row_kernels::BLOCK).min(n);
-            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], GAMMA) {
+            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], gamma) {
                 continue;
             }
             for i in lo..hi {
-                if d[i] - GAMMA * e[i] < 0.0 {
+                if d[i] - gamma * e[i] < 0.0 {
                     let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
-                    let terms = rows.iter().enumerate().map(|(k, &j)| {
-                        let a = if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
-                        (y[k], a)
-                    });
-                    let exact = residual2(p, terms);
+                    let a = |j: usize| if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
+                    let hi_terms = rows.iter().zip(y).map(|(&j, &yk)| (yk, a(j)));
+                    let lo_terms = rows.iter().zip(ylo).map(|(&j, &yk)| (yk, a(j)));
+                    let exact = residual2(p, hi_terms.chain(lo_terms));
                     d[i] = exact;
                     e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
                 }
@@ -783,6 +818,6 @@ impl Certifier {
 
     /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
     fn min_lower(&self) -> f64 {
-        row_kernels::min_lower(&self.d, &self.e, GAMMA)
+        row_kernels::min_lower(&self.d, &self.e, self.gamma)
     }
 }
