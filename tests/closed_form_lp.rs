@@ -275,6 +275,14 @@ struct Case<'a> {
     certify: bool,
 }
 
+/// Smallest distance between two Diracs.
+fn min_separation(d: &[(f64, f64)]) -> f64 {
+    d.iter()
+        .enumerate()
+        .flat_map(|(i, a)| d[i + 1..].iter().map(move |b| (a.0 - b.0).abs()))
+        .fold(f64::INFINITY, f64::min)
+}
+
 fn exact_support(case: &Case, seed: u64) {
     let kind = solver_kind();
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -285,6 +293,7 @@ fn exact_support(case: &Case, seed: u64) {
     let mut unique = 0;
     let mut worst_unique = 0.0f64;
     let mut worst_cluster = 0.0f64;
+    let mut cluster_misses = 0;
     while done < instances() {
         let d = diracs(&mut rng, case.kmax, case.dlo, case.dhi);
         let zf = rng.gen_range(case.dlo..case.dhi);
@@ -306,11 +315,7 @@ fn exact_support(case: &Case, seed: u64) {
             // Hankel matrix determines only to ~1e-7 in f64 (checked against 60-digit mpmath:
             // two Diracs 0.003 apart give root errors 1.6e-7 and |G − F_Z| = 1.7e-5 at m = 6; 0.001
             // apart 1.0e-4).
-            let sep = d
-                .iter()
-                .enumerate()
-                .flat_map(|(i, a)| d[i + 1..].iter().map(move |b| (a.0 - b.0).abs()))
-                .fold(f64::INFINITY, f64::min);
+            let sep = min_separation(&d);
             let tol = if sep >= 0.02 { 1e-6 } else { 1e-3 };
             let truth: f64 = d.iter().filter(|x| x.0 < zf).map(|x| x.1).sum();
             let e = (g.clamp(0.0, 1.0) - truth).abs();
@@ -350,6 +355,15 @@ fn exact_support(case: &Case, seed: u64) {
             lp_failures += 1;
             continue;
         }
+        let sep = min_separation(&d);
+        if l < g - 1e-6 && sep < 0.02 && err < 1e-3 {
+            // The certified LP exhibits a distribution (its support reproduces the moments,
+            // `try_lp`) with less mass below z_f than the closed form claims: on a cluster the
+            // closed form's roots are off (see the singular case above), not the LP.
+            worst_cluster = worst_cluster.max(err);
+            cluster_misses += 1;
+            continue;
+        }
         worst = worst.max(err);
         assert!(
             err < 1e-6,
@@ -359,7 +373,12 @@ fn exact_support(case: &Case, seed: u64) {
         done += 1;
     }
     eprintln!(
-        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e} for Diracs ≥ 0.02 apart, {worst_cluster:.1e} for clusters; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
+        "{}: exact-support max |G − LP| = {worst:.2e} over {done} LPs (+{unique} singular, max |G − F_Z| = {worst_unique:.1e} for Diracs ≥ 0.02 apart, {worst_cluster:.1e} for clusters incl. {cluster_misses} where the LP exhibits a lower G; {skipped} skipped: support outside the grid interval; {lp_failures} LP solver failures; {kind})",
+        case.name
+    );
+    assert!(
+        cluster_misses * 10 < done,
+        "{}: closed form off on clusters too often",
         case.name
     );
     assert!(

@@ -15,9 +15,10 @@
 //!   (or the tighter Σ_i u_i min(0, d_i) with u_i the bound on w_i from sign-definite rows):
 //!   every distribution with exactly these moments has mass ≥ L ≥ G − 1e-9 below z_f. The d_i
 //!   are computed in f64 and lowered by their rounding bound; the duals are double-double
-//!   (y + y_lo). When L > G + 1e-9 (huge duals near the boundary of the moment space), G must
-//!   instead match L′ = L + y·ρ to 1e-9, the bound for the support's own moments b̄ + ρ (ρ its
-//!   residual, within the tolerance above).
+//!   (y + y_lo). The support's residual ρ must not move the bound: |y·ρ| ≤ 1e-9, unless ρ is
+//!   rounding-level (≤ 64 ε of the row's terms); then, when L > G + 1e-9 (huge duals near the
+//!   boundary of the moment space), G must instead match L′ = L + y·ρ to 1e-9, the bound for
+//!   the support's own moments b̄ + ρ, which equal b̄ at f64 resolution.
 //! * **infeasible**: a Farkas ray y with y·b̄ < min_i y·ā_i − 1e-9 (|min_i y·ā_i| + Σ_j |y_j| σ_j):
 //!   then no distribution reproduces the moments even to the tolerance above.
 //!
@@ -47,6 +48,9 @@ pub const CANCEL: f64 = 1e-5;
 const TOL_WEIGHT: f64 = 1e-12;
 /// Accurate pivots by Dantzig's rule before Bland's.
 const BLAND_AFTER: usize = 60;
+/// How many units of ε a support's residual may be for the bound of its own moments to stand
+/// in for the bound of b̄ (see [`Certifier::optimal`]).
+const ULPS: f64 = 64.0;
 /// Rounding bound factor per term of a reduced cost (a few units of ε for r ≤ 13 terms).
 const GAMMA: f64 = 16.0 * f64::EPSILON;
 
@@ -307,12 +311,15 @@ impl Certifier {
         self.dual(basis, kf);
         let lower = self.lower_bound(kf);
         let gap = g - lower;
-        // The same bound for the support's own moments b̄′ = b̄ + ρ (within the tolerance of
-        // b̄): L′ = L + y·ρ. Near the boundary of the moment space the duals are huge and
-        // y·ρ exceeds 1e-9 although ρ is rounding-level: G is then the sharp bound of b̄′,
-        // and L ≤ G + 1e-9 still bounds it from below for b̄ itself.
-        let shifted = gap - self.dual_shift(basis);
-        let ok = gap <= TOL_GAP && (gap.abs() <= TOL_GAP || shifted.abs() <= TOL_GAP);
+        // The support reproduces b̄′ = b̄ + ρ, not b̄: its G moves the bound by y·ρ. Required:
+        // either |y·ρ| ≤ 1e-9 (G is within 1e-9 of the sharp bound of b̄ itself), or ρ is
+        // rounding-level (b̄′ and b̄ are the same moments at f64 resolution; near the boundary
+        // of the moment space |y| reaches 1e9 and y·ρ exceeds 1e-9 there). In the latter case
+        // G must match L or the bound for b̄′, L′ = L + y·ρ, to 1e-9.
+        let (shift, ulp) = self.dual_shift(basis);
+        let ok = gap <= TOL_GAP
+            && (ulp || shift.abs() <= TOL_GAP)
+            && (gap.abs() <= TOL_GAP || (ulp && (gap - shift).abs() <= TOL_GAP));
         if !ok || gap.is_nan() {
             return Err(format!("dual bound {lower:.12} does not match G = {g:.12}"));
         }
@@ -713,17 +720,25 @@ impl Certifier {
         }
     }
 
-    /// y·ρ with ρ_k = Σ_t x_t ā_{j_k}(z_{B_t}) − b̄_{j_k} the support's residual on each
-    /// independent row (double-double), y the unscaled duals.
-    fn dual_shift(&self, basis: &[usize]) -> f64 {
+    /// (y·ρ, whether every ρ_k is rounding-level) with ρ_k = Σ_t x_t ā_{j_k}(z_{B_t}) − b̄_{j_k}
+    /// the support's residual on each independent row (double-double) and y + y_lo the
+    /// unscaled duals. Rounding-level: |ρ_k| ≤ [`ULPS`] ε (|b̄_j| + Σ_t |x_t ā_jt|), so b̄ + ρ is
+    /// indistinguishable from b̄ in f64.
+    fn dual_shift(&self, basis: &[usize]) -> (f64, bool) {
         let r = self.rows.len();
-        (0..r)
-            .map(|k| {
-                let j = self.rows[k];
-                let terms = (0..r).map(|t| (self.entry(j, basis[t]), self.x[t]));
-                -(self.y[k] + self.ylo[k]) * residual2(self.bbar[j], terms)
-            })
-            .sum()
+        let (mut shift, mut ulp) = (0.0, true);
+        for k in 0..r {
+            let j = self.rows[k];
+            let terms = (0..r).map(|t| (self.entry(j, basis[t]), self.x[t]));
+            let rho = -residual2(self.bbar[j], terms);
+            let mag: f64 = self.bbar[j].abs()
+                + (0..r)
+                    .map(|t| (self.entry(j, basis[t]) * self.x[t]).abs())
+                    .sum::<f64>();
+            ulp &= rho.abs() <= ULPS * f64::EPSILON * mag;
+            shift += (self.y[k] + self.ylo[k]) * rho;
+        }
+        (shift, ulp)
     }
 
     /// L = y·b̄ + min(0, min_i d_i) for the duals in y.
