@@ -187,7 +187,8 @@ impl Tally {
             let w = format!("(reference misreport): {what}");
             if let Err(e) = check_support(table, b, zf, sol, &w) {
                 self.failures.push(e);
-            } else if sol.g > g_mix + 1e-9 {
+            } else if sol.g > g_mix + 1e-8 {
+                // 1e-8: b is the mixture's moments rounded to f64 (see below).
                 self.failures
                     .push(format!("{w}: G {} > mixture {g_mix}", sol.g));
             }
@@ -349,7 +350,9 @@ fn run_family(
                         let w = format!("{name} (reference misreport): {what}");
                         if let Err(e) = check_support(&table, &b, zf, sol, &w) {
                             tally.failures.push(e);
-                        } else if sol.g > g_mix + 1e-9 {
+                        } else if sol.g > g_mix + 1e-8 {
+                            // 1e-8: b is the mixture's moments rounded to f64, which moves
+                            // the optimum of clustered problems by |y|·ε (duals ~1e8).
                             tally
                                 .failures
                                 .push(format!("{w}: G {} > mixture {g_mix}", sol.g));
