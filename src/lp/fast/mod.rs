@@ -555,9 +555,12 @@ impl FastSolver {
             Verdict::Infeasible => Legacy::Infeasible,
             Verdict::Failed => Legacy::Reference,
         };
-        if let Legacy::Answer(fast_basis, _) = &legacy {
+        if let Legacy::Answer(fast_basis, why) = &legacy {
             let mut basis = fast_basis.clone();
-            if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
+            let found =
+                self.cert
+                    .improve_checked(moments, kf, &mut basis, IMPROVE_STEPS, why.clone());
+            if let Ok(c) = found {
                 self.stats.improved += 1;
                 return Ok(certified(c));
             }
