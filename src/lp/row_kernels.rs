@@ -65,14 +65,17 @@ pub fn any_below_shifted(d: &[f64], t: &[f64], e: &[f64], gamma: f64) -> bool {
     hit
 }
 
-/// min_i (d_i − γ e_i) (+∞ for no points).
+/// min_i (d_i − γ e_i) (+∞ for no points; NaN values are skipped, as by `f64::min`).
 pub fn min_lower(d: &[f64], e: &[f64], gamma: f64) -> f64 {
-    let mut lanes = [f64::INFINITY; 4];
-    let (dc, ec) = (d.chunks_exact(4), e.chunks_exact(4));
+    const L: usize = 8;
+    let mut lanes = [f64::INFINITY; L];
+    let (dc, ec) = (d.chunks_exact(L), e.chunks_exact(L));
     let (dr, er) = (dc.remainder(), ec.remainder());
-    for (d4, e4) in dc.zip(ec) {
-        for k in 0..4 {
-            lanes[k] = lanes[k].min(d4[k] - gamma * e4[k]);
+    for (d8, e8) in dc.zip(ec) {
+        for k in 0..L {
+            // A plain comparison (false for NaN) compiles to a vector min; f64::min does not.
+            let v = d8[k] - gamma * e8[k];
+            lanes[k] = if v < lanes[k] { v } else { lanes[k] };
         }
     }
     let tail = dr.iter().zip(er).map(|(d, e)| d - gamma * e);
@@ -107,5 +110,9 @@ mod tests {
         assert!(any_below(&d, &e, g));
         assert!(!any_below(&d, &e, 0.0));
         assert_eq!(min_lower(&[], &[], g), f64::INFINITY);
+        let mut d2 = d.clone();
+        d2[5] = f64::NAN;
+        let want2 = d2.iter().map(|d| d - g).fold(f64::INFINITY, f64::min);
+        assert_eq!(min_lower(&d2, &e, g), want2);
     }
 }
