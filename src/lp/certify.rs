@@ -440,20 +440,13 @@ impl Certifier {
         }
         // Primal step on the most negative capped reduced cost.
         let mut best: Option<(usize, f64)> = None;
-        'scan: for lo in (0..self.n).step_by(row_kernels::BLOCK) {
-            let hi = (lo + row_kernels::BLOCK).min(self.n);
-            if !row_kernels::any_below(&self.d[lo..hi], &self.e[lo..hi], self.gamma) {
-                continue;
-            }
-            for i in lo..hi {
-                let low = self.d[i] - self.gamma * self.e[i];
-                if low < 0.0 && !basis.contains(&i) {
-                    let v = low * self.cap(i);
-                    if best.is_none_or(|(_, v0)| v < v0) {
-                        best = Some((i, v));
-                        if self.bland {
-                            break 'scan;
-                        }
+        for (i, low) in row_kernels::below(&self.d, &self.e, self.gamma) {
+            if !basis.contains(&i) {
+                let v = low * self.cap(i);
+                if best.is_none_or(|(_, v0)| v < v0) {
+                    best = Some((i, v));
+                    if self.bland {
+                        break;
                     }
                 }
             }
@@ -789,21 +782,9 @@ impl Certifier {
     /// Σ_i w_i d_i that stays tight where huge columns (a steep exponential near its peak) can
     /// only carry tiny weights.
     fn capped_lower(&self) -> f64 {
-        let (d, e) = (&self.d, &self.e);
-        let mut sum = 0.0;
-        for lo in (0..self.n).step_by(row_kernels::BLOCK) {
-            let hi = (lo + row_kernels::BLOCK).min(self.n);
-            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], self.gamma) {
-                continue;
-            }
-            for i in lo..hi {
-                let v = d[i] - self.gamma * e[i];
-                if v < 0.0 {
-                    sum += self.cap(i) * v;
-                }
-            }
-        }
-        sum
+        row_kernels::below(&self.d, &self.e, self.gamma)
+            .map(|(i, v)| self.cap(i) * v)
+            .sum()
     }
 
     /// d_i = p_i − y·ā_i (p = 0 when `kf` is None) and the magnitudes e_i = |p_i| + Σ|y_j ā_ji|.

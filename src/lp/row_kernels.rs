@@ -55,6 +55,27 @@ pub fn any_below(d: &[f64], e: &[f64], gamma: f64) -> bool {
     hit
 }
 
+/// (i, d_i − γ e_i) for every i where that is negative, in index order; blocks of [`BLOCK`]
+/// points are skipped with one vectorised [`any_below`] test each.
+pub fn below<'a>(
+    d: &'a [f64],
+    e: &'a [f64],
+    gamma: f64,
+) -> impl Iterator<Item = (usize, f64)> + 'a {
+    let n = d.len().min(e.len());
+    (0..n)
+        .step_by(BLOCK)
+        .filter(move |&lo| {
+            let hi = (lo + BLOCK).min(n);
+            any_below(&d[lo..hi], &e[lo..hi], gamma)
+        })
+        .flat_map(move |lo| lo..(lo + BLOCK).min(n))
+        .filter_map(move |i| {
+            let v = d[i] - gamma * e[i];
+            (v < 0.0).then_some((i, v))
+        })
+}
+
 /// Whether some d_i + t_i ≤ γ e_i, i.e. d_i + t_i may be negative within the rounding bound
 /// γ e_i (the slices of equal length).
 pub fn any_below_shifted(d: &[f64], t: &[f64], e: &[f64], gamma: f64) -> bool {
@@ -109,6 +130,12 @@ mod tests {
         assert_eq!(min_lower(&d, &e, g), want);
         assert!(any_below(&d, &e, g));
         assert!(!any_below(&d, &e, 0.0));
+        let scan: Vec<(usize, f64)> = (0..23)
+            .map(|i| (i, d[i] - g * e[i]))
+            .filter(|p| p.1 < 0.0)
+            .collect();
+        assert!(!scan.is_empty());
+        assert_eq!(below(&d, &e, g).collect::<Vec<_>>(), scan);
         assert_eq!(min_lower(&[], &[], g), f64::INFINITY);
         let mut d2 = d.clone();
         d2[5] = f64::NAN;
