@@ -58,6 +58,10 @@ pub struct Args {
     /// Seed of the random depth maps the moment vectors come from.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// `--corpus adversarial`: how many tables to list by their share of the mean (tables
+    /// with a failed LP are always listed; 0..=1000).
+    #[arg(long, default_value_t = 8, value_parser = usize_in(0, 1000))]
+    pub top_groups: usize,
     /// Timed repeats of the fast solvers' problem sequence; each problem's minimum time is
     /// kept (filters preemption on a shared machine; 1..=1000).
     #[arg(long, default_value_t = 3, value_parser = usize_in(1, 1000))]
@@ -191,6 +195,36 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         .collect()
 }
 
+/// The `top` groups that contribute most to the corpus mean, and every group with a failure.
+fn print_top_groups(r: &CorpusRow, top: usize) {
+    let mut order: Vec<usize> = (0..r.groups.len()).collect();
+    order.sort_by(|&a, &b| r.groups[b].total_us.total_cmp(&r.groups[a].total_us));
+    let total: f64 = r.groups.iter().map(|g| g.total_us).sum();
+    println!(
+        "  {:<62} {:>5} {:>9} {:>10} {:>6} {:>5}",
+        "largest shares of the mean (table: kind)", "LPs", "mean µs", "max µs", "failed", "escal"
+    );
+    for (k, &i) in order.iter().enumerate() {
+        let g = &r.groups[i];
+        if k >= top && g.failed == 0 {
+            continue;
+        }
+        println!(
+            "  {:<62} {:>5} {:>9.1} {:>10.1} {:>6} {:>5}   {:>4.1} % of the total",
+            g.name,
+            g.problems,
+            g.total_us / g.problems.max(1) as f64,
+            g.max_us,
+            g.failed,
+            g.escalations,
+            100.0 * g.total_us / total
+        );
+        if let Some(why) = &g.first_reason {
+            println!("      first failure: {why}");
+        }
+    }
+}
+
 /// `--corpus stacks|adversarial`: one row per grid size (stacks) or one for the corpus.
 fn run_corpus(args: &Args) -> Result<()> {
     let groups = groups(args)?;
@@ -264,6 +298,9 @@ fn run_corpus(args: &Args) -> Result<()> {
                 "  {}: {} reference answers invalid (not compared), {} fallbacks",
                 r.corpus, r.reference_invalid, r.fallbacks
             );
+        }
+        if r.groups.len() > 1 {
+            print_top_groups(r, args.top_groups);
         }
     }
     println!("(× mean = reference mean / fast mean on the same problems; failed = no certificate for either verdict)");

@@ -81,6 +81,23 @@ pub struct CorpusRow {
     pub reference_invalid: usize,
     /// max |G_fast − G_reference| where both are optimal and the reference answer valid.
     pub max_abs_diff: f64,
+    /// Per table (group): where the mean and the failures come from.
+    pub groups: Vec<GroupRow>,
+}
+
+/// One group's share of a corpus row.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct GroupRow {
+    /// "basis @ n: kind".
+    pub name: String,
+    pub problems: usize,
+    /// Sum of the fast solver's µs over the group's problems.
+    pub total_us: f64,
+    pub max_us: f64,
+    pub failed: usize,
+    pub escalations: u64,
+    /// The reason given by the group's first `Failed` answer.
+    pub first_reason: Option<String>,
 }
 
 /// Time the fast solver on every problem of `groups` (`repeats` passes, minimum per problem)
@@ -112,6 +129,7 @@ pub fn run(
         speedup_mean: f64::NAN,
         reference_invalid: 0,
         max_abs_diff: 0.0,
+        groups: Vec::new(),
     };
     for g in groups {
         if !row.ns.contains(&g.table.n()) {
@@ -120,6 +138,15 @@ pub fn run(
         let (times, sols, stats) = time_group(g, repeats)?;
         row.escalations += stats.escalations;
         row.fallbacks += stats.fallbacks;
+        row.groups.push(GroupRow {
+            name: g.name.clone(),
+            problems: times.len(),
+            total_us: times.iter().sum(),
+            max_us: times.iter().fold(0.0, |a: f64, &t| a.max(t)),
+            failed: sols.iter().filter(|s| s.status == Status::Failed).count(),
+            escalations: stats.escalations,
+            first_reason: sols.iter().find_map(|s| s.reason.clone()),
+        });
         for s in &sols {
             match s.status {
                 Status::Optimal => row.optimal += 1,
