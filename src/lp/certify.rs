@@ -118,6 +118,8 @@ pub struct Certifier {
     /// x before clamping to ≥ 0.
     xraw: Vec<f64>,
     y: Vec<f64>,
+    /// `rows` is 0, 1, …, r − 1: row k + 1 is fcols[k·n..] (one fused reduced-cost pass).
+    rows_consecutive: bool,
     /// Low parts of the duals: y + ylo is the double-double dual vector (0 for Farkas rays).
     ylo: Vec<f64>,
     /// Rounding factor of the f64 reduced costs for the current duals: γ plus the relative
@@ -169,6 +171,7 @@ impl Certifier {
         Certifier {
             n,
             m,
+            rows_consecutive: rows.iter().enumerate().all(|(k, &j)| k == j),
             avx512: row_kernels::has_avx512(),
             finv,
             duals_fresh: false,
@@ -811,9 +814,14 @@ impl Certifier {
         e[..k].fill(1.0 + y0.abs());
         d[k..].fill(-y0);
         e[k..].fill(y0.abs());
-        for (yk, &j) in y.iter().zip(&self.rows).skip(1) {
-            let col = &self.fcols[(j - 1) * n..j * n];
-            row_kernels::sub_scaled_abs(d, e, *yk, col, self.avx512);
+        if self.rows_consecutive {
+            // Rows 0..=m: the function rows are fcols as they stand, one fused pass.
+            row_kernels::sub_rows_abs(d, e, &y[1..], &self.fcols, self.avx512);
+        } else {
+            for (yk, &j) in y.iter().zip(&self.rows).skip(1) {
+                let col = &self.fcols[(j - 1) * n..j * n];
+                row_kernels::sub_scaled_abs(d, e, *yk, col, self.avx512);
+            }
         }
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.

@@ -46,6 +46,58 @@ unsafe fn sub_scaled_abs_avx512(d: &mut [f64], e: &mut [f64], y: f64, f: &[f64])
     sub_scaled_abs_generic(d, e, y, f)
 }
 
+/// d_i −= Σ_k y_k f_k(z_i) and e_i += Σ_k |y_k f_k(z_i)|, the rows f_k at mat[k·n..(k+1)·n]
+/// (n = d.len()): [`sub_scaled_abs`] for every row in one pass over d and e, with the same
+/// operations in the same order per point (the same bits).
+pub fn sub_rows_abs(d: &mut [f64], e: &mut [f64], ys: &[f64], mat: &[f64], avx512: bool) {
+    let n = d.len();
+    assert!(e.len() == n && mat.len() >= ys.len() * n);
+    #[cfg(target_arch = "x86_64")]
+    if avx512 {
+        // SAFETY: `avx512` is only true where the CPU has AVX-512F (`has_avx512`).
+        unsafe { sub_rows_abs_avx512(d, e, ys, mat) };
+        return;
+    }
+    let _ = avx512;
+    sub_rows_abs_generic(d, e, ys, mat);
+}
+
+#[inline(always)]
+fn sub_rows_abs_generic(d: &mut [f64], e: &mut [f64], ys: &[f64], mat: &[f64]) {
+    let n = d.len();
+    let full = n - n % BLOCK;
+    for lo in (0..full).step_by(BLOCK) {
+        let mut db = [0.0; BLOCK];
+        let mut eb = [0.0; BLOCK];
+        db.copy_from_slice(&d[lo..lo + BLOCK]);
+        eb.copy_from_slice(&e[lo..lo + BLOCK]);
+        for (k, &y) in ys.iter().enumerate() {
+            let f = &mat[k * n + lo..k * n + lo + BLOCK];
+            for t in 0..BLOCK {
+                let v = y * f[t];
+                db[t] -= v;
+                eb[t] += v.abs();
+            }
+        }
+        d[lo..lo + BLOCK].copy_from_slice(&db);
+        e[lo..lo + BLOCK].copy_from_slice(&eb);
+    }
+    for (k, &y) in ys.iter().enumerate() {
+        let f = &mat[k * n..(k + 1) * n];
+        for i in full..n {
+            let v = y * f[i];
+            d[i] -= v;
+            e[i] += v.abs();
+        }
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn sub_rows_abs_avx512(d: &mut [f64], e: &mut [f64], ys: &[f64], mat: &[f64]) {
+    sub_rows_abs_generic(d, e, ys, mat)
+}
+
 /// Whether some d_i − γ e_i < 0 (d and e of equal length).
 pub fn any_below(d: &[f64], e: &[f64], gamma: f64) -> bool {
     let mut hit = false;
@@ -119,6 +171,26 @@ mod tests {
         assert_eq!(e1, e2);
         assert_eq!(d1[3], 0.5 + 0.3 * f[3]);
         assert_eq!(e1[3], 0.5 + (0.3 * f[3]).abs());
+    }
+
+    #[test]
+    fn sub_rows_abs_is_row_by_row_sub_scaled_abs_bit_for_bit() {
+        for n in [1usize, 15, 16, 37, 64] {
+            let mat: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+            let ys = [-0.3, 1.7e5, 2.5e-7];
+            let d0: Vec<f64> = (0..n).map(|i| (i % 3) as f64 - 0.25).collect();
+            let e0: Vec<f64> = d0.iter().map(|v| v.abs()).collect();
+            let (mut d1, mut e1) = (d0.clone(), e0.clone());
+            for (k, &y) in ys.iter().enumerate() {
+                sub_scaled_abs(&mut d1, &mut e1, y, &mat[k * n..(k + 1) * n], false);
+            }
+            for avx in [false, has_avx512()] {
+                let (mut d2, mut e2) = (d0.clone(), e0.clone());
+                sub_rows_abs(&mut d2, &mut e2, &ys, &mat, avx);
+                assert_eq!(d1, d2, "n = {n}");
+                assert_eq!(e1, e2, "n = {n}");
+            }
+        }
     }
 
     #[test]

@@ -65,6 +65,8 @@ pub struct ScaledSimplex {
     x: Vec<f64>,
     /// Duals in double-double.
     y: Vec<Dd>,
+    /// Their high parts (the f64 pricing pass).
+    yhi: Vec<f64>,
     alpha: Vec<f64>,
     col: Vec<f64>,
     /// Row-major basis matrix.
@@ -290,10 +292,9 @@ impl ScaledSimplex {
         self.e[..k].copy_from_slice(&self.kappa[..k]);
         self.d[k..].fill(0.0);
         self.e[k..].fill(0.0);
-        for (t, y) in self.y.iter().enumerate() {
-            let row = &self.arow[t * n..(t + 1) * n];
-            row_kernels::sub_scaled_abs(&mut self.d, &mut self.e, y.0, row, self.avx512);
-        }
+        self.yhi.clear();
+        self.yhi.extend(self.y.iter().map(|y| y.0));
+        row_kernels::sub_rows_abs(&mut self.d, &mut self.e, &self.yhi, &self.arow, self.avx512);
         let factor = 4.0 * (r as f64 + 2.0) * f64::EPSILON;
         let mut best = (None, 0.0);
         for lo in (0..n).step_by(row_kernels::BLOCK) {

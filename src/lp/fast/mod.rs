@@ -610,7 +610,10 @@ impl FastSolver {
         self.stats.pivots += self.scaled.pivots - pivots;
         let sol = match found {
             Found::Optimal(mut basis) => {
-                match self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS * 16) {
+                match self
+                    .cert
+                    .improve(moments, kf, &mut basis, IMPROVE_STEPS * 16)
+                {
                     Ok(c) => certified(c),
                     Err(e) => {
                         Solution::failed(format!("scaled simplex optimum not certified: {e}"))
