@@ -51,6 +51,9 @@ const BLAND_AFTER: usize = 60;
 /// How many units of ε a support's residual may be for the bound of its own moments to stand
 /// in for the bound of b̄ (see [`Certifier::optimal`]).
 const ULPS: f64 = 64.0;
+/// Pivot ratio of the f64 basis factorisation up to which its refined solves are taken as
+/// accurate (a primal residual is then the basis's, not the arithmetic's).
+const F64_ACCURATE: f64 = 1e8;
 /// Rounding bound factor per term of a reduced cost (a few units of ε for r ≤ 13 terms).
 const GAMMA: f64 = 16.0 * f64::EPSILON;
 
@@ -256,6 +259,13 @@ impl Certifier {
         self.precise = false;
         match self.check(b, kf, basis) {
             Ok(c) => Ok(c),
+            // The weights miss the moments although the f64 solves are accurate (pivot ratio
+            // ≤ 1e8, refined in double-double residuals): the basis is not primal feasible, in
+            // any precision. (On the stacks and adversarial corpora the double-double retry
+            // never certified such a basis.)
+            Err(e) if self.factored && !self.primal_ok && self.lu.pivot_ratio() <= F64_ACCURATE => {
+                Err(e)
+            }
             Err(_) if basis.len() == self.rows.len() => {
                 // Beyond f64 (or singular in f64): the same basis in double-double.
                 self.precise = true;

@@ -103,6 +103,21 @@ impl Lu {
         true
     }
 
+    /// max |u_kk| / min |u_kk| over the pivots of the last factorisation: a lower bound on
+    /// the condition of A (∞ before any factorisation).
+    pub fn pivot_ratio(&self) -> f64 {
+        let r = self.r;
+        let d = (0..r).map(|k| self.lu[k * r + k].abs());
+        let (lo, hi) = d.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+        if r == 0 || lo == 0.0 {
+            f64::INFINITY
+        } else {
+            hi / lo
+        }
+    }
+
     /// Solve A x = b in place (x holds b on entry).
     pub fn solve(&self, x: &mut [f64]) {
         let (r, lu) = (self.r, &self.lu);
