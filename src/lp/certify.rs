@@ -232,6 +232,11 @@ impl Certifier {
         &self.scale
     }
 
+    /// The values f_j(z_i) of function row j ≥ 1 over the grid; None for the constant row 0.
+    pub fn function_row(&self, j: usize) -> Option<&[f64]> {
+        (j > 0).then(|| &self.fcols[(j - 1) * self.n..j * self.n])
+    }
+
     /// Entry of row j (0 = constant) at grid point i.
     #[inline]
     pub fn entry(&self, j: usize, i: usize) -> f64 {
@@ -434,12 +439,18 @@ impl Certifier {
                 row_kernels::sub_scaled_abs(ra, rm, self.tmp[k], col, self.avx512);
             }
             let mut best: Option<(usize, f64)> = None;
-            for i in 0..self.n {
-                let a = -self.ra[i];
-                if a < -1e-9 * self.rm[i].max(f64::MIN_POSITIVE) && !basis.contains(&i) {
-                    let ratio = self.d[i].max(0.0) / -a;
-                    if best.is_none_or(|(_, r0)| ratio < r0) {
-                        best = Some((i, ratio));
+            for lo in (0..self.n).step_by(row_kernels::BLOCK) {
+                let hi = (lo + row_kernels::BLOCK).min(self.n);
+                if !row_kernels::any_above(&self.ra[lo..hi], &self.rm[lo..hi], 1e-9) {
+                    continue;
+                }
+                for i in lo..hi {
+                    let a = -self.ra[i];
+                    if a < -1e-9 * self.rm[i].max(f64::MIN_POSITIVE) && !basis.contains(&i) {
+                        let ratio = self.d[i].max(0.0) / -a;
+                        if best.is_none_or(|(_, r0)| ratio < r0) {
+                            best = Some((i, ratio));
+                        }
                     }
                 }
             }

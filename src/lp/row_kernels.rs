@@ -128,6 +128,16 @@ pub fn below<'a>(
         })
 }
 
+/// Whether some a_i > c · max(m_i, f64::MIN_POSITIVE) (the slices of equal length): a block
+/// test for entries that are positive beyond their own rounding scale.
+pub fn any_above(a: &[f64], m: &[f64], c: f64) -> bool {
+    let mut hit = false;
+    for (a, m) in a.iter().zip(m) {
+        hit |= *a > c * m.max(f64::MIN_POSITIVE);
+    }
+    hit
+}
+
 /// Whether some d_i + t_i ≤ γ e_i, i.e. d_i + t_i may be negative within the rounding bound
 /// γ e_i (the slices of equal length).
 pub fn any_below_shifted(d: &[f64], t: &[f64], e: &[f64], gamma: f64) -> bool {
@@ -201,6 +211,9 @@ mod tests {
         let want = d.iter().map(|d| d - g).fold(f64::INFINITY, f64::min);
         assert_eq!(min_lower(&d, &e, g), want);
         assert!(any_below(&d, &e, g));
+        assert!(any_above(&[0.0, 2e-9], &[0.0, 1.0], 1e-9));
+        assert!(!any_above(&[0.0, 1e-9], &[0.0, 1.0], 1e-9));
+        assert!(any_above(&[1e-300], &[0.0], 1e-9));
         assert!(!any_below(&d, &e, 0.0));
         let scan: Vec<(usize, f64)> = (0..23)
             .map(|i| (i, d[i] - g * e[i]))

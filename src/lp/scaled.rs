@@ -44,9 +44,7 @@ pub enum Found {
 pub struct ScaledSimplex {
     n: usize,
     r: usize,
-    /// Scaled columns, column i at acol[i·r..(i+1)·r].
-    acol: Vec<f64>,
-    /// The same scaled entries row by row: arow[k·n + i] (the pricing kernel's layout).
+    /// Scaled entries row by row: arow[k·n + i] (the pricing kernel's layout).
     arow: Vec<f64>,
     /// Column scales (exact powers of two).
     kappa: Vec<f64>,
@@ -119,13 +117,14 @@ impl ScaledSimplex {
         out
     }
 
-    /// Scaled columns, column scales and right-hand side for the current moments.
+    /// Scaled rows, column scales and right-hand side for the current moments: row by row
+    /// (vectorised passes over the grid), κ_i from the exponent of max_k |s_k ā_ki| ≥ 1 (the
+    /// constant row is 1 after scaling).
     fn setup(&mut self, cert: &Certifier) {
         let rows = cert.rows();
         let (r, n) = (rows.len(), cert.n());
         self.n = n;
         self.r = r;
-        self.acol.resize(n * r, 0.0);
         self.arow.resize(n * r, 0.0);
         self.kappa.resize(n, 1.0);
         self.d.resize(n, 0.0);
@@ -133,35 +132,50 @@ impl ScaledSimplex {
         self.e.resize(n, 0.0);
         self.avx512 = row_kernels::has_avx512();
         let s = cert.row_scales();
-        for i in 0..n {
-            let col = &mut self.acol[i * r..(i + 1) * r];
-            let mut big = 0.0f64;
-            for (k, &j) in rows.iter().enumerate() {
-                col[k] = s[j] * cert.entry(j, i);
-                big = big.max(col[k].abs());
+        // e holds max_k |s_k ā_ki| while the rows are filled.
+        self.e.fill(0.0);
+        for (k, &j) in rows.iter().enumerate() {
+            let row = &mut self.arow[k * n..(k + 1) * n];
+            match cert.function_row(j) {
+                Some(f) => row.iter_mut().zip(f).for_each(|(a, &v)| *a = s[j] * v),
+                None => row.fill(s[j]),
             }
-            let kap = inv_pow2(big);
-            col.iter_mut().for_each(|v| *v *= kap);
-            self.kappa[i] = kap;
-            self.tol[i] = TOL_D * kap.min(1.0);
-            for k in 0..r {
-                self.arow[k * n + i] = col[k];
-            }
+            self.e
+                .iter_mut()
+                .zip(row.iter())
+                .for_each(|(m, a)| *m = m.max(a.abs()));
         }
-        self.rhs = rows.iter().map(|&j| s[j] * cert.bbar(j)).collect();
+        for (kap, &big) in self.kappa.iter_mut().zip(&self.e) {
+            *kap = inv_pow2(big);
+        }
+        for k in 0..r {
+            let row = &mut self.arow[k * n..(k + 1) * n];
+            row.iter_mut()
+                .zip(&self.kappa)
+                .for_each(|(a, &kap)| *a *= kap);
+        }
+        for (t, &kap) in self.tol.iter_mut().zip(&self.kappa) {
+            *t = TOL_D * kap.min(1.0);
+        }
+        self.rhs.clear();
+        self.rhs.extend(rows.iter().map(|&j| s[j] * cert.bbar(j)));
         self.basis.resize(r, 0);
         self.is_basic.clear();
         self.is_basic.resize(n + r, false);
-        self.sign = self
-            .rhs
-            .iter()
-            .map(|&v| if v < 0.0 { -1.0 } else { 1.0 })
-            .collect();
+        self.sign.clear();
+        self.sign
+            .extend(self.rhs.iter().map(|&v| if v < 0.0 { -1.0 } else { 1.0 }));
         self.bm.resize(r * r, 0.0);
         self.y.resize(r, Dd::default());
         for v in [&mut self.x, &mut self.alpha, &mut self.col] {
             v.resize(r, 0.0);
         }
+    }
+
+    /// Scaled entry of row k at grid point i.
+    #[inline]
+    fn a(&self, k: usize, i: usize) -> f64 {
+        self.arow[k * self.n + i]
     }
 
     /// Column q (grid index or artificial) into self.col.
@@ -171,7 +185,9 @@ impl ScaledSimplex {
             self.col.iter_mut().for_each(|v| *v = 0.0);
             self.col[q - self.n] = self.sign[q - self.n];
         } else {
-            self.col.copy_from_slice(&self.acol[q * r..(q + 1) * r]);
+            for k in 0..r {
+                self.col[k] = self.a(k, q);
+            }
         }
     }
 
@@ -273,10 +289,9 @@ impl ScaledSimplex {
     /// comparison with −tol open).
     fn reduced_dd(&self, q: usize, c: f64) -> f64 {
         let r = self.r;
-        let a = &self.acol[q * r..(q + 1) * r];
         let mut acc = Dd::from(c);
         for k in 0..r {
-            acc = acc.add(self.y[k].mul(Dd::from(a[k])).neg());
+            acc = acc.add(self.y[k].mul(Dd::from(self.a(k, q))).neg());
         }
         acc.0 + acc.1
     }
@@ -394,8 +409,7 @@ impl ScaledSimplex {
                 if self.is_basic[i] {
                     continue;
                 }
-                let a = &self.acol[i * r..(i + 1) * r];
-                let v: f64 = (0..r).map(|k| row[k] * a[k]).sum();
+                let v: f64 = (0..r).map(|k| row[k] * self.a(k, i)).sum();
                 if v.abs() > best.1 {
                     best = (Some(i), v.abs());
                 }
