@@ -613,8 +613,15 @@ impl Certifier {
                 self.tmp[k] = self.scale[j] * residual2(self.bbar[j], terms);
             }
             self.solve(false, Which::Tmp);
+            let mut moved = false;
             for t in 0..r {
-                self.x[t] += self.colscale[t] * self.tmp[t];
+                let next = self.x[t] + self.colscale[t] * self.tmp[t];
+                moved |= next != self.x[t];
+                self.x[t] = next;
+            }
+            // x unchanged: the next pass would find the same residual and move nothing either.
+            if !moved {
+                break;
             }
         }
         self.xraw.copy_from_slice(&self.x);
@@ -750,13 +757,15 @@ impl Certifier {
             self.solve(true, Which::Tmp);
             // The last correction is kept apart: y + ylo in double-double. Near the boundary of
             // the moment space |y| reaches 1e9, and the f64 y alone leaves reduced costs of
-            // ε|y| ≈ 1e-7 on the basis columns.
+            // ε|y| ≈ 1e-7 on the basis columns. A correction that leaves y unchanged would be
+            // found again by the next passes: it is the low part at once.
+            let still = step < 2 && (0..r).all(|k| self.y[k] + self.tmp[k] == self.y[k]);
+            if step == 2 || still {
+                self.ylo[..r].copy_from_slice(&self.tmp[..r]);
+                break;
+            }
             for k in 0..r {
-                if step < 2 {
-                    self.y[k] += self.tmp[k];
-                } else {
-                    self.ylo[k] = self.tmp[k];
-                }
+                self.y[k] += self.tmp[k];
             }
         }
         for k in 0..r {
