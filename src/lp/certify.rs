@@ -121,8 +121,6 @@ pub struct Certifier {
     /// x before clamping to ≥ 0.
     xraw: Vec<f64>,
     y: Vec<f64>,
-    /// `rows` is 0, 1, …, r − 1: row k + 1 is fcols[k·n..] (one fused reduced-cost pass).
-    rows_consecutive: bool,
     /// Low parts of the duals: y + ylo is the double-double dual vector (0 for Farkas rays).
     ylo: Vec<f64>,
     /// Rounding factor of the f64 reduced costs for the current duals: γ plus the relative
@@ -174,7 +172,6 @@ impl Certifier {
         Certifier {
             n,
             m,
-            rows_consecutive: rows.iter().enumerate().all(|(k, &j)| k == j),
             avx512: row_kernels::has_avx512(),
             finv,
             duals_fresh: false,
@@ -434,10 +431,7 @@ impl Certifier {
             let (ra, rm) = (&mut self.ra, &mut self.rm);
             ra.fill(-self.tmp[0]);
             rm.fill(self.tmp[0].abs());
-            for (k, &j) in self.rows.iter().enumerate().skip(1) {
-                let col = &self.fcols[(j - 1) * self.n..j * self.n];
-                row_kernels::sub_scaled_abs(ra, rm, self.tmp[k], col, self.avx512);
-            }
+            sub_function_rows(ra, rm, &self.tmp[1..], &self.fcols, &self.rows, self.avx512);
             let mut best: Option<(usize, f64)> = None;
             for lo in (0..self.n).step_by(row_kernels::BLOCK) {
                 let hi = (lo + row_kernels::BLOCK).min(self.n);
@@ -844,15 +838,7 @@ impl Certifier {
         e[..k].fill(1.0 + y0.abs());
         d[k..].fill(-y0);
         e[k..].fill(y0.abs());
-        if self.rows_consecutive {
-            // Rows 0..=m: the function rows are fcols as they stand, one fused pass.
-            row_kernels::sub_rows_abs(d, e, &y[1..], &self.fcols, self.avx512);
-        } else {
-            for (yk, &j) in y.iter().zip(&self.rows).skip(1) {
-                let col = &self.fcols[(j - 1) * n..j * n];
-                row_kernels::sub_scaled_abs(d, e, *yk, col, self.avx512);
-            }
-        }
+        sub_function_rows(d, e, &y[1..], &self.fcols, &self.rows, self.avx512);
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
         let (rows, fcols) = (&self.rows, &self.fcols);
@@ -881,5 +867,26 @@ impl Certifier {
     /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
     fn min_lower(&self) -> f64 {
         row_kernels::min_lower(&self.d, &self.e, self.gamma)
+    }
+}
+
+/// d_i −= Σ_k ys_k f_{rows[k+1]}(z_i) and e_i += Σ_k |ys_k f_{rows[k+1]}(z_i)| over the grid
+/// (ys pairs with the function rows, rows[0] = 0 being the constant): one fused pass when the
+/// rows are 0, 1, …, m (fcols as it stands), else a pass per row. The same bits either way.
+fn sub_function_rows(
+    d: &mut [f64],
+    e: &mut [f64],
+    ys: &[f64],
+    fcols: &[f64],
+    rows: &[usize],
+    avx512: bool,
+) {
+    let n = d.len();
+    if rows.iter().enumerate().all(|(k, &j)| k == j) {
+        row_kernels::sub_rows_abs(d, e, ys, fcols, avx512);
+    } else {
+        for (y, &j) in ys.iter().zip(&rows[1..]) {
+            row_kernels::sub_scaled_abs(d, e, *y, &fcols[(j - 1) * n..j * n], avx512);
+        }
     }
 }

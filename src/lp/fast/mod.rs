@@ -71,6 +71,8 @@ const TOL_DEP: f64 = 1e-8;
 const MAX_COND: f64 = 1e12;
 /// Accurate pivots ([`Certifier::improve`]) tried on a basis that does not certify.
 const IMPROVE_STEPS: usize = 4;
+/// Accurate pivots from the scaled simplex's basis, the last chance before `failed`.
+const FINAL_IMPROVE_STEPS: usize = 64;
 /// Pivots between refactorisations of the basis inverse.
 const REFACTOR_EVERY: usize = 16;
 /// Consecutive degenerate pivots after which Bland's rule takes over.
@@ -612,7 +614,7 @@ impl FastSolver {
             Found::Optimal(mut basis) => {
                 match self
                     .cert
-                    .improve(moments, kf, &mut basis, IMPROVE_STEPS * 16)
+                    .improve(moments, kf, &mut basis, FINAL_IMPROVE_STEPS)
                 {
                     Ok(c) => certified(c),
                     Err(e) => {
