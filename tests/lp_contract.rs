@@ -118,15 +118,16 @@ fn monotone_one_function_closed_form() {
     assert!(checked > 5000, "{checked}");
 }
 
-/// Every problem of the adversarial corpus settled (optimal, never failed or infeasible: they
-/// are all moments of distributions), G no more than the start distribution's own mass below
-/// z_f, and the support reproducing every moment, checked here in f64 against each moment's
-/// own magnitude.
+/// Every problem of the adversarial corpus settled (optimal, never infeasible: they are all
+/// moments of distributions), G no more than the start distribution's own mass below z_f, and
+/// the support reproducing every moment, checked here in f64 against each moment's own
+/// magnitude. Given the distribution nothing fails; given its moments rounded to f64, only the
+/// problems the exact simplex proves infeasible by less than the tolerance (ill-posed) may.
 #[test]
 fn adversarial_corpus_is_certified() {
     let groups = corpus::adversarial(6, false, 7).unwrap();
     let (mut solves, mut escalated, mut failed) = (0u64, 0u64, 0u64);
-    let mut above = 0u64;
+    let (mut above, mut ill_posed) = (0u64, 0u64);
     for g in &groups {
         let mut s = FastSolver::new(g.table.clone());
         s.set_reference_fallback(false);
@@ -144,7 +145,16 @@ fn adversarial_corpus_is_certified() {
                 };
                 assert_ne!(sol.status, Status::Infeasible, "{}", g.name);
                 if sol.status == Status::Failed {
-                    assert!(sol.g.is_nan() && sol.reason.is_some(), "{}", g.name);
+                    // Only from f64 moments, and only where the exact LP is infeasible while
+                    // the start distribution reproduces them to rounding.
+                    let why = sol.reason.as_deref().unwrap_or_default();
+                    assert!(sol.g.is_nan() && k % 2 == 1, "{}: {why}", g.name);
+                    assert!(
+                        why.contains("ill-posed at f64 resolution"),
+                        "{}: {why}",
+                        g.name
+                    );
+                    ill_posed += 1;
                     continue;
                 }
                 let upper = mass_below(g.table.grid(), &p.dist, zf);
@@ -186,16 +196,19 @@ fn adversarial_corpus_is_certified() {
         }
     }
     eprintln!(
-        "adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed, \
-         {above} above the start distribution's mass by > 1e-8"
+        "adversarial corpus: {solves} solves, {escalated} escalated, {failed} failed \
+         ({ill_posed} ill-posed), {above} above the start distribution's mass by > 1e-8"
     );
+    assert_eq!(failed, ill_posed);
     assert!(
         above * 1000 <= solves,
         "{above} of {solves} above by > 1e-8"
     );
     assert!(solves > 10_000, "{solves}");
-    // NOT MET yet (docs/lp.md): the issue asks for none; 18 of 13 286 (0.14 %, power bases
-    // m ≥ 5 on clusters and flat receivers) still come back `failed` (764 before the
-    // double-double duals); this bounds the share so that it cannot grow unnoticed.
-    assert!(failed * 200 <= solves, "{failed} of {solves} failed");
+    // The ill-posed f64 moment vectors (power bases m ≥ 10 on flat receivers and boundary
+    // moments; 6 of 13 286 when written): bounded so that the share cannot grow unnoticed.
+    assert!(
+        ill_posed * 1000 <= solves,
+        "{ill_posed} of {solves} ill-posed"
+    );
 }

@@ -209,6 +209,11 @@ impl Certifier {
         self.n
     }
 
+    /// Number of basis functions m (rows 1..=m; row 0 is the constant).
+    pub fn m(&self) -> usize {
+        self.m
+    }
+
     /// b̄_j of the moments last given (b̄_0 = 1).
     pub fn bbar(&self, j: usize) -> f64 {
         self.bbar[j]

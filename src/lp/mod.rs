@@ -12,6 +12,7 @@ pub mod bench_corpus;
 pub mod certify;
 pub mod corpus;
 mod dense;
+pub mod exact;
 pub mod fast;
 pub mod instances;
 mod pricing;

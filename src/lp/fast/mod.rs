@@ -45,6 +45,7 @@ mod simplex;
 mod starts;
 
 use super::certify::{Certified, Certifier};
+use super::exact::{ExactAnswer, ExactSimplex};
 use super::pricing::ColumnTable;
 use super::reference::ReferenceSolver;
 use super::scaled::{Found, ScaledSimplex};
@@ -111,6 +112,8 @@ pub struct FastStats {
     pub escalations: u64,
     /// Problems returned as `Failed` (nothing settled them and the reference fallback is off).
     pub failed: u64,
+    /// Problems handed to the exact simplex ([`super::exact`]) after the scaled simplex.
+    pub exact: u64,
     /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
     pub improved: u64,
     /// Solves started from a given distribution ([`MomentSolver::solve_distribution`]) by the
@@ -500,7 +503,7 @@ impl FastSolver {
             Legacy::Answer(b, _) => Some(b.clone()),
             _ => None,
         };
-        let sol = self.escalate(moments, kf, start.as_deref());
+        let sol = self.escalate(moments, kf, start.as_deref(), hint);
         if sol.status != Status::Failed {
             return Ok(sol);
         }
@@ -602,37 +605,139 @@ impl FastSolver {
         Some(certified(c))
     }
 
-    /// The scaled simplex on the problem, from `start` if given; its answer certified.
-    fn escalate(&mut self, moments: &[f64], kf: usize, start: Option<&[usize]>) -> Solution {
+    /// The scaled simplex on the problem, from `start` if given; its answer certified. What
+    /// that leaves unsettled goes to the exact simplex ([`super::exact`]) from the last basis
+    /// tried.
+    fn escalate(
+        &mut self,
+        moments: &[f64],
+        kf: usize,
+        start: Option<&[usize]>,
+        dist: Option<&[(u32, f64)]>,
+    ) -> Solution {
         self.stats.escalations += 1;
         self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
         self.cert.set_moments(moments);
         let pivots = self.scaled.pivots;
         let found = self.scaled.solve(&self.cert, kf, start);
         self.stats.pivots += self.scaled.pivots - pivots;
-        let sol = match found {
+        let (sol, last) = match found {
             Found::Optimal(mut basis) => {
                 match self
                     .cert
                     .improve(moments, kf, &mut basis, FINAL_IMPROVE_STEPS)
                 {
-                    Ok(c) => certified(c),
-                    Err(e) => {
-                        Solution::failed(format!("scaled simplex optimum not certified: {e}"))
-                    }
+                    Ok(c) => (certified(c), None),
+                    Err(e) => (
+                        Solution::failed(format!("scaled simplex optimum not certified: {e}")),
+                        Some(basis),
+                    ),
                 }
             }
             Found::Infeasible(y) => match self.cert.infeasible(moments, &y) {
-                Ok(_) => Solution::infeasible(),
-                Err(e) => Solution::failed(format!("phase 1 infeasible, but {e}")),
+                Ok(_) => (Solution::infeasible(), None),
+                Err(e) => (
+                    Solution::failed(format!("phase 1 infeasible, but {e}")),
+                    None,
+                ),
             },
-            Found::Failed(e) => Solution::failed(e),
+            Found::Failed(e) => (Solution::failed(e), None),
+        };
+        let sol = if sol.status == Status::Failed {
+            // The last basis tried is usually exactly optimal (for the exact moments of the
+            // distribution); the distribution's own support is a feasible start.
+            // Completed by the last basis's columns (at weight 0), its duals are close to
+            // that basis's, which were nearly optimal.
+            let support = dist.and_then(|h| self.support_basis(h));
+            let mixed = dist
+                .zip(last.as_deref())
+                .and_then(|(h, l)| mixed_basis(h, l));
+            let from: Vec<Vec<usize>> = [last, mixed, support, start.map(<[usize]>::to_vec)]
+                .into_iter()
+                .flatten()
+                .collect();
+            match self.exact(moments, kf, from, dist) {
+                Some(ex) if ex.status == Status::Failed => Solution::failed(format!(
+                    "{}; {}",
+                    sol.reason.unwrap_or_default(),
+                    ex.reason.unwrap_or_default()
+                )),
+                Some(ex) => ex,
+                None => sol,
+            }
+        } else {
+            sol
         };
         if sol.status == Status::Infeasible {
             self.stats.infeasible += 1;
         }
         sol
     }
+
+    /// The exact simplex from the first feasible of the bases `from` (else evenly spaced grid
+    /// points), on the exact moments of `dist` when given; None when it does not settle the
+    /// problem either.
+    fn exact(
+        &mut self,
+        moments: &[f64],
+        kf: usize,
+        mut from: Vec<Vec<usize>>,
+        dist: Option<&[(u32, f64)]>,
+    ) -> Option<Solution> {
+        self.cert.set_moments(moments);
+        let mut ex = ExactSimplex::new(&self.cert, kf, dist)?;
+        self.stats.exact += 1;
+        let (n, r) = (self.table.n(), self.table.m() + 1);
+        from.push((0..r).map(|t| t * (n - 1) / (r - 1).max(1)).collect());
+        let from: Vec<&[usize]> = from.iter().map(Vec::as_slice).collect();
+        let answer = ex.solve(&from);
+        self.stats.pivots += ex.pivots as u64;
+        let z = self.table.grid().points();
+        match answer {
+            ExactAnswer::Optimal { g, weights, .. } => Some(Solution {
+                status: Status::Optimal,
+                g: g.clamp(0.0, 1.0),
+                support: weights.iter().map(|&(i, w)| (z[i], w)).collect(),
+                reason: None,
+            }),
+            // The exact ray proves that no distribution has exactly these moments; the answer
+            // `infeasible` also promises that none reproduces them to the tolerance
+            // ([`super::certify`]), which the same ray must show.
+            ExactAnswer::Infeasible(y) => {
+                let y: Vec<f64> = y.iter().map(|v| -v).collect();
+                Some(match self.cert.infeasible(moments, &y) {
+                    Ok(_) => Solution::infeasible(),
+                    Err(_) => Solution::failed(
+                        "ill-posed at f64 resolution: exactly outside the moment space \
+                         (Farkas ray), but within 1e-9 of it; solve from the distribution \
+                         for the exact answer",
+                    ),
+                })
+            }
+            ExactAnswer::Failed(e) => Some(Solution::failed(e)),
+        }
+    }
+}
+
+/// The atoms of `dist` (at most |last| of them) completed by columns of `last`: a basis
+/// (if nonsingular) whose basic solution is the distribution itself.
+fn mixed_basis(dist: &[(u32, f64)], last: &[usize]) -> Option<Vec<usize>> {
+    let mut basis: Vec<usize> = Vec::with_capacity(last.len());
+    for &(i, w) in dist {
+        let i = i as usize;
+        if w > 0.0 && !basis.contains(&i) {
+            if basis.len() == last.len() {
+                return None;
+            }
+            basis.push(i);
+        }
+    }
+    for &i in last {
+        if basis.len() < last.len() && !basis.contains(&i) {
+            basis.push(i);
+        }
+    }
+    Some(basis)
 }
 
 /// The solution of a certified answer.
