@@ -210,6 +210,10 @@ impl ColumnTable {
                     7 => self.$f::<7>(y, split, ranges, best),
                     8 => self.$f::<8>(y, split, ranges, best),
                     9 => self.$f::<9>(y, split, ranges, best),
+                    10 => self.$f::<10>(y, split, ranges, best),
+                    11 => self.$f::<11>(y, split, ranges, best),
+                    12 => self.$f::<12>(y, split, ranges, best),
+                    13 => self.$f::<13>(y, split, ranges, best),
                     _ => self.scan_ranges_scalar(y, split, ranges, best),
                 }
             };
@@ -436,7 +440,7 @@ mod tests {
         eprintln!("pricing kernels tested: {kernels:?}");
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for trial in 0..3000 {
-            let r = 1 + trial % 11;
+            let r = 1 + trial % 15;
             let len = rng.gen_range(1..70);
             let cols: Vec<Vec<f64>> = (0..len)
                 .map(|_| (0..r).map(|_| rng.gen_range(-1.0..1.0)).collect())

@@ -148,21 +148,19 @@ pub(super) fn complete_basis(
             return None;
         }
     }
+    // res[i]: squared residual of column i after projecting out q, updated per new vector.
+    let mut res: Vec<f64> = (0..n)
+        .map(|i| {
+            let row = &rows[i * r..(i + 1) * r];
+            q.iter().fold(dot(row, row), |v, qi| v - dot(qi, row).powi(2))
+        })
+        .collect();
     while basis.len() < r {
         let mut best = None;
         let mut best_v = 0.0;
-        for i in 0..n {
-            if basis.contains(&i) {
-                continue;
-            }
-            let row = &rows[i * r..(i + 1) * r];
-            let mut res = dot(row, row);
-            for qi in &q {
-                let h = dot(qi, row);
-                res -= h * h;
-            }
-            if res > best_v {
-                best_v = res;
+        for (i, &v) in res.iter().enumerate() {
+            if v > best_v && !basis.contains(&i) {
+                best_v = v;
                 best = Some(i);
             }
         }
@@ -171,6 +169,12 @@ pub(super) fn complete_basis(
             return None;
         }
         basis.push(i);
+        if basis.len() < r {
+            let qn = &q[q.len() - 1];
+            for (k, v) in res.iter_mut().enumerate() {
+                *v -= dot(qn, &rows[k * r..(k + 1) * r]).powi(2);
+            }
+        }
     }
     Some(basis)
 }
