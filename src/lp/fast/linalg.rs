@@ -152,7 +152,8 @@ pub(super) fn complete_basis(
     let mut res: Vec<f64> = (0..n)
         .map(|i| {
             let row = &rows[i * r..(i + 1) * r];
-            q.iter().fold(dot(row, row), |v, qi| v - dot(qi, row).powi(2))
+            q.iter()
+                .fold(dot(row, row), |v, qi| v - dot(qi, row).powi(2))
         })
         .collect();
     while basis.len() < r {
