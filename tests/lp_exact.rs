@@ -15,6 +15,7 @@
 #![allow(clippy::needless_range_loop)] // exact Gaussian elimination on small matrices
 
 use momentlab::lp::bench::problems;
+use momentlab::lp::corpus;
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::instances::power_table;
 use momentlab::lp::reference::ReferenceSolver;
@@ -73,6 +74,13 @@ impl Certificate {
 
 /// Exact certificate of `basis` (grid indices, m + 1 of them) for the LP on `table`.
 fn certify(table: &GridTable, moments: &[f64], zf: f64, basis: &[usize]) -> Certificate {
+    let mut bbar = vec![BigRational::one()];
+    bbar.extend(moments.iter().map(|&v| q(v)));
+    certify_rhs(table, bbar, zf, basis)
+}
+
+/// [`certify`] for the exact right-hand side b̄ = [1; b] (rationals).
+fn certify_rhs(table: &GridTable, bbar: Vec<BigRational>, zf: f64, basis: &[usize]) -> Certificate {
     let (n, m) = (table.n(), table.m());
     assert_eq!(basis.len(), m + 1, "full-rank basis expected");
     let z = table.grid().points();
@@ -84,8 +92,6 @@ fn certify(table: &GridTable, moments: &[f64], zf: f64, basis: &[usize]) -> Cert
     let bm: Vec<Vec<BigRational>> = (0..=m)
         .map(|k| basis.iter().map(|&i| q(col(i)[k])).collect())
         .collect();
-    let mut bbar = vec![BigRational::one()];
-    bbar.extend(moments.iter().map(|&v| q(v)));
     let x = solve_exact(bm.clone(), bbar).expect("basis singular in exact arithmetic");
     let cost = |i: usize| (z[i] < zf) as i64;
     let bt: Vec<Vec<BigRational>> = (0..=m)
@@ -267,6 +273,56 @@ fn fast_bases_are_exactly_optimal_on_kernel_problems_from_moments() {
         );
     }
     eprintln!("reference: {off} of {total} off the exact G by > 1e-6 (worst {worst:e})");
+}
+
+/// The answers of the exact simplex (src/lp/exact.rs, the last resort after the scaled
+/// simplex) on the adversarial corpus, checked here by independent rational arithmetic: its
+/// basis is exactly optimal for the distribution's exact moments Σ w_i ā_i / Σ w_i, and the G
+/// it returns is that basis's exact G rounded.
+#[test]
+fn exact_simplex_answers_are_exactly_optimal_on_the_adversarial_corpus() {
+    let groups = corpus::adversarial(6, false, 7).unwrap();
+    let mut checked = 0;
+    for g in groups.iter().filter(|g| g.table.m() >= 8) {
+        let mut s = FastSolver::new(g.table.clone());
+        s.set_reference_fallback(false);
+        let m = g.table.m();
+        for p in &g.problems {
+            for &zf in &p.zf {
+                let sol = s.solve_distribution(&p.dist, zf).unwrap();
+                let Some(basis) = s.last_exact_basis() else {
+                    continue;
+                };
+                assert_eq!(sol.status, Status::Optimal, "{}", g.name);
+                let total: BigRational = p.dist.iter().map(|e| q(e.1)).sum();
+                let bbar: Vec<BigRational> = (0..=m)
+                    .map(|j| {
+                        let a = |i: u32| {
+                            if j == 0 {
+                                1.0
+                            } else {
+                                g.table.row(i as usize)[j - 1]
+                            }
+                        };
+                        let s: BigRational = p.dist.iter().map(|&(i, w)| q(w) * q(a(i))).sum();
+                        s / &total
+                    })
+                    .collect();
+                let c = certify_rhs(&g.table, bbar, zf, basis);
+                assert!(c.optimal(), "{}: {c:?}", g.name);
+                assert!(
+                    (c.g - sol.g).abs() <= 2.0 * f64::EPSILON,
+                    "{}: G {} vs exact {}",
+                    g.name,
+                    sol.g,
+                    c.g
+                );
+                checked += 1;
+            }
+        }
+    }
+    eprintln!("exact simplex answers checked: {checked}");
+    assert!(checked >= 5, "{checked}");
 }
 
 #[test]

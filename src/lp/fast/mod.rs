@@ -181,6 +181,9 @@ pub struct FastSolver {
     cert: Certifier,
     /// The escalation solver.
     scaled: ScaledSimplex,
+    /// The exactly optimal basis of the last answer from the exact simplex, if the last
+    /// answer came from it.
+    last_exact: Option<Vec<usize>>,
     fallback: Option<ReferenceSolver>,
     /// Hand problems nothing else settles to the reference solver (default) or report them
     /// `Failed`.
@@ -273,6 +276,7 @@ impl FastSolver {
             stats: FastStats::default(),
             cert: Certifier::new(&table, cert_rows),
             scaled: ScaledSimplex::default(),
+            last_exact: None,
             fallback: None,
             use_fallback: false,
             c: vec![0.0; r],
@@ -332,6 +336,12 @@ impl FastSolver {
         if !on {
             self.warm_basis = None;
         }
+    }
+
+    /// The exactly optimal basis (grid indices, one per row 0..=m) when the last answer came
+    /// from the exact simplex ([`super::exact`]); None otherwise. For independent checks.
+    pub fn last_exact_basis(&self) -> Option<&[usize]> {
+        self.last_exact.as_deref()
     }
 
     /// The basis the next solve starts from (grid indices), if any.
@@ -486,6 +496,7 @@ impl FastSolver {
     ) -> Result<Solution> {
         self.check_problem(moments, zf)?;
         self.stats.solves += 1;
+        self.last_exact = None;
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
@@ -692,6 +703,9 @@ impl FastSolver {
         let from: Vec<&[usize]> = from.iter().map(Vec::as_slice).collect();
         let answer = ex.solve(&from);
         self.stats.pivots += ex.pivots as u64;
+        if let ExactAnswer::Optimal { basis, .. } = &answer {
+            self.last_exact = Some(basis.clone());
+        }
         let z = self.table.grid().points();
         match answer {
             ExactAnswer::Optimal { g, weights, .. } => Some(Solution {
