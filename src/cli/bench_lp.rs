@@ -201,8 +201,14 @@ fn print_top_groups(r: &CorpusRow, top: usize) {
     order.sort_by(|&a, &b| r.groups[b].total_us.total_cmp(&r.groups[a].total_us));
     let total: f64 = r.groups.iter().map(|g| g.total_us).sum();
     println!(
-        "  {:<62} {:>5} {:>9} {:>10} {:>6} {:>5}",
-        "largest shares of the mean (table: kind)", "LPs", "mean µs", "max µs", "failed", "escal"
+        "  {:<62} {:>5} {:>9} {:>10} {:>6} {:>5} {:>5}",
+        "largest shares of the mean (table: kind)",
+        "LPs",
+        "mean µs",
+        "max µs",
+        "failed",
+        "escal",
+        "exact"
     );
     for (k, &i) in order.iter().enumerate() {
         let g = &r.groups[i];
@@ -210,13 +216,14 @@ fn print_top_groups(r: &CorpusRow, top: usize) {
             continue;
         }
         println!(
-            "  {:<62} {:>5} {:>9.1} {:>10.1} {:>6} {:>5}   {:>4.1} % of the total",
+            "  {:<62} {:>5} {:>9.1} {:>10.1} {:>6} {:>5} {:>5}   {:>4.1} % of the total",
             g.name,
             g.problems,
             g.total_us / g.problems.max(1) as f64,
             g.max_us,
             g.failed,
             g.escalations,
+            g.exact,
             100.0 * g.total_us / total
         );
         if let Some(why) = &g.first_reason {
@@ -293,10 +300,10 @@ fn run_corpus(args: &Args) -> Result<()> {
             r.speedup_mean,
             r.max_abs_diff
         );
-        if r.reference_invalid > 0 || r.fallbacks > 0 {
+        if r.reference_invalid > 0 || r.fallbacks > 0 || r.exact > 0 {
             println!(
-                "  {}: {} reference answers invalid (not compared), {} fallbacks",
-                r.corpus, r.reference_invalid, r.fallbacks
+                "  {}: {} reference answers invalid (not compared), {} fallbacks, {} handed to the exact simplex",
+                r.corpus, r.reference_invalid, r.fallbacks, r.exact
             );
         }
         if r.groups.len() > 1 {

@@ -66,6 +66,8 @@ pub struct CorpusRow {
     pub failed: usize,
     /// Solves escalated to the scaled simplex (in the last pass).
     pub escalations: u64,
+    /// Of which settled only by the exact simplex (`lp::exact`).
+    pub exact: u64,
     /// Fallbacks to the reference (the fast solver runs with the fallback off: must be 0).
     pub fallbacks: u64,
     /// The reference (good_lp + microlp) on a prefix of the problems, µs per LP.
@@ -96,6 +98,8 @@ pub struct GroupRow {
     pub max_us: f64,
     pub failed: usize,
     pub escalations: u64,
+    /// Solves handed to the exact simplex.
+    pub exact: u64,
     /// The reason given by the group's first `Failed` answer.
     pub first_reason: Option<String>,
 }
@@ -122,6 +126,7 @@ pub fn run(
         infeasible: 0,
         failed: 0,
         escalations: 0,
+        exact: 0,
         fallbacks: 0,
         reference_problems: 0,
         reference_us: Spread::default(),
@@ -137,6 +142,7 @@ pub fn run(
         }
         let (times, sols, stats) = time_group(g, repeats)?;
         row.escalations += stats.escalations;
+        row.exact += stats.exact;
         row.fallbacks += stats.fallbacks;
         row.groups.push(GroupRow {
             name: g.name.clone(),
@@ -145,6 +151,7 @@ pub fn run(
             max_us: times.iter().fold(0.0, |a: f64, &t| a.max(t)),
             failed: sols.iter().filter(|s| s.status == Status::Failed).count(),
             escalations: stats.escalations,
+            exact: stats.exact,
             first_reason: sols.iter().find_map(|s| s.reason.clone()),
         });
         for s in &sols {
@@ -221,6 +228,7 @@ fn time_group(
     // Counters of the last pass only (the statuses are the last pass's too).
     let mut stats = solver.stats();
     stats.escalations -= before.escalations;
+    stats.exact -= before.exact;
     stats.fallbacks -= before.fallbacks;
     Ok((best, sols, stats))
 }

@@ -29,7 +29,7 @@ use num_traits::{Signed, ToPrimitive, Zero};
 /// Primal pivots per phase before the exact simplex gives up.
 const MAX_PIVOTS: usize = 400;
 /// Dual pivots tried before phase 1.
-const MAX_DUAL_PIVOTS: usize = 200;
+const MAX_DUAL_PIVOTS: usize = 100;
 /// Largest number of rows handled (the work grows as r³ in numbers of r·(53 + span) bits).
 const MAX_ROWS: usize = 24;
 
