@@ -655,19 +655,7 @@ impl FastSolver {
             Found::Failed(e) => (Solution::failed(e), None),
         };
         let sol = if sol.status == Status::Failed {
-            // The last basis tried is usually exactly optimal (for the exact moments of the
-            // distribution); the distribution's own support is a feasible start.
-            // Completed by the last basis's columns (at weight 0), its duals are close to
-            // that basis's, which were nearly optimal.
-            let support = dist.and_then(|h| self.support_basis(h));
-            let mixed = dist
-                .zip(last.as_deref())
-                .and_then(|(h, l)| mixed_basis(h, l));
-            let from: Vec<Vec<usize>> = [last, mixed, support, start.map(<[usize]>::to_vec)]
-                .into_iter()
-                .flatten()
-                .collect();
-            match self.exact(moments, kf, from, dist) {
+            match self.exact(moments, kf, [last, start.map(<[usize]>::to_vec)], dist) {
                 Some(ex) if ex.status == Status::Failed => Solution::failed(format!(
                     "{}; {}",
                     sol.reason.unwrap_or_default(),
@@ -685,22 +673,32 @@ impl FastSolver {
         sol
     }
 
-    /// The exact simplex from the first feasible of the bases `from` (else evenly spaced grid
-    /// points), on the exact moments of `dist` when given; None when it does not settle the
-    /// problem either.
+    /// The exact simplex on the exact moments of `dist` when given (else on `moments`). Its
+    /// starts: the last basis the escalation tried (usually exactly optimal already, or a few
+    /// dual pivots away), the distribution's atoms completed by that basis's columns (feasible,
+    /// with duals close to that basis's), the distribution's support, the fast solver's basis,
+    /// evenly spaced grid points. None when the exact LP does not apply (dependent rows).
     fn exact(
         &mut self,
         moments: &[f64],
         kf: usize,
-        mut from: Vec<Vec<usize>>,
+        [last, fast]: [Option<Vec<usize>>; 2],
         dist: Option<&[(u32, f64)]>,
     ) -> Option<Solution> {
+        let (n, r) = (self.table.n(), self.table.m() + 1);
+        let mixed = dist
+            .zip(last.as_deref())
+            .and_then(|(h, l)| mixed_basis(h, l));
+        let support = dist.and_then(|h| self.support_basis(h));
+        let spread = Some((0..r).map(|t| t * (n - 1) / (r - 1).max(1)).collect());
+        let from: Vec<Vec<usize>> = [last, mixed, support, fast, spread]
+            .into_iter()
+            .flatten()
+            .collect();
+        let from: Vec<&[usize]> = from.iter().map(Vec::as_slice).collect();
         self.cert.set_moments(moments);
         let mut ex = ExactSimplex::new(&self.cert, kf, dist)?;
         self.stats.exact += 1;
-        let (n, r) = (self.table.n(), self.table.m() + 1);
-        from.push((0..r).map(|t| t * (n - 1) / (r - 1).max(1)).collect());
-        let from: Vec<&[usize]> = from.iter().map(Vec::as_slice).collect();
         let answer = ex.solve(&from);
         self.stats.pivots += ex.pivots as u64;
         if let ExactAnswer::Optimal { basis, .. } = &answer {
