@@ -701,17 +701,18 @@ impl FastSolver {
         self.stats.exact += 1;
         let answer = ex.solve(&from);
         self.stats.pivots += ex.pivots as u64;
-        if let ExactAnswer::Optimal { basis, .. } = &answer {
-            self.last_exact = Some(basis.clone());
-        }
         let z = self.table.grid().points();
         match answer {
-            ExactAnswer::Optimal { g, weights, .. } => Some(Solution {
-                status: Status::Optimal,
-                g: g.clamp(0.0, 1.0),
-                support: weights.iter().map(|&(i, w)| (z[i], w)).collect(),
-                reason: None,
-            }),
+            ExactAnswer::Optimal { g, weights, basis } => {
+                let support = weights.iter().map(|&(i, w)| (z[i], w)).collect();
+                self.last_exact = Some(basis);
+                Some(Solution {
+                    status: Status::Optimal,
+                    g: g.clamp(0.0, 1.0),
+                    support,
+                    reason: None,
+                })
+            }
             // The exact ray proves that no distribution has exactly these moments; the answer
             // `infeasible` also promises that none reproduces them to the tolerance
             // ([`super::certify`]), which the same ray must show.
