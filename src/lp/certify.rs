@@ -129,6 +129,12 @@ pub struct Certifier {
     tmp: Vec<f64>,
     d: Vec<f64>,
     e: Vec<f64>,
+    /// Offsets in `fcols` of the function rows rows[1..].
+    offs: Vec<usize>,
+    /// First indices of the blocks of d where some d_i − γ e_i < 0, when `flagged_ok` (the
+    /// last [`Self::reduced`] priced a cost vector): the only places a bound can go negative.
+    flagged: Vec<usize>,
+    flagged_ok: bool,
     /// −α and Σ|·| of a row of B⁻¹A over the grid (dual steps of [`Self::improve`]).
     ra: Vec<f64>,
     rm: Vec<f64>,
@@ -161,6 +167,7 @@ impl Certifier {
             };
         }
         let r = rows.len();
+        let offs = rows[1..].iter().map(|&j| (j - 1) * n).collect();
         let finv = (1..=m)
             .filter(|&j| definite[j])
             .map(|j| {
@@ -199,6 +206,9 @@ impl Certifier {
             tmp: vec![0.0; r],
             d: vec![0.0; n],
             e: vec![0.0; n],
+            offs,
+            flagged: Vec::new(),
+            flagged_ok: false,
             ra: vec![0.0; n],
             rm: vec![0.0; n],
         }
@@ -814,9 +824,14 @@ impl Certifier {
     /// Σ_i w_i d_i that stays tight where huge columns (a steep exponential near its peak) can
     /// only carry tiny weights.
     fn capped_lower(&self) -> f64 {
-        row_kernels::below(&self.d, &self.e, self.gamma)
-            .map(|(i, v)| self.cap(i) * v)
-            .sum()
+        debug_assert!(self.flagged_ok);
+        let mut sum = 0.0;
+        for (lo, hi) in self.flagged_blocks() {
+            for (i, v) in row_kernels::below(&self.d[lo..hi], &self.e[lo..hi], self.gamma) {
+                sum += self.cap(lo + i) * v;
+            }
+        }
+        sum
     }
 
     /// d_i = p_i − y·ā_i (p = 0 when `kf` is None) and the magnitudes e_i = |p_i| + Σ|y_j ā_ji|.
@@ -837,22 +852,15 @@ impl Certifier {
         let gamma = self.gamma;
         let (d, e) = (&mut self.d, &mut self.e);
         // Farkas: d holds y·ā_i (the sign is flipped at the end).
-        let y0 = y[0];
         let k = kf.unwrap_or(0).min(n);
-        d[..k].fill(1.0 - y0);
-        e[..k].fill(1.0 + y0.abs());
-        d[k..].fill(-y0);
-        e[k..].fill(y0.abs());
-        sub_function_rows(d, e, &y[1..], &self.fcols, &self.rows, self.avx512);
+        let (fcols, offs) = (&self.fcols, &self.offs);
+        let flagged = &mut self.flagged;
+        row_kernels::reduced_costs(d, e, (k, y[0]), &y[1..], fcols, offs, gamma, flagged, self.avx512);
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
-        let (rows, fcols) = (&self.rows, &self.fcols);
-        for lo in (0..n).step_by(row_kernels::BLOCK) {
-            let hi = (lo + row_kernels::BLOCK).min(n);
-            if !row_kernels::any_below(&d[lo..hi], &e[lo..hi], gamma) {
-                continue;
-            }
-            for i in lo..hi {
+        let rows = &self.rows;
+        for &lo in flagged.iter() {
+            for i in lo..(lo + row_kernels::BLOCK).min(n) {
                 if d[i] - gamma * e[i] < 0.0 {
                     let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
                     let a = |j: usize| if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
@@ -864,6 +872,7 @@ impl Certifier {
                 }
             }
         }
+        self.flagged_ok = kf.is_some();
         if kf.is_none() {
             d.iter_mut().for_each(|v| *v = -*v);
         }
@@ -871,7 +880,21 @@ impl Certifier {
 
     /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
     fn min_lower(&self) -> f64 {
-        row_kernels::min_lower(&self.d, &self.e, self.gamma)
+        if !self.flagged_ok {
+            return row_kernels::min_lower(&self.d, &self.e, self.gamma);
+        }
+        // Outside the flagged blocks every d_i − γ e_i ≥ 0 (or NaN, skipped either way).
+        self.flagged_blocks()
+            .map(|(lo, hi)| row_kernels::min_lower(&self.d[lo..hi], &self.e[lo..hi], self.gamma))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// The flagged blocks as index ranges (see `flagged`).
+    fn flagged_blocks(&self) -> impl Iterator<Item = (usize, usize)> + '_ {
+        let n = self.n;
+        self.flagged
+            .iter()
+            .map(move |&lo| (lo, (lo + row_kernels::BLOCK).min(n)))
     }
 }
 

@@ -98,6 +98,113 @@ unsafe fn sub_rows_abs_avx512(d: &mut [f64], e: &mut [f64], ys: &[f64], mat: &[f
     sub_rows_abs_generic(d, e, ys, mat)
 }
 
+/// The reduced costs of a dual vector over the grid in one pass:
+/// d_i = p_i − y₀ − Σ_k y_k f_k(z_i) and e_i = p_i + |y₀| + Σ_k |y_k f_k(z_i)| with
+/// p_i = [i < kf], the row f_k at `mat[offs[k]..offs[k] + n]` (n = d.len()). Returns in `flagged`
+/// the first index of every block of [`BLOCK`] points holding some d_i − γ e_i < 0. Per point the
+/// same operations in the same order as filling d and e and then [`sub_scaled_abs`] row by row
+/// (the same bits).
+#[allow(clippy::too_many_arguments)] // one fused pass: the reduced costs and their bound
+pub fn reduced_costs(
+    d: &mut [f64],
+    e: &mut [f64],
+    (kf, y0): (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    gamma: f64,
+    flagged: &mut Vec<usize>,
+    avx512: bool,
+) {
+    let n = d.len();
+    assert!(e.len() == n && ys.len() == offs.len());
+    assert!(offs.iter().all(|&o| o + n <= mat.len()));
+    flagged.clear();
+    #[cfg(target_arch = "x86_64")]
+    if avx512 {
+        // SAFETY: `avx512` is only true where the CPU has AVX-512F (`has_avx512`).
+        unsafe { reduced_costs_avx512(d, e, (kf, y0), ys, mat, offs, gamma, flagged) };
+        return;
+    }
+    let _ = avx512;
+    reduced_costs_generic(d, e, (kf, y0), ys, mat, offs, gamma, flagged);
+}
+
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn reduced_costs_generic(
+    d: &mut [f64],
+    e: &mut [f64],
+    (kf, y0): (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    gamma: f64,
+    flagged: &mut Vec<usize>,
+) {
+    let n = d.len();
+    let full = n - n % BLOCK;
+    let ay0 = y0.abs();
+    for lo in (0..full).step_by(BLOCK) {
+        let mut db = [0.0; BLOCK];
+        let mut eb = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            db[t] = p - y0;
+            eb[t] = p + ay0;
+        }
+        for (&y, &o) in ys.iter().zip(offs) {
+            let f = &mat[o + lo..o + lo + BLOCK];
+            for t in 0..BLOCK {
+                let v = y * f[t];
+                db[t] -= v;
+                eb[t] += v.abs();
+            }
+        }
+        let mut hit = false;
+        for t in 0..BLOCK {
+            hit |= db[t] - gamma * eb[t] < 0.0;
+        }
+        d[lo..lo + BLOCK].copy_from_slice(&db);
+        e[lo..lo + BLOCK].copy_from_slice(&eb);
+        if hit {
+            flagged.push(lo);
+        }
+    }
+    let mut hit = false;
+    for i in full..n {
+        let p = if i < kf { 1.0 } else { 0.0 };
+        let (mut di, mut ei) = (p - y0, p + ay0);
+        for (&y, &o) in ys.iter().zip(offs) {
+            let v = y * mat[o + i];
+            di -= v;
+            ei += v.abs();
+        }
+        d[i] = di;
+        e[i] = ei;
+        hit |= di - gamma * ei < 0.0;
+    }
+    if hit {
+        flagged.push(full);
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+#[allow(clippy::too_many_arguments)]
+unsafe fn reduced_costs_avx512(
+    d: &mut [f64],
+    e: &mut [f64],
+    kf: (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    gamma: f64,
+    flagged: &mut Vec<usize>,
+) {
+    reduced_costs_generic(d, e, kf, ys, mat, offs, gamma, flagged)
+}
+
 /// Whether some d_i − γ e_i < 0 (d and e of equal length).
 pub fn any_below(d: &[f64], e: &[f64], gamma: f64) -> bool {
     let mut hit = false;
@@ -199,6 +306,53 @@ mod tests {
                 sub_rows_abs(&mut d2, &mut e2, &ys, &mat, avx);
                 assert_eq!(d1, d2, "n = {n}");
                 assert_eq!(e1, e2, "n = {n}");
+            }
+        }
+    }
+
+    #[test]
+    fn reduced_costs_is_fill_then_rows_bit_for_bit_and_flags_every_negative_block() {
+        for n in [1usize, 15, 16, 37, 64, 100] {
+            let mat: Vec<f64> = (0..4 * n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+            let ys = [-0.3e-3, 1.7e-4, 2.5e-7];
+            let offs = [3 * n, 0, n];
+            for kf in [0, n / 3, n] {
+                for y0 in [0.25, -0.5] {
+                    let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);
+                    for i in 0..n {
+                        d1[i] = if i < kf { 1.0 - y0 } else { -y0 };
+                        e1[i] = if i < kf { 1.0 + y0.abs() } else { y0.abs() };
+                    }
+                    for (&y, &o) in ys.iter().zip(&offs) {
+                        sub_scaled_abs(&mut d1, &mut e1, y, &mat[o..o + n], false);
+                    }
+                    let g = 1e-3;
+                    let want: Vec<usize> = (0..n)
+                        .step_by(BLOCK)
+                        .filter(|&lo| {
+                            let hi = (lo + BLOCK).min(n);
+                            any_below(&d1[lo..hi], &e1[lo..hi], g)
+                        })
+                        .collect();
+                    for avx in [false, has_avx512()] {
+                        let (mut d2, mut e2) = (vec![9.0; n], vec![9.0; n]);
+                        let mut flagged = vec![7];
+                        reduced_costs(
+                            &mut d2,
+                            &mut e2,
+                            (kf, y0),
+                            &ys,
+                            &mat,
+                            &offs,
+                            g,
+                            &mut flagged,
+                            avx,
+                        );
+                        assert_eq!(d1, d2, "n = {n}, kf = {kf}");
+                        assert_eq!(e1, e2, "n = {n}, kf = {kf}");
+                        assert_eq!(flagged, want, "n = {n}, kf = {kf}");
+                    }
+                }
             }
         }
     }

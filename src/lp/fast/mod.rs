@@ -130,6 +130,9 @@ pub struct FastStats {
     /// Optima whose weights, refined against the LP as stated, were infeasible: solved again
     /// with every basic solution refined.
     pub accurate_retries: u64,
+    /// Optima reached by partial pricing alone whose certificate failed: the simplex resumed
+    /// from that basis with the full pricing pass.
+    pub resumed: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -206,6 +209,11 @@ pub struct FastSolver {
     /// Refine every basic solution against the LP as stated (set when an optimum's weights
     /// turned out infeasible on refinement; per solve).
     accurate: bool,
+    /// Phase 2 may end when partial pricing finds no entering column, leaving the full
+    /// pricing pass to the certificate's reduced costs over every grid point (per solve).
+    partial_optimum: bool,
+    /// The last "no entering column" came from partial pricing alone (no full pass).
+    full_pass_skipped: bool,
     x_backup: Vec<f64>,
     /// Duals and weights before the last verification refactorisation.
     yold: Vec<f64>,
@@ -292,6 +300,8 @@ impl FastSolver {
             c0: vec![0.0; r],
             b_orig: vec![0.0; m],
             accurate: false,
+            partial_optimum: false,
+            full_pass_skipped: false,
             x_backup: vec![0.0; r],
             yold: vec![0.0; r],
             xold: vec![0.0; r],
@@ -500,12 +510,25 @@ impl FastSolver {
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
-        let verdict = if c_given || self.transform(moments) {
+        let mut verdict = if c_given || self.transform(moments) {
             self.c0.copy_from_slice(&self.c);
+            self.partial_optimum = true;
+            self.full_pass_skipped = false;
             self.attempts(kf, hint)
         } else {
             Verdict::Infeasible
         };
+        self.partial_optimum = false;
+        if matches!(verdict, Verdict::Optimal) && self.full_pass_skipped {
+            // Partial pricing ended phase 2: the certificate prices every grid point (in the
+            // original coordinates, with refined duals) and so stands in for the full pass.
+            if let Ok(c) = self.cert.optimal(moments, kf, &self.basis) {
+                self.remember_optimal();
+                return Ok(certified(c));
+            }
+            self.stats.resumed += 1;
+            verdict = self.resume(kf);
+        }
         let legacy = match self.certify_fast(verdict, moments, kf, hint) {
             Ok(sol) => return Ok(sol),
             Err(legacy) => legacy,

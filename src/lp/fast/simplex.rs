@@ -298,6 +298,15 @@ impl FastSolver {
         } else {
             self.price_partial(kf_eff)
         };
+        if partial.0 == usize::MAX && !bland && self.partial_optimum && !st.phase1 && !st.perturbed
+        {
+            // The certificate will price every column (see `solve_inner`).
+            self.full_pass_skipped = true;
+            return Ok((usize::MAX, 0.0));
+        }
+        if partial.0 == usize::MAX {
+            self.full_pass_skipped = false;
+        }
         if partial.0 == usize::MAX && !bland && !st.verified && st.since_refactor > 0 {
             // About to prove optimality with a full pass: refactorise first, so that the
             // pass prices with fresh duals (the updated ones of an ill-conditioned basis

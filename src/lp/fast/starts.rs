@@ -25,7 +25,25 @@ impl FastSolver {
     /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
     /// (two cold runs, the second with Bland's rule throughout).
     pub(super) fn attempts(&mut self, kf: usize, hint: Option<&[(u32, f64)]>) -> Verdict {
-        let (mut start, warm_or_cold) = self.first_start(hint.is_some());
+        let (start, warm_or_cold) = self.first_start(hint.is_some());
+        self.attempts_from(kf, hint, start, warm_or_cold)
+    }
+
+    /// [`Self::attempts`] again from the basis the last one ended on (with the full pricing
+    /// pass unless `partial_optimum` is set).
+    pub(super) fn resume(&mut self, kf: usize) -> Verdict {
+        let (_, warm_or_cold) = self.first_start(false);
+        self.attempts_from(kf, None, Start::Current, warm_or_cold)
+    }
+
+    /// The attempts of [`Self::attempts`] from `start`; `warm_or_cold` after a failed hint.
+    fn attempts_from(
+        &mut self,
+        kf: usize,
+        hint: Option<&[(u32, f64)]>,
+        mut start: Start,
+        warm_or_cold: Start,
+    ) -> Verdict {
         let mut cold_runs = 0;
         let mut stash: Option<Vec<usize>> = None;
         for _attempt in 0..6 {
@@ -116,6 +134,7 @@ impl FastSolver {
         match stash {
             Some(basis) => {
                 self.stats.loose += 1;
+                self.full_pass_skipped = false;
                 self.mark_basic(false);
                 self.basis.copy_from_slice(&basis);
                 self.mark_basic(true);
