@@ -317,7 +317,7 @@ mod tests {
             let ys = [-0.3e-3, 1.7e-4, 2.5e-7];
             let offs = [3 * n, 0, n];
             for kf in [0, n / 3, n] {
-                for y0 in [0.25, -0.5] {
+                for y0 in [0.25f64, -0.5] {
                     let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);
                     for i in 0..n {
                         d1[i] = if i < kf { 1.0 - y0 } else { -y0 };

@@ -237,10 +237,11 @@ pub struct FastSolver {
     /// 1 / max_i |M_j(z_i)|: row equilibration of the original system.
     oscale: Vec<f64>,
     lo_rhs: Vec<f64>,
-    /// Crossover workspace: the start distribution, residuals, orthonormal directions and
-    /// basis positions of its support points.
+    /// Crossover workspace: the start distribution, squared residual norms, a residual,
+    /// orthonormal directions and basis positions of its support points.
     hint: Vec<(usize, f64)>,
-    hint_res: Vec<f64>,
+    hint_nrm: Vec<f64>,
+    hint_v: Vec<f64>,
     hint_u: Vec<f64>,
     hint_pos: Vec<usize>,
 }
@@ -324,7 +325,8 @@ impl FastSolver {
             fscale,
             table,
             hint: Vec::new(),
-            hint_res: Vec::new(),
+            hint_nrm: Vec::new(),
+            hint_v: vec![0.0; r],
             hint_u: Vec::new(),
             hint_pos: Vec::new(),
         };

@@ -199,8 +199,8 @@ impl FastSolver {
         self.push_out_superbasic(kf)
     }
 
-    /// The start's positive atoms into `hint`, their columns into `hint_res`, and every atom
-    /// superbasic in `hint_pos`; false for an invalid or empty start.
+    /// The start's positive atoms into `hint`, their squared column norms into `hint_nrm`,
+    /// and every atom superbasic in `hint_pos`; false for an invalid or empty start.
     fn load_hint(&mut self, start: &[(u32, f64)]) -> bool {
         let (n, r) = (self.n, self.r);
         self.hint.clear();
@@ -217,12 +217,10 @@ impl FastSolver {
         if s == 0 {
             return false;
         }
-        // Greedy maximal volume among the support columns: residuals after projecting out the
-        // chosen ones (modified Gram–Schmidt on copies).
-        self.hint_res.clear();
+        self.hint_nrm.clear();
         for &(i, _) in &self.hint {
-            self.hint_res
-                .extend_from_slice(&self.rows[i * r..(i + 1) * r]);
+            let a = &self.rows[i * r..(i + 1) * r];
+            self.hint_nrm.push(dot(a, a));
         }
         self.hint_u.clear();
         // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
@@ -231,49 +229,53 @@ impl FastSolver {
         true
     }
 
-    /// Greedy maximal volume: the support column with the largest residual (relative size
-    /// ≥ 1e-5) enters the basis with its weight, and is projected out of the others' residuals;
-    /// returns the number of basis positions filled.
+    /// Greedy maximal volume (QR with column pivoting on the support columns): the support
+    /// column with the largest residual after projecting out the chosen ones enters the basis
+    /// with its weight, while that residual is ≥ 1e-5 (columns have RMS 1 over the grid and
+    /// first coordinate 1); returns the number of basis positions filled. The residual norms
+    /// are downdated (‖r‖² −= (a·u)² per chosen direction u); only the chosen column's
+    /// residual is formed, by modified Gram–Schmidt twice.
     fn choose_support(&mut self) -> usize {
         let (r, s) = (self.r, self.hint.len());
         let mut chosen = 0usize;
         while chosen < r {
             let mut best = usize::MAX;
-            let mut best_v = 0.0;
+            let mut best_v = 1e-10;
             for k in 0..s {
-                if self.hint_pos[k] != usize::MAX {
-                    continue;
-                }
-                let v = dot(
-                    &self.hint_res[k * r..(k + 1) * r],
-                    &self.hint_res[k * r..(k + 1) * r],
-                );
-                if v > best_v {
-                    best_v = v;
+                if self.hint_pos[k] == usize::MAX && self.hint_nrm[k] >= best_v {
+                    best_v = self.hint_nrm[k];
                     best = k;
                 }
             }
-            // Relative to the column norm (RMS 1 over the grid, first coordinate 1).
-            if best == usize::MAX || best_v.sqrt() < 1e-5 {
+            if best == usize::MAX {
                 break;
             }
-            let inv = 1.0 / best_v.sqrt();
-            let u: Vec<f64> = self.hint_res[best * r..(best + 1) * r]
-                .iter()
-                .map(|v| v * inv)
-                .collect();
-            for k in 0..s {
-                if self.hint_pos[k] == usize::MAX && k != best {
-                    let row = &mut self.hint_res[k * r..(k + 1) * r];
-                    let h = dot(row, &u);
-                    for (a, b) in row.iter_mut().zip(&u) {
-                        *a -= h * b;
-                    }
+            let i = self.hint[best].0;
+            let v = &mut self.hint_v;
+            v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
+            for _pass in 0..2 {
+                for u in self.hint_u.chunks(r) {
+                    let h = dot(v, u);
+                    v.iter_mut().zip(u).for_each(|(a, b)| *a -= h * b);
                 }
             }
-            self.hint_u.extend_from_slice(&u);
+            let nv = norm(v);
+            if nv.is_nan() || nv < 1e-5 {
+                // The downdated norm drifted: this column is dependent on the chosen ones.
+                self.hint_nrm[best] = 0.0;
+                continue;
+            }
+            v.iter_mut().for_each(|a| *a /= nv);
+            for k in 0..s {
+                if self.hint_pos[k] == usize::MAX && k != best {
+                    let j = self.hint[k].0;
+                    let h = dot(&self.rows[j * r..(j + 1) * r], v);
+                    self.hint_nrm[k] -= h * h;
+                }
+            }
+            self.hint_u.extend_from_slice(v);
             self.hint_pos[best] = chosen;
-            self.basis[chosen] = self.hint[best].0;
+            self.basis[chosen] = i;
             self.x[chosen] = self.hint[best].1;
             chosen += 1;
         }
