@@ -855,7 +855,17 @@ impl Certifier {
         let k = kf.unwrap_or(0).min(n);
         let (fcols, offs) = (&self.fcols, &self.offs);
         let flagged = &mut self.flagged;
-        row_kernels::reduced_costs(d, e, (k, y[0]), &y[1..], fcols, offs, gamma, flagged, self.avx512);
+        row_kernels::reduced_costs(
+            d,
+            e,
+            (k, y[0]),
+            &y[1..],
+            fcols,
+            offs,
+            gamma,
+            flagged,
+            self.avx512,
+        );
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
         let rows = &self.rows;

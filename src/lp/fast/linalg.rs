@@ -14,8 +14,84 @@ pub(super) fn norm(a: &[f64]) -> f64 {
 /// out = A v for row-major r × r A.
 #[inline]
 pub(super) fn mat_vec(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
+    // Specialised for the row count (loops unrolled at compile time).
+    match r {
+        2 => mat_vec_r::<2>(a, v, out, r),
+        3 => mat_vec_r::<3>(a, v, out, r),
+        4 => mat_vec_r::<4>(a, v, out, r),
+        5 => mat_vec_r::<5>(a, v, out, r),
+        6 => mat_vec_r::<6>(a, v, out, r),
+        7 => mat_vec_r::<7>(a, v, out, r),
+        8 => mat_vec_r::<8>(a, v, out, r),
+        9 => mat_vec_r::<9>(a, v, out, r),
+        _ => mat_vec_r::<0>(a, v, out, r),
+    }
+}
+
+#[inline(always)]
+fn mat_vec_r<const R: usize>(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
+    let r = if R > 0 { R } else { r };
+    let (a, v, out) = (&a[..r * r], &v[..r], &mut out[..r]);
     for t in 0..r {
-        out[t] = dot(&a[t * r..(t + 1) * r], &v[..r]);
+        out[t] = dot(&a[t * r..(t + 1) * r], v);
+    }
+}
+
+/// The basis-inverse update of a pivot: row l of the row-major r × r `binv` divided by α_l,
+/// then α_t times it subtracted from every other row t.
+#[inline]
+pub(super) fn pivot_rows(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
+    match r {
+        2 => pivot_rows_r::<2>(binv, alpha, l, r),
+        3 => pivot_rows_r::<3>(binv, alpha, l, r),
+        4 => pivot_rows_r::<4>(binv, alpha, l, r),
+        5 => pivot_rows_r::<5>(binv, alpha, l, r),
+        6 => pivot_rows_r::<6>(binv, alpha, l, r),
+        7 => pivot_rows_r::<7>(binv, alpha, l, r),
+        8 => pivot_rows_r::<8>(binv, alpha, l, r),
+        9 => pivot_rows_r::<9>(binv, alpha, l, r),
+        _ => pivot_rows_r::<0>(binv, alpha, l, r),
+    }
+}
+
+#[inline(always)]
+fn pivot_rows_r<const R: usize>(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
+    let r = if R > 0 { R } else { r };
+    let (binv, alpha) = (&mut binv[..r * r], &alpha[..r]);
+    let al = alpha[l];
+    let mut row = [0.0f64; 16];
+    let row = if r <= 16 {
+        &mut row[..r]
+    } else {
+        return pivot_rows_wide(binv, alpha, l, r);
+    };
+    for k in 0..r {
+        binv[l * r + k] /= al;
+        row[k] = binv[l * r + k];
+    }
+    for t in 0..r {
+        let f = alpha[t];
+        if t != l && f != 0.0 {
+            for k in 0..r {
+                binv[t * r + k] -= f * row[k];
+            }
+        }
+    }
+}
+
+/// [`pivot_rows`] for r > 16.
+fn pivot_rows_wide(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
+    let al = alpha[l];
+    for k in 0..r {
+        binv[l * r + k] /= al;
+    }
+    for t in 0..r {
+        let f = alpha[t];
+        if t != l && f != 0.0 {
+            for k in 0..r {
+                binv[t * r + k] -= f * binv[l * r + k];
+            }
+        }
     }
 }
 

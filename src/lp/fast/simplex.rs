@@ -2,7 +2,7 @@
 //! iteration (pricing, optimality checks of either phase, Harris ratio test, pivot), degenerate
 //! perturbation, and the bounded "refactorise, else rescue, else fail" recovery.
 
-use super::linalg::{invert, mat_vec, norm};
+use super::linalg::{invert, mat_vec, norm, pivot_rows};
 use super::price::{price, price_bland};
 use super::{
     FastSolver, Outcome, ART, DEGENERATE_LIMIT, MAX_COND, REFACTOR_EVERY, TOL_D, TOL_INF, TOL_P,
@@ -337,6 +337,16 @@ impl FastSolver {
     /// No entering column (d_q ≥ −TOL_D): verify with a fresh factorisation, then end phase 1,
     /// restore perturbed moments, or settle the phase-2 optimum.
     fn at_optimum(&mut self, st: &mut Run, dq: f64) -> Result<(), Jump> {
+        if self.full_pass_skipped
+            && !st.phase1
+            && !st.perturbed
+            && self.x.iter().all(|&v| v >= -TOL_P)
+        {
+            // The certificate factorises, refines and prices on its own (see `solve_inner`);
+            // should it fail, the run resumes from this basis with the full pass and the
+            // verification, polish and refinement below.
+            return Err(Jump::End(Outcome::Optimal));
+        }
         if !st.verified && st.since_refactor > 0 {
             self.verify_optimum(st, dq)?;
         }
@@ -540,21 +550,7 @@ impl FastSolver {
 
     /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
     pub(super) fn exchange(&mut self, l: usize, q: usize) {
-        let r = self.r;
-        let al = self.alpha[l];
-        for k in 0..r {
-            self.binv[l * r + k] /= al;
-        }
-        for t in 0..r {
-            if t != l {
-                let f = self.alpha[t];
-                if f != 0.0 {
-                    for k in 0..r {
-                        self.binv[t * r + k] -= f * self.binv[l * r + k];
-                    }
-                }
-            }
-        }
+        pivot_rows(&mut self.binv, &self.alpha, l, self.r);
         self.factored_ok = false;
         if self.basis[l] != ART {
             self.set_basic(self.basis[l], false);
