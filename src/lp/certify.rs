@@ -75,6 +75,9 @@ pub struct Certified {
     pub residual: f64,
     /// G − L (L the dual lower bound).
     pub gap: f64,
+    /// A lower bound on min(0, min_i d_i), the most negative reduced cost over the grid for
+    /// the certificate's duals.
+    pub min_reduced: f64,
 }
 
 /// Checks answers for one table; owns its workspace (no allocation per check except the
@@ -363,6 +366,7 @@ impl Certifier {
             support,
             residual,
             gap,
+            min_reduced: self.min_lower().min(0.0),
         })
     }
 

@@ -524,9 +524,14 @@ impl FastSolver {
         if matches!(verdict, Verdict::Optimal) && self.full_pass_skipped {
             // Partial pricing ended phase 2: the certificate prices every grid point (in the
             // original coordinates, with refined duals) and so stands in for the full pass.
-            if let Ok(c) = self.cert.optimal(moments, kf, &self.basis) {
-                self.remember_optimal();
-                return Ok(certified(c));
+            // As strict as that pass: no reduced cost below −TOL_D (the reduced costs do not
+            // depend on the coordinates).
+            match self.cert.optimal(moments, kf, &self.basis) {
+                Ok(c) if c.min_reduced >= -TOL_D => {
+                    self.remember_optimal();
+                    return Ok(certified(c));
+                }
+                _ => {}
             }
             self.stats.resumed += 1;
             verdict = self.resume(kf);
