@@ -227,7 +227,6 @@ fn time_group(
     }
     // Counters of the last pass only (the statuses are the last pass's too).
     let mut stats = solver.stats();
-    if std::env::var_os("ML_STATS").is_some() {
         eprintln!("{:?}", stats);
         eprintln!(
             "sizes: {:?}",

@@ -12,10 +12,13 @@
 //!   Numerically dependent functions (relative residual < 1e-10) are dropped and their moment
 //!   is checked for consistency instead.
 //! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
-//!   subgrid, the neighbours of z_f and of the support, the fine window around the best; a full
-//!   pass proves optimality) with the blocked SIMD kernels of [`super::pricing`], a Harris-style
-//!   ratio test, Bland's rule after repeated degenerate pivots, a refactorisation every 16
-//!   pivots and before the optimality-proving pass.
+//!   subgrid, the neighbours of z_f and of the support, the fine window around the best) with
+//!   the blocked SIMD kernels of [`super::pricing`], a Harris-style ratio test, Bland's rule
+//!   after repeated degenerate pivots, a refactorisation every 16 pivots. When partial pricing
+//!   finds no entering column in phase 2, the certificate ([`super::certify`]) prices every
+//!   grid point with refined duals in the original coordinates: that proves optimality (no
+//!   reduced cost below −1e-10, the same as a full pass). Only when it does not is the run
+//!   resumed with the full pricing pass (after a refactorisation) and the usual verification.
 //! * **Phase 1** uses a single artificial column: from any start basis B with x = B⁻¹c, the
 //!   artificial d = −Σ_{x_t<0} a_{B_t} replaces the most negative basic variable, which makes the
 //!   basis feasible; phase 1 then minimises the artificial's weight. Moments are infeasible when
@@ -26,9 +29,10 @@
 //! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
 //!   case: the moments are those of a kernel's depth distribution). The moments are formed in
 //!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible
-//!   point: a crossover turns it into a basic feasible solution of no greater cost (support
-//!   columns of greatest volume as the basis, every other support point pushed to weight 0 or
-//!   into the basis by one ratio test), so phase 1 is skipped.
+//!   point: a crossover turns it into a basic feasible solution of no greater cost (the first
+//!   grid point at or above z_f and the last grid point, which the optimum nearly always holds,
+//!   and the support columns of greatest volume as the basis, every other support point
+//!   pushed to weight 0 or into the basis by one ratio test), so phase 1 is skipped.
 //! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
 //!   original system in double-double arithmetic); weights that turn out infeasible trigger a
 //!   rerun in accurate mode (see `finish_optimal`).
