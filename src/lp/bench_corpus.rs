@@ -227,12 +227,6 @@ fn time_group(
     }
     // Counters of the last pass only (the statuses are the last pass's too).
     let mut stats = solver.stats();
-        eprintln!("{:?}", stats);
-        eprintln!(
-            "sizes: {:?}",
-            g.problems.iter().map(|p| p.dist.len()).sum::<usize>() as f64 / g.problems.len() as f64
-        );
-    }
     stats.escalations -= before.escalations;
     stats.exact -= before.exact;
     stats.fallbacks -= before.fallbacks;
