@@ -137,6 +137,9 @@ pub struct FastStats {
     /// Optima reached by partial pricing alone whose certificate failed: the simplex resumed
     /// from that basis with the full pricing pass.
     pub resumed: u64,
+    /// Runs ended because the column that had just left the basis would re-enter (rounding
+    /// in the duals of an ill-conditioned basis): the certificate decides.
+    pub ping_pong: u64,
 }
 
 /// Index of the artificial column in a basis.

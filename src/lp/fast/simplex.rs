@@ -34,6 +34,8 @@ struct Run {
     rescues: usize,
     /// c is perturbed (see [`FastSolver::perturb`]).
     perturbed: bool,
+    /// The column that left the basis at the last pivot (usize::MAX: none yet).
+    last_left: usize,
 }
 
 /// How an iteration of [`FastSolver::run`] ends early.
@@ -162,6 +164,7 @@ impl FastSolver {
             verified: false,
             rescues: 0,
             perturbed: false,
+            last_left: usize::MAX,
         };
         if !self.start_phase1(&mut st) {
             return Outcome::Failed;
@@ -225,6 +228,15 @@ impl FastSolver {
         let (q, dq) = self.price_step(st, bland)?;
         if dq >= -TOL_D {
             return self.at_optimum(st, dq);
+        }
+        if q == st.last_left && !st.phase1 && !st.perturbed {
+            // Right after a pivot the leaving column's reduced cost is −d_q/α_l > 0: its
+            // return is rounding in the duals of an ill-conditioned basis (a tight cluster at
+            // n = 4096 otherwise ping-pongs until the iteration cap). The certificate, with
+            // duals refined in double-double, decides instead (see `solve_inner`).
+            self.stats.ping_pong += 1;
+            self.full_pass_skipped = true;
+            return self.at_optimum(st, 0.0);
         }
         st.verified = false;
         self.load_alpha(q);
@@ -521,6 +533,7 @@ impl FastSolver {
             st.degenerate = 0;
         }
         let leaving = self.basis[l];
+        st.last_left = leaving;
         self.pivot(l, q, theta);
         self.stats.pivots += 1;
         if st.phase1 {
