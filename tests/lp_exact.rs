@@ -455,3 +455,79 @@ fn numerically_singular_optimal_basis_still_answers() {
         assert!(sol.g <= g_mix + 1e-9);
     }
 }
+
+/// Regression: a window of a rendered stack at n = 4096, 46 atoms in a cluster 0.597…0.611,
+/// z_f = 0.795. The optimum holds two pairs of neighbouring grid points and z⁺ with weight
+/// 4.5e-8; on the way there the f64 duals of the clustered basis made columns 2483 and 2484
+/// swap places for hundreds of pivots (each "improving" by 1e-9) until the iteration cap, and
+/// the problem was escalated (1 709 pivots, 6 ms). The answer must be exactly optimal within
+/// the contract, found by the fast solver (no escalation) in a handful of pivots.
+#[test]
+fn clustered_window_at_n4096_does_not_ping_pong() {
+    let atoms: [(u32, f64); 46] = [
+        (2448, 0.0035618554214704493),
+        (2451, 0.0065398909027219575),
+        (2453, 0.00549758757164541),
+        (2454, 0.010094071401662422),
+        (2456, 0.02319083214636087),
+        (2458, 0.022712771196571713),
+        (2459, 0.014284435012370983),
+        (2460, 0.013096760744698446),
+        (2461, 0.020214349146474755),
+        (2462, 0.020876568244282207),
+        (2463, 0.020214349146474755),
+        (2464, 0.0220474789399418),
+        (2465, 0.024378506414033402),
+        (2466, 0.0464418725952962),
+        (2467, 0.035720328015221334),
+        (2468, 0.028605955437628502),
+        (2469, 0.028676573768712584),
+        (2470, 0.03216781085909895),
+        (2471, 0.03172511102046686),
+        (2472, 0.030308420548137177),
+        (2473, 0.07524450873476109),
+        (2474, 0.030308420548137177),
+        (2475, 0.03172511102046686),
+        (2476, 0.0452645716037974),
+        (2477, 0.04418576846164265),
+        (2478, 0.028587369842663756),
+        (2479, 0.02734730731903233),
+        (2480, 0.02816743563270483),
+        (2481, 0.024378506414033402),
+        (2482, 0.0220474789399418),
+        (2483, 0.023776204567945203),
+        (2484, 0.020876568244282207),
+        (2485, 0.020214349146474755),
+        (2486, 0.018594348316343857),
+        (2487, 0.02986424803638512),
+        (2488, 0.014265916345115148),
+        (2489, 0.013096760744698446),
+        (2490, 0.010094071401662422),
+        (2491, 0.0077798074995837595),
+        (2492, 0.010094071401662422),
+        (2493, 0.00549758757164541),
+        (2494, 0.007132958172557574),
+        (2495, 0.0065398909027219575),
+        (2497, 0.00905944299311586),
+        (2499, 0.0035618554214704493),
+        (2502, 0.0019399121838833847),
+    ];
+    let zf = 0.7951159951159951;
+    let grid = Grid::uniform(4096).unwrap();
+    let table = power_table(&grid, 4).unwrap();
+    let moments = momentlab::lp::distribution_moments(&table, &atoms).unwrap();
+    let mut fast = FastSolver::new(table.clone());
+    fast.set_reference_fallback(false);
+    let sol = fast.solve_distribution(&atoms, zf).unwrap();
+    assert_eq!(sol.status, Status::Optimal, "{:?}", sol.reason);
+    let stats = fast.stats();
+    assert_eq!(stats.escalations, 0, "{stats:?}");
+    assert!(stats.pivots <= 50, "{stats:?}");
+    let basis = fast.warm_basis().expect("optimal basis").to_vec();
+    let c = certify(&table, &moments, zf, &basis);
+    assert!(
+        c.min_weight >= -1e-12 && c.min_reduced_cost >= -1e-9,
+        "basis {basis:?}: {c:?}"
+    );
+    assert!((sol.g - c.g).abs() <= 1e-9, "G {} exact {}", sol.g, c.g);
+}
