@@ -54,6 +54,9 @@ const ULPS: f64 = 64.0;
 /// Pivot ratio of the f64 basis factorisation up to which its refined solves are taken as
 /// accurate (a primal residual is then the basis's, not the arithmetic's).
 const F64_ACCURATE: f64 = 1e8;
+/// Points of a block needing a double-double reduced cost from which the whole block is
+/// recomputed at once ([`row_kernels::reduced_dd_block`]).
+const BLOCK_DD: usize = 3;
 /// Rounding bound factor per term of a reduced cost (a few units of ε for r ≤ 13 terms).
 const GAMMA: f64 = 16.0 * f64::EPSILON;
 
@@ -873,8 +876,34 @@ impl Certifier {
         // Where the f64 rounding bound could hide a negative value, recompute in double-double
         // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
         let rows = &self.rows;
+        let mut block = [0.0; row_kernels::BLOCK];
         for &lo in flagged.iter() {
-            for i in lo..(lo + row_kernels::BLOCK).min(n) {
+            let hi = (lo + row_kernels::BLOCK).min(n);
+            let count = (lo..hi).filter(|&i| d[i] - gamma * e[i] < 0.0).count();
+            if count >= BLOCK_DD && hi - lo == row_kernels::BLOCK {
+                // Many points to recompute (huge duals): the whole block at once, vectorised.
+                let kfv = kf.unwrap_or(0);
+                let (y, ylo) = (&y[..rows.len()], &ylo[..rows.len()]);
+                row_kernels::reduced_dd_block(
+                    lo,
+                    kfv,
+                    y,
+                    ylo,
+                    fcols,
+                    offs,
+                    &mut block,
+                    self.avx512,
+                );
+                for i in lo..hi {
+                    if d[i] - gamma * e[i] < 0.0 {
+                        let exact = block[i - lo];
+                        d[i] = exact;
+                        e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
+                    }
+                }
+                continue;
+            }
+            for i in lo..hi {
                 if d[i] - gamma * e[i] < 0.0 {
                     let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
                     let a = |j: usize| if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };

@@ -30,10 +30,28 @@ pub fn two_sum(a: f64, b: f64) -> (f64, f64) {
 
 /// c − Σ_t a_t·x_t as accurately as if computed in twice the working precision (Ogita, Rump
 /// & Oishi's Dot2), then rounded.
+/// The same bits on every CPU (with fused multiply-add where the CPU has it).
+#[inline]
 pub fn residual2(c: f64, terms: impl Iterator<Item = (f64, f64)>) -> f64 {
+    #[cfg(target_arch = "x86_64")]
+    if has_fma() {
+        // SAFETY: the CPU has FMA.
+        return unsafe { residual2_fma(c, terms) };
+    }
+    residual2_in::<Dekker>(c, terms)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn residual2_fma(c: f64, terms: impl Iterator<Item = (f64, f64)>) -> f64 {
+    residual2_in::<Fused>(c, terms)
+}
+
+#[inline(always)]
+fn residual2_in<P: ExactProduct>(c: f64, terms: impl Iterator<Item = (f64, f64)>) -> f64 {
     let (mut s, mut err) = (c, 0.0);
     for (a, x) in terms {
-        let (p, ep) = two_prod(a, x);
+        let (p, ep) = P::two_prod(a, x);
         let (t, es) = two_sum(s, -p);
         s = t;
         err += es - ep;
@@ -181,19 +199,65 @@ impl Dd {
         Dd(-self.0, -self.1)
     }
     pub fn mul(self, o: Dd) -> Dd {
-        let (p, e) = two_prod(self.0, o.0);
+        self.mul_in::<Dekker>(o)
+    }
+    #[inline(always)]
+    fn mul_in<P: ExactProduct>(self, o: Dd) -> Dd {
+        let (p, e) = P::two_prod(self.0, o.0);
         let e = e + self.0 * o.1 + self.1 * o.0;
         let (h, l) = two_sum(p, e);
         Dd(h, l)
     }
-    pub fn div(self, o: Dd) -> Dd {
+    #[inline(always)]
+    fn div_in<P: ExactProduct>(self, o: Dd) -> Dd {
         let q1 = self.0 / o.0;
-        let r = self.add(o.mul(Dd::from(q1)).neg());
+        let r = self.add(o.mul_in::<P>(Dd::from(q1)).neg());
         let q2 = r.0 / o.0;
-        let r = r.add(o.mul(Dd::from(q2)).neg());
+        let r = r.add(o.mul_in::<P>(Dd::from(q2)).neg());
         let q3 = r.0 / o.0;
         let (h, l) = two_sum(q1, q2);
         Dd(h, l).add(Dd::from(q3))
+    }
+}
+
+/// How the exact product a·b = p + e is formed: the same (p, e) either way for finite
+/// products whose operands stay below ~1e300 (Dekker's splitting overflows beyond).
+trait ExactProduct {
+    fn two_prod(a: f64, b: f64) -> (f64, f64);
+}
+
+/// Dekker's splitting ([`two_prod`]), on every CPU.
+struct Dekker;
+
+impl ExactProduct for Dekker {
+    #[inline(always)]
+    fn two_prod(a: f64, b: f64) -> (f64, f64) {
+        two_prod(a, b)
+    }
+}
+
+/// A fused multiply-add: e = fma(a, b, −p). Used only inside functions compiled with the
+/// `fma` target feature (there `mul_add` is one instruction, elsewhere a library call).
+struct Fused;
+
+impl ExactProduct for Fused {
+    #[inline(always)]
+    fn two_prod(a: f64, b: f64) -> (f64, f64) {
+        let p = a * b;
+        (p, a.mul_add(b, -p))
+    }
+}
+
+/// Whether the CPU has fused multiply-add (cached by the standard library).
+#[inline]
+fn has_fma() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::arch::is_x86_feature_detected!("fma")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
     }
 }
 
@@ -209,6 +273,22 @@ pub struct DdLu {
 impl DdLu {
     /// Factorise `a` (row-major r × r, f64 entries taken exactly); false if singular.
     pub fn factor(&mut self, a: &[f64], r: usize) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.factor_fma(a, r) };
+        }
+        self.factor_in::<Dekker>(a, r)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn factor_fma(&mut self, a: &[f64], r: usize) -> bool {
+        self.factor_in::<Fused>(a, r)
+    }
+
+    #[inline(always)]
+    fn factor_in<P: ExactProduct>(&mut self, a: &[f64], r: usize) -> bool {
         self.r = r;
         self.lu.clear();
         self.lu.extend(a[..r * r].iter().map(|&v| Dd::from(v)));
@@ -230,10 +310,10 @@ impl DdLu {
                 self.perm.swap(p, k);
             }
             for i in k + 1..r {
-                let l = lu[i * r + k].div(piv);
+                let l = lu[i * r + k].div_in::<P>(piv);
                 lu[i * r + k] = l;
                 for c in k + 1..r {
-                    lu[i * r + c] = lu[i * r + c].add(l.mul(lu[k * r + c]).neg());
+                    lu[i * r + c] = lu[i * r + c].add(l.mul_in::<P>(lu[k * r + c]).neg());
                 }
             }
         }
@@ -242,6 +322,22 @@ impl DdLu {
 
     /// Solve A x = b in place.
     pub fn solve(&self, x: &mut [f64]) {
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.solve_fma(x) };
+        }
+        self.solve_in::<Dekker>(x)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn solve_fma(&self, x: &mut [f64]) {
+        self.solve_in::<Fused>(x)
+    }
+
+    #[inline(always)]
+    fn solve_in<P: ExactProduct>(&self, x: &mut [f64]) {
         let (r, lu) = (self.r, &self.lu);
         let mut y = [Dd::default(); 32];
         for i in 0..r {
@@ -249,14 +345,14 @@ impl DdLu {
         }
         for i in 0..r {
             for c in 0..i {
-                y[i] = y[i].add(lu[i * r + c].mul(y[c]).neg());
+                y[i] = y[i].add(lu[i * r + c].mul_in::<P>(y[c]).neg());
             }
         }
         for i in (0..r).rev() {
             for c in i + 1..r {
-                y[i] = y[i].add(lu[i * r + c].mul(y[c]).neg());
+                y[i] = y[i].add(lu[i * r + c].mul_in::<P>(y[c]).neg());
             }
-            y[i] = y[i].div(lu[i * r + i]);
+            y[i] = y[i].div_in::<P>(lu[i * r + i]);
         }
         for i in 0..r {
             x[i] = y[i].0 + y[i].1;
@@ -274,6 +370,22 @@ impl DdLu {
 
     /// Solve Aᵀ x = b, keeping x in double-double (duals whose products with a column cancel).
     pub fn solve_t_dd(&self, b: &[f64], out: &mut [Dd]) {
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.solve_t_dd_fma(b, out) };
+        }
+        self.solve_t_dd_in::<Dekker>(b, out)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn solve_t_dd_fma(&self, b: &[f64], out: &mut [Dd]) {
+        self.solve_t_dd_in::<Fused>(b, out)
+    }
+
+    #[inline(always)]
+    fn solve_t_dd_in<P: ExactProduct>(&self, b: &[f64], out: &mut [Dd]) {
         let (r, lu) = (self.r, &self.lu);
         let mut y = [Dd::default(); 32];
         for i in 0..r {
@@ -281,13 +393,13 @@ impl DdLu {
         }
         for i in 0..r {
             for c in 0..i {
-                y[i] = y[i].add(lu[c * r + i].mul(y[c]).neg());
+                y[i] = y[i].add(lu[c * r + i].mul_in::<P>(y[c]).neg());
             }
-            y[i] = y[i].div(lu[i * r + i]);
+            y[i] = y[i].div_in::<P>(lu[i * r + i]);
         }
         for i in (0..r).rev() {
             for c in i + 1..r {
-                y[i] = y[i].add(lu[c * r + i].mul(y[c]).neg());
+                y[i] = y[i].add(lu[c * r + i].mul_in::<P>(y[c]).neg());
             }
         }
         for i in 0..r {
@@ -298,6 +410,50 @@ impl DdLu {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn residual2_gives_the_same_bits_with_and_without_fma() {
+        let a: Vec<f64> = (0..40).map(|k| (k as f64 * 0.37).sin() * 1e5).collect();
+        let x: Vec<f64> = (0..40).map(|k| (k as f64 * 1.3).cos() / 3.0).collect();
+        let terms = || a.iter().copied().zip(x.iter().copied());
+        let c = terms().map(|(a, x)| a * x).sum::<f64>();
+        let dekker = residual2_in::<Dekker>(c, terms());
+        assert_eq!(residual2(c, terms()), dekker);
+        // Exact to double-double accuracy: the f64 sum's own rounding error, not 0.
+        assert!(dekker != 0.0 && dekker.abs() < 1e-9);
+    }
+
+    #[test]
+    fn dd_lu_gives_the_same_bits_with_and_without_fma() {
+        let r = 9;
+        // Ill-conditioned: powers of clustered points (a Vandermonde matrix).
+        let a: Vec<f64> = (0..r * r)
+            .map(|k| (0.6 + 1e-3 * (k / r) as f64).powi((k % r) as i32 + 1) * 3.7)
+            .collect();
+        let b: Vec<f64> = (0..r).map(|k| (k as f64 * 0.7).cos()).collect();
+        let mut dekker = DdLu::default();
+        assert!(dekker.factor_in::<Dekker>(&a, r));
+        let mut x1 = b.clone();
+        dekker.solve_in::<Dekker>(&mut x1);
+        let mut y1 = vec![Dd::default(); r];
+        dekker.solve_t_dd_in::<Dekker>(&b, &mut y1);
+        // The dispatching entry points (FMA where the CPU has it).
+        let mut fused = DdLu::default();
+        assert!(fused.factor(&a, r));
+        assert_eq!(fused.lu, dekker.lu);
+        let mut x2 = b.clone();
+        fused.solve(&mut x2);
+        assert_eq!(x1, x2);
+        let mut y2 = vec![Dd::default(); r];
+        fused.solve_t_dd(&b, &mut y2);
+        assert_eq!(y1, y2);
+        // And it solves: A x = b to double-double accuracy, rounded.
+        for i in 0..r {
+            let terms = (0..r).map(|c| (a[i * r + c], x1[c]));
+            let mag: f64 = (0..r).map(|c| (a[i * r + c] * x1[c]).abs()).sum();
+            assert!(residual2(b[i], terms).abs() <= 1e-14 * mag, "row {i}");
+        }
+    }
+
     use super::*;
 
     #[test]

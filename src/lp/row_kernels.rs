@@ -2,6 +2,8 @@
 //! ([`super::certify`]): pure functions over slices, written so the compiler vectorises them
 //! (no fused multiply-add: the results are the same, bit for bit, on every path).
 
+#![allow(clippy::needless_range_loop)] // lane-indexed blocks the compiler vectorises
+
 /// Grid points per block of [`any_below`] scans.
 pub const BLOCK: usize = 16;
 
@@ -205,6 +207,96 @@ unsafe fn reduced_costs_avx512(
     reduced_costs_generic(d, e, kf, ys, mat, offs, gamma, flagged)
 }
 
+/// For the [`BLOCK`] grid points from `lo`: out_t = p_i − Σ_k (y_k + ylo_k) f_k(z_i) in
+/// double-double (Dekker's exact products, Knuth's exact sums; rounded once at the end), with
+/// p_i = [i < kf], f_0 = 1 and f_k (k ≥ 1) at `mat[offs[k−1] + i]`. The terms in the order
+/// y_0, …, y_{r−1}, ylo_0, …, ylo_{r−1}: per point the same operations as
+/// `dense::residual2(p_i, those terms)` (the same bits), over a whole block at once.
+#[allow(clippy::too_many_arguments)] // one fused pass over a block
+pub fn reduced_dd_block(
+    lo: usize,
+    kf: usize,
+    y: &[f64],
+    ylo: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    out: &mut [f64; BLOCK],
+    avx512: bool,
+) {
+    assert!(y.len() == ylo.len() && offs.len() + 1 == y.len());
+    assert!(offs.iter().all(|&o| o + lo + BLOCK <= mat.len()));
+    #[cfg(target_arch = "x86_64")]
+    if avx512 {
+        // SAFETY: `avx512` is only true where the CPU has AVX-512F (`has_avx512`).
+        unsafe { reduced_dd_block_avx512(lo, kf, y, ylo, mat, offs, out) };
+        return;
+    }
+    let _ = avx512;
+    reduced_dd_block_generic(lo, kf, y, ylo, mat, offs, out);
+}
+
+#[inline(always)]
+fn reduced_dd_block_generic(
+    lo: usize,
+    kf: usize,
+    y: &[f64],
+    ylo: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    out: &mut [f64; BLOCK],
+) {
+    const SPLIT: f64 = 134_217_729.0; // 2^27 + 1, as in dense::two_prod
+    let mut s = [0.0f64; BLOCK];
+    let mut err = [0.0f64; BLOCK];
+    for t in 0..BLOCK {
+        s[t] = if lo + t < kf { 1.0 } else { 0.0 };
+    }
+    let ones = [1.0f64; BLOCK];
+    for part in [y, ylo] {
+        for (k, &yk) in part.iter().enumerate() {
+            let f: &[f64] = if k == 0 {
+                &ones
+            } else {
+                &mat[offs[k - 1] + lo..offs[k - 1] + lo + BLOCK]
+            };
+            let c = SPLIT * yk;
+            let ah = c - (c - yk);
+            let al = yk - ah;
+            for t in 0..BLOCK {
+                let b = f[t];
+                let p = yk * b;
+                let cb = SPLIT * b;
+                let bh = cb - (cb - b);
+                let bl = b - bh;
+                let ep = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+                let np = -p;
+                let sum = s[t] + np;
+                let bb = sum - s[t];
+                let es = (s[t] - (sum - bb)) + (np - bb);
+                s[t] = sum;
+                err[t] += es - ep;
+            }
+        }
+    }
+    for t in 0..BLOCK {
+        out[t] = s[t] + err[t];
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn reduced_dd_block_avx512(
+    lo: usize,
+    kf: usize,
+    y: &[f64],
+    ylo: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    out: &mut [f64; BLOCK],
+) {
+    reduced_dd_block_generic(lo, kf, y, ylo, mat, offs, out)
+}
+
 /// Whether some d_i − γ e_i < 0 (d and e of equal length).
 pub fn any_below(d: &[f64], e: &[f64], gamma: f64) -> bool {
     let mut hit = false;
@@ -352,6 +444,30 @@ mod tests {
                         assert_eq!(e1, e2, "n = {n}, kf = {kf}");
                         assert_eq!(flagged, want, "n = {n}, kf = {kf}");
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn reduced_dd_block_is_residual2_bit_for_bit() {
+        use crate::lp::dense::residual2;
+        let n = 48;
+        let mat: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+        let offs = [2 * n, 0];
+        let y = [0.3, -1.7e9, 2.5e-7];
+        let ylo = [1e-17, 3e-8, -2e-23];
+        for (lo, kf) in [(0, 5), (16, 0), (32, 48)] {
+            for avx in [false, has_avx512()] {
+                let mut out = [0.0; BLOCK];
+                reduced_dd_block(lo, kf, &y, &ylo, &mat, &offs, &mut out, avx);
+                for t in 0..BLOCK {
+                    let i = lo + t;
+                    let a = |k: usize| if k == 0 { 1.0 } else { mat[offs[k - 1] + i] };
+                    let hi = (0..3).map(|k| (y[k], a(k)));
+                    let lo_terms = (0..3).map(|k| (ylo[k], a(k)));
+                    let p = if i < kf { 1.0 } else { 0.0 };
+                    assert_eq!(out[t], residual2(p, hi.chain(lo_terms)), "i = {i}");
                 }
             }
         }
