@@ -856,69 +856,75 @@ impl Certifier {
             }
         });
         self.gamma = GAMMA + 2.0 * tau;
-        let gamma = self.gamma;
-        let (d, e) = (&mut self.d, &mut self.e);
         // Farkas: d holds y·ā_i (the sign is flipped at the end).
         let k = kf.unwrap_or(0).min(n);
+        let (d, e, flagged) = (&mut self.d, &mut self.e, &mut self.flagged);
         let (fcols, offs) = (&self.fcols, &self.offs);
-        let flagged = &mut self.flagged;
+        let (ys, gamma) = (&y[1..], self.gamma);
         row_kernels::reduced_costs(
             d,
             e,
             (k, y[0]),
-            &y[1..],
+            ys,
             fcols,
             offs,
             gamma,
             flagged,
             self.avx512,
         );
-        // Where the f64 rounding bound could hide a negative value, recompute in double-double
-        // (error ≤ 2ε|d| + O(ε²) e): the huge duals of clustered bases cancel to 1e-7 in f64.
-        let rows = &self.rows;
-        let mut block = [0.0; row_kernels::BLOCK];
-        for &lo in flagged.iter() {
-            let hi = (lo + row_kernels::BLOCK).min(n);
-            let count = (lo..hi).filter(|&i| d[i] - gamma * e[i] < 0.0).count();
-            if count >= BLOCK_DD && hi - lo == row_kernels::BLOCK {
-                // Many points to recompute (huge duals): the whole block at once, vectorised.
-                let kfv = kf.unwrap_or(0);
-                let (y, ylo) = (&y[..rows.len()], &ylo[..rows.len()]);
-                row_kernels::reduced_dd_block(
-                    lo,
-                    kfv,
-                    y,
-                    ylo,
-                    fcols,
-                    offs,
-                    &mut block,
-                    self.avx512,
-                );
-                for i in lo..hi {
-                    if d[i] - gamma * e[i] < 0.0 {
-                        let exact = block[i - lo];
-                        d[i] = exact;
-                        e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
-                    }
-                }
-                continue;
-            }
-            for i in lo..hi {
-                if d[i] - gamma * e[i] < 0.0 {
-                    let p = kf.map_or(0.0, |kf| (i < kf) as u8 as f64);
-                    let a = |j: usize| if j == 0 { 1.0 } else { fcols[(j - 1) * n + i] };
-                    let hi_terms = rows.iter().zip(y).map(|(&j, &yk)| (yk, a(j)));
-                    let lo_terms = rows.iter().zip(ylo).map(|(&j, &yk)| (yk, a(j)));
-                    let exact = residual2(p, hi_terms.chain(lo_terms));
-                    d[i] = exact;
-                    e[i] = exact.abs() / 8.0 + 1e-14 * e[i];
-                }
-            }
-        }
+        self.recheck(y, k);
         self.flagged_ok = kf.is_some();
         if kf.is_none() {
-            d.iter_mut().for_each(|v| *v = -*v);
+            self.d.iter_mut().for_each(|v| *v = -*v);
         }
+    }
+
+    /// In the flagged blocks, where the f64 rounding bound could hide a negative value: d_i
+    /// in double-double (error ≤ 2ε|d| + O(ε²) e; the huge duals of clustered bases cancel to
+    /// 1e-7 in f64), with the bound e_i shrunk to match. A block with [`BLOCK_DD`] or more such
+    /// points is recomputed whole, vectorised (the same bits).
+    fn recheck(&mut self, y: &[f64], kf: usize) {
+        let (n, r, gamma) = (self.n, self.rows.len(), self.gamma);
+        let mut block = [0.0; row_kernels::BLOCK];
+        for b in 0..self.flagged.len() {
+            let lo = self.flagged[b];
+            let hi = (lo + row_kernels::BLOCK).min(n);
+            let open = |c: &Self, i: usize| c.d[i] - gamma * c.e[i] < 0.0;
+            let count = (lo..hi).filter(|&i| open(self, i)).count();
+            let whole = count >= BLOCK_DD && hi - lo == row_kernels::BLOCK;
+            if whole {
+                let (fcols, offs) = (&self.fcols, &self.offs);
+                let (y, ylo) = (&y[..r], &self.ylo[..r]);
+                row_kernels::reduced_dd_block(lo, kf, y, ylo, fcols, offs, &mut block, self.avx512);
+            }
+            for i in lo..hi {
+                if open(self, i) {
+                    let exact = if whole {
+                        block[i - lo]
+                    } else {
+                        self.reduced_dd(y, kf, i)
+                    };
+                    self.d[i] = exact;
+                    self.e[i] = exact.abs() / 8.0 + 1e-14 * self.e[i];
+                }
+            }
+        }
+    }
+
+    /// p_i − (y + y_lo)·ā_i in double-double, rounded (p_i = [i < kf]).
+    fn reduced_dd(&self, y: &[f64], kf: usize, i: usize) -> f64 {
+        let p = (i < kf) as u8 as f64;
+        let hi_terms = self
+            .rows
+            .iter()
+            .zip(y)
+            .map(|(&j, &yk)| (yk, self.entry(j, i)));
+        let lo_terms = self
+            .rows
+            .iter()
+            .zip(&self.ylo)
+            .map(|(&j, &yk)| (yk, self.entry(j, i)));
+        residual2(p, hi_terms.chain(lo_terms))
     }
 
     /// min_i (d_i − γ e_i): a lower bound on the exact min of the values in d.
