@@ -11,21 +11,29 @@ pub(super) fn norm(a: &[f64]) -> f64 {
     dot(a, a).sqrt()
 }
 
+/// `f::<R>(args)` for the row count r = R ≤ 9 (loops unrolled at compile time), else
+/// `f::<0>(args)` (any r).
+macro_rules! by_rows {
+    ($r:expr, $f:ident, $($arg:expr),*) => {
+        match $r {
+            1 => $f::<1>($($arg),*),
+            2 => $f::<2>($($arg),*),
+            3 => $f::<3>($($arg),*),
+            4 => $f::<4>($($arg),*),
+            5 => $f::<5>($($arg),*),
+            6 => $f::<6>($($arg),*),
+            7 => $f::<7>($($arg),*),
+            8 => $f::<8>($($arg),*),
+            9 => $f::<9>($($arg),*),
+            _ => $f::<0>($($arg),*),
+        }
+    };
+}
+
 /// out = A v for row-major r × r A.
 #[inline]
 pub(super) fn mat_vec(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
-    // Specialised for the row count (loops unrolled at compile time).
-    match r {
-        2 => mat_vec_r::<2>(a, v, out, r),
-        3 => mat_vec_r::<3>(a, v, out, r),
-        4 => mat_vec_r::<4>(a, v, out, r),
-        5 => mat_vec_r::<5>(a, v, out, r),
-        6 => mat_vec_r::<6>(a, v, out, r),
-        7 => mat_vec_r::<7>(a, v, out, r),
-        8 => mat_vec_r::<8>(a, v, out, r),
-        9 => mat_vec_r::<9>(a, v, out, r),
-        _ => mat_vec_r::<0>(a, v, out, r),
-    }
+    by_rows!(r, mat_vec_r, a, v, out, r)
 }
 
 #[inline(always)]
@@ -41,30 +49,20 @@ fn mat_vec_r<const R: usize>(a: &[f64], v: &[f64], out: &mut [f64], r: usize) {
 /// then α_t times it subtracted from every other row t.
 #[inline]
 pub(super) fn pivot_rows(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
-    match r {
-        2 => pivot_rows_r::<2>(binv, alpha, l, r),
-        3 => pivot_rows_r::<3>(binv, alpha, l, r),
-        4 => pivot_rows_r::<4>(binv, alpha, l, r),
-        5 => pivot_rows_r::<5>(binv, alpha, l, r),
-        6 => pivot_rows_r::<6>(binv, alpha, l, r),
-        7 => pivot_rows_r::<7>(binv, alpha, l, r),
-        8 => pivot_rows_r::<8>(binv, alpha, l, r),
-        9 => pivot_rows_r::<9>(binv, alpha, l, r),
-        _ => pivot_rows_r::<0>(binv, alpha, l, r),
-    }
+    by_rows!(r, pivot_rows_r, binv, alpha, l, r)
 }
 
 #[inline(always)]
 fn pivot_rows_r<const R: usize>(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
     let r = if R > 0 { R } else { r };
+    if r > 16 {
+        return pivot_rows_wide(binv, alpha, l, r);
+    }
     let (binv, alpha) = (&mut binv[..r * r], &alpha[..r]);
     let al = alpha[l];
-    let mut row = [0.0f64; 16];
-    let row = if r <= 16 {
-        &mut row[..r]
-    } else {
-        return pivot_rows_wide(binv, alpha, l, r);
-    };
+    // Row l after the division, copied (the other rows are updated from it).
+    let mut buf = [0.0f64; 16];
+    let row = &mut buf[..r];
     for k in 0..r {
         binv[l * r + k] /= al;
         row[k] = binv[l * r + k];
@@ -97,19 +95,7 @@ fn pivot_rows_wide(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
 
 /// Invert the r × r row-major matrix `a` (destroyed) into `inv`; false if singular.
 pub(super) fn invert(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
-    // Specialised for the row count (loops unrolled at compile time).
-    match r {
-        1 => invert_r::<1>(a, inv, r),
-        2 => invert_r::<2>(a, inv, r),
-        3 => invert_r::<3>(a, inv, r),
-        4 => invert_r::<4>(a, inv, r),
-        5 => invert_r::<5>(a, inv, r),
-        6 => invert_r::<6>(a, inv, r),
-        7 => invert_r::<7>(a, inv, r),
-        8 => invert_r::<8>(a, inv, r),
-        9 => invert_r::<9>(a, inv, r),
-        _ => invert_r::<0>(a, inv, r),
-    }
+    by_rows!(r, invert_r, a, inv, r)
 }
 
 /// Gauss–Jordan with partial pivoting for r = R (R = 0: any r).
