@@ -248,6 +248,10 @@ pub struct FastSolver {
     /// orthonormal directions and basis positions of its support points.
     hint: Vec<(usize, f64)>,
     hint_nrm: Vec<f64>,
+    /// The support's columns coordinate-major (see [`FastSolver::load_hint`]) and their
+    /// projections (see [`FastSolver::choose_support`]).
+    hint_a: Vec<f64>,
+    hint_h: Vec<f64>,
     hint_v: Vec<f64>,
     hint_u: Vec<f64>,
     hint_pos: Vec<usize>,
@@ -333,6 +337,8 @@ impl FastSolver {
             table,
             hint: Vec::new(),
             hint_nrm: Vec::new(),
+            hint_a: Vec::new(),
+            hint_h: Vec::new(),
             hint_v: vec![0.0; r],
             hint_u: Vec::new(),
             hint_pos: Vec::new(),

@@ -229,10 +229,22 @@ impl FastSolver {
         if s == 0 {
             return false;
         }
+        // The support's columns coordinate by coordinate (hint_a[c·s + k] = a_{i_k}[c]), so the
+        // norms and their downdates below run over the support points at once.
+        self.hint_a.clear();
+        for c in 0..r {
+            let rows = &self.rows;
+            self.hint_a
+                .extend(self.hint.iter().map(|&(i, _)| rows[i * r + c]));
+        }
         self.hint_nrm.clear();
-        for &(i, _) in &self.hint {
-            let a = &self.rows[i * r..(i + 1) * r];
-            self.hint_nrm.push(dot(a, a));
+        self.hint_nrm.resize(s, 0.0);
+        for c in 0..r {
+            let a = &self.hint_a[c * s..(c + 1) * s];
+            self.hint_nrm
+                .iter_mut()
+                .zip(a)
+                .for_each(|(v, a)| *v += a * a);
         }
         self.hint_u.clear();
         // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
@@ -254,9 +266,10 @@ impl FastSolver {
         while chosen < limit.min(r) {
             let mut best = usize::MAX;
             let mut best_v = 1e-10;
-            for k in 0..s {
-                if self.hint_pos[k] == usize::MAX && self.hint_nrm[k] >= best_v {
-                    best_v = self.hint_nrm[k];
+            // Chosen points have norm −∞ (and keep it through the downdates).
+            for (k, &v) in self.hint_nrm.iter().enumerate() {
+                if v >= best_v {
+                    best_v = v;
                     best = k;
                 }
             }
@@ -279,14 +292,20 @@ impl FastSolver {
                 continue;
             }
             v.iter_mut().for_each(|a| *a /= nv);
-            for k in 0..s {
-                if self.hint_pos[k] == usize::MAX && k != best {
-                    let j = self.hint[k].0;
-                    let h = dot(&self.rows[j * r..(j + 1) * r], v);
-                    self.hint_nrm[k] -= h * h;
-                }
+            // ‖r_k‖² −= (a_k·v)² for every support point (the chosen ones' values are unused).
+            let h = &mut self.hint_h;
+            h.clear();
+            h.resize(s, 0.0);
+            for (c, &vc) in v.iter().enumerate() {
+                let a = &self.hint_a[c * s..(c + 1) * s];
+                h.iter_mut().zip(a).for_each(|(h, a)| *h += a * vc);
             }
+            self.hint_nrm
+                .iter_mut()
+                .zip(h.iter())
+                .for_each(|(n, h)| *n -= h * h);
             self.hint_u.extend_from_slice(v);
+            self.hint_nrm[best] = f64::NEG_INFINITY;
             self.hint_pos[best] = chosen;
             self.basis[chosen] = i;
             self.x[chosen] = self.hint[best].1;
@@ -311,22 +330,23 @@ impl FastSolver {
             if self.basis[..chosen].contains(&i) {
                 continue;
             }
-            let mut v = self.rows[i * r..(i + 1) * r].to_vec();
-            let n0 = norm(&v);
+            let v = &mut self.hint_v;
+            v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
+            let n0 = norm(v);
             for _pass in 0..2 {
                 for u in self.hint_u.chunks(r) {
-                    let h = dot(&v, u);
+                    let h = dot(v, u);
                     for (a, b) in v.iter_mut().zip(u) {
                         *a -= h * b;
                     }
                 }
             }
-            let nv = norm(&v);
+            let nv = norm(v);
             if nv <= 1e-5 * n0 {
                 continue;
             }
             v.iter_mut().for_each(|a| *a /= nv);
-            self.hint_u.extend_from_slice(&v);
+            self.hint_u.extend_from_slice(v);
             self.basis[chosen] = i;
             self.x[chosen] = 0.0;
             chosen += 1;
