@@ -604,10 +604,12 @@ impl FastSolver {
     ) -> Result<Solution, Legacy> {
         let legacy = match verdict {
             Verdict::Optimal => {
-                self.remember_optimal();
                 let fast_basis = self.basis.clone();
                 match self.cert.optimal(moments, kf, &fast_basis) {
-                    Ok(c) => return Ok(certified(c)),
+                    Ok(c) => {
+                        self.remember_optimal();
+                        return Ok(certified(c));
+                    }
                     Err(e) => Legacy::Answer(fast_basis, e),
                 }
             }
@@ -621,6 +623,7 @@ impl FastSolver {
                     .improve_checked(moments, kf, &mut basis, IMPROVE_STEPS, why.clone());
             if let Ok(c) = found {
                 self.stats.improved += 1;
+                self.remember_certified(&basis);
                 return Ok(certified(c));
             }
         }
@@ -629,6 +632,7 @@ impl FastSolver {
         if let Some(mut basis) = hint.and_then(|h| self.support_basis(h)) {
             if let Ok(c) = self.cert.improve(moments, kf, &mut basis, IMPROVE_STEPS) {
                 self.stats.improved += 1;
+                self.remember_certified(&basis);
                 return Ok(certified(c));
             }
         }

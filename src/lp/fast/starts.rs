@@ -156,6 +156,15 @@ impl FastSolver {
         }
     }
 
+    /// After accurate pivots certified `basis` (not the basis the simplex ended on): it is
+    /// the next warm start instead, so that the warm basis is always a certified optimum.
+    pub(super) fn remember_certified(&mut self, basis: &[usize]) {
+        if self.warm && basis.len() == self.r && basis.iter().all(|&i| i < self.n) {
+            self.warm_basis = Some(basis.to_vec());
+            self.last_c.copy_from_slice(&self.c0);
+        }
+    }
+
     /// The support of a distribution with at most r atoms, completed to r columns from the
     /// cold-start basis (None for larger supports).
     pub(super) fn support_basis(&self, dist: &[(u32, f64)]) -> Option<Vec<usize>> {
