@@ -105,7 +105,8 @@ pub struct GroupRow {
 }
 
 /// Time the fast solver on every problem of `groups` (`repeats` passes, minimum per problem)
-/// and the reference on the first `reference_per_group` problems of each group;
+/// and the reference on the first `reference_per_group` problems of each group, interleaved
+/// (see [`time_group`]);
 /// `progress(k)` after each group with k LPs done.
 pub fn run(
     corpus: &str,
@@ -140,7 +141,12 @@ pub fn run(
         if !row.ns.contains(&g.table.n()) {
             row.ns.push(g.table.n());
         }
-        let (times, sols, stats) = time_group(g, repeats)?;
+        let Timed {
+            fast_us: times,
+            sols,
+            stats,
+            reference,
+        } = time_group(g, repeats, reference_per_group)?;
         row.escalations += stats.escalations;
         row.exact += stats.exact;
         row.fallbacks += stats.fallbacks;
@@ -161,14 +167,8 @@ pub fn run(
                 Status::Failed => row.failed += 1,
             }
         }
-        let mut reference = ReferenceSolver::new(g.table.clone());
-        // The first fragment depth of each of the first problems (index into the sequence).
-        let mut k = 0;
-        for p in g.problems.iter().take(reference_per_group) {
-            let b = distribution_moments(&g.table, &p.dist)?;
-            let t0 = Instant::now();
-            let r = reference.solve(&b, p.zf[0]);
-            ref_us.push(t0.elapsed().as_secs_f64() * 1e6);
+        for (k, b, us, r) in reference {
+            ref_us.push(us);
             prefix_us.push(times[k]);
             match r {
                 Ok(r)
@@ -181,7 +181,6 @@ pub fn run(
                 }
                 _ => row.reference_invalid += 1,
             }
-            k += p.zf.len();
         }
         row.problems += times.len();
         fast_us.extend(times);
@@ -195,42 +194,83 @@ pub fn run(
     Ok(row)
 }
 
-/// µs per LP (minimum over `repeats` identical passes), the answers, and the solver's stats.
-fn time_group(
-    g: &Group,
-    repeats: usize,
-) -> Result<(Vec<f64>, Vec<Solution>, super::fast::FastStats)> {
+/// Problems per stretch of [`time_group`]: the fast passes over a stretch and the reference on
+/// its problems run within about a millisecond of each other.
+const STRETCH: usize = 64;
+
+/// What [`time_group`] measured.
+struct Timed {
+    /// µs per LP of the fast solver (minimum over the passes), in solve order.
+    fast_us: Vec<f64>,
+    /// Its answers (of the last pass).
+    sols: Vec<Solution>,
+    /// Its counters over one pass (escalations, exact, fallbacks).
+    stats: super::fast::FastStats,
+    /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
+    /// of the first problems.
+    reference: Vec<(usize, Vec<f64>, f64, Result<Solution>)>,
+}
+
+/// The fast solver on every problem of `g`, `repeats` passes (minimum per problem), with the
+/// warm state carried from problem to problem as in one sequential pass; the reference on the
+/// first `reference_per_group` problems. Both run stretch by stretch ([`STRETCH`] problems:
+/// the fast passes, then the reference on the same problems), so that the speed-up is a ratio
+/// of times taken in the same phase of a machine whose speed drifts by 10–40 % over seconds.
+fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<Timed> {
     let mut solver = FastSolver::new(g.table.clone());
     solver.set_reference_fallback(false);
-    let mut best: Vec<f64> = Vec::new();
-    let mut sols = Vec::new();
-    let mut before = solver.stats();
-    for rep in 0..repeats.max(1) {
-        solver.reset();
-        sols.clear();
-        before = solver.stats();
-        let mut k = 0;
-        for p in &g.problems {
-            for &zf in &p.zf {
-                let t0 = Instant::now();
-                let s = solver.solve_distribution(&p.dist, zf)?;
-                let us = t0.elapsed().as_secs_f64() * 1e6;
-                if rep == 0 {
-                    best.push(us);
-                } else {
-                    best[k] = best[k].min(us);
+    let mut reference = ReferenceSolver::new(g.table.clone());
+    let mut out = Timed {
+        fast_us: Vec::new(),
+        sols: Vec::new(),
+        stats: Default::default(),
+        reference: Vec::new(),
+    };
+    let mut first = 0; // index of the stretch's first problem
+    for stretch in g.problems.chunks(STRETCH) {
+        let start = solver.warm_state();
+        let k0 = out.fast_us.len();
+        for rep in 0..repeats.max(1) {
+            solver.restore_warm_state(&start);
+            out.sols.truncate(k0);
+            let before = solver.stats();
+            let mut k = k0;
+            for p in stretch {
+                for &zf in &p.zf {
+                    let t0 = Instant::now();
+                    let s = solver.solve_distribution(&p.dist, zf)?;
+                    let us = t0.elapsed().as_secs_f64() * 1e6;
+                    if rep == 0 {
+                        out.fast_us.push(us);
+                    } else {
+                        out.fast_us[k] = out.fast_us[k].min(us);
+                    }
+                    out.sols.push(s);
+                    k += 1;
                 }
-                sols.push(s);
-                k += 1;
+            }
+            if rep + 1 == repeats.max(1) {
+                // Counters of the last pass only (the statuses are the last pass's too).
+                let after = solver.stats();
+                out.stats.escalations += after.escalations - before.escalations;
+                out.stats.exact += after.exact - before.exact;
+                out.stats.fallbacks += after.fallbacks - before.fallbacks;
             }
         }
+        let mut k = k0;
+        for (i, p) in stretch.iter().enumerate() {
+            if first + i < reference_per_group {
+                let b = distribution_moments(&g.table, &p.dist)?;
+                let t0 = Instant::now();
+                let r = reference.solve(&b, p.zf[0]);
+                let us = t0.elapsed().as_secs_f64() * 1e6;
+                out.reference.push((k, b, us, r));
+            }
+            k += p.zf.len();
+        }
+        first += stretch.len();
     }
-    // Counters of the last pass only (the statuses are the last pass's too).
-    let mut stats = solver.stats();
-    stats.escalations -= before.escalations;
-    stats.exact -= before.exact;
-    stats.fallbacks -= before.fallbacks;
-    Ok((best, sols, stats))
+    Ok(out)
 }
 
 #[cfg(test)]

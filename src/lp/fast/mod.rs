@@ -391,6 +391,18 @@ impl FastSolver {
         Ok(())
     }
 
+    /// What the solver carries from one problem to the next (the last optimal basis and its
+    /// moments), to time a stretch of problems repeatedly from the same state.
+    pub(in crate::lp) fn warm_state(&self) -> (Option<Vec<usize>>, Vec<f64>) {
+        (self.warm_basis.clone(), self.last_c.clone())
+    }
+
+    /// Restore a [`Self::warm_state`].
+    pub(in crate::lp) fn restore_warm_state(&mut self, state: &(Option<Vec<usize>>, Vec<f64>)) {
+        self.warm_basis.clone_from(&state.0);
+        self.last_c.copy_from_slice(&state.1);
+    }
+
     /// Enable or disable partial pricing (coarse subgrid first; on by default for n ≥ 64).
     pub fn set_partial_pricing(&mut self, on: bool) {
         let n = self.n;
