@@ -204,7 +204,7 @@ struct Timed {
     fast_us: Vec<f64>,
     /// Its answers (of the last pass).
     sols: Vec<Solution>,
-    /// Its counters over one pass (escalations, exact, fallbacks).
+    /// Its counters over one pass (escalations, exact, fallbacks, same_moments, pivots).
     stats: super::fast::FastStats,
     /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
     /// of the first problems.
@@ -255,6 +255,8 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
                 out.stats.escalations += after.escalations - before.escalations;
                 out.stats.exact += after.exact - before.exact;
                 out.stats.fallbacks += after.fallbacks - before.fallbacks;
+                out.stats.same_moments += after.same_moments - before.same_moments;
+                out.stats.pivots += after.pivots - before.pivots;
             }
         }
         let mut k = k0;
@@ -275,7 +277,65 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
 
 #[cfg(test)]
 mod tests {
-    use super::Spread;
+    use super::{time_group, Spread, STRETCH};
+    use crate::lp::corpus::{problem, Group, Kind};
+    use crate::lp::fast::FastSolver;
+    use crate::lp::instances::power_table;
+    use crate::lp::MomentSolver;
+    use crate::Grid;
+    use rand::SeedableRng;
+
+    /// Stretch-wise timing with repeats gives the answers of one sequential pass (the warm
+    /// state restored before every repeat of a stretch), and times the reference on exactly
+    /// the requested prefix, at the solve index of each problem's first fragment depth.
+    #[test]
+    fn stretches_answer_as_one_sequential_pass() {
+        let grid = Grid::uniform(256).unwrap();
+        let table = power_table(&grid, 4).unwrap();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let kinds = [Kind::Flat, Kind::Cluster, Kind::Mixture, Kind::Adjacent];
+        // Some problems with two fragment depths (the same moments twice: a warm start).
+        let problems: Vec<_> = (0..2 * STRETCH + 9)
+            .map(|k| {
+                let mut p = problem(&mut rng, 256, 4, kinds[k % kinds.len()]);
+                if k % 3 == 0 {
+                    let z = p.zf[0];
+                    p.zf.push((z + 0.1).min(1.0));
+                }
+                p
+            })
+            .collect::<Vec<_>>();
+        // The first problem of the second stretch has the moments of the last of the first:
+        // solved from the warm basis only if each repeat starts from the state the first
+        // stretch left.
+        let mut problems = problems;
+        problems[STRETCH] = problems[STRETCH - 1].clone();
+        let g = Group {
+            name: "test".into(),
+            basis: vec![],
+            table: table.clone(),
+            problems,
+        };
+        let timed = time_group(&g, 3, STRETCH + 5).unwrap();
+        let mut fast = FastSolver::new(table);
+        fast.set_reference_fallback(false);
+        let mut k = 0;
+        let mut firsts = Vec::new();
+        for p in &g.problems {
+            firsts.push(k);
+            for &zf in &p.zf {
+                let s = fast.solve_distribution(&p.dist, zf).unwrap();
+                assert_eq!(s, timed.sols[k], "solve {k}");
+                k += 1;
+            }
+        }
+        assert_eq!(timed.fast_us.len(), k);
+        assert_eq!(timed.stats.same_moments, fast.stats().same_moments);
+        assert_eq!(timed.stats.pivots, fast.stats().pivots);
+        assert!(timed.fast_us.iter().all(|t| t.is_finite() && *t >= 0.0));
+        let at: Vec<usize> = timed.reference.iter().map(|r| r.0).collect();
+        assert_eq!(at, firsts[..STRETCH + 5].to_vec());
+    }
 
     #[test]
     fn spread_order_statistics() {
