@@ -49,7 +49,8 @@ pub struct Args {
     #[arg(long, default_value_t = 2000, value_parser = usize_in(1, 1_000_000))]
     pub problems: usize,
     /// LPs per grid size for the reference solver (a prefix of the same problems; it takes
-    /// milliseconds per LP; 1..=100000).
+    /// milliseconds per LP; with `--corpus stacks|adversarial` timed 64 problems at a time
+    /// between the fast solver's passes, so that both see the same machine; 1..=100000).
     #[arg(long, default_value_t = 30, value_parser = usize_in(1, 100_000))]
     pub reference_problems: usize,
     /// Number of basis functions: the power basis z, …, z^m (4 = MSM; 1..=8).
