@@ -6,7 +6,7 @@
 //! ([`MomentSolver::solve_distribution`]), one solver per table, warm state carried from one
 //! problem to the next.
 
-use super::corpus::Group;
+use super::corpus::{Group, Problem};
 use super::fast::FastSolver;
 use super::reference::ReferenceSolver;
 use super::{distribution_moments, support_reproduces, MomentSolver, Solution, Status};
@@ -226,42 +226,13 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
         stats: Default::default(),
         reference: Vec::new(),
     };
-    let mut first = 0; // index of the stretch's first problem
-    for stretch in g.problems.chunks(STRETCH) {
-        let start = solver.warm_state();
+    for (s, stretch) in g.problems.chunks(STRETCH).enumerate() {
         let k0 = out.fast_us.len();
-        for rep in 0..repeats.max(1) {
-            solver.restore_warm_state(&start);
-            out.sols.truncate(k0);
-            let before = solver.stats();
-            let mut k = k0;
-            for p in stretch {
-                for &zf in &p.zf {
-                    let t0 = Instant::now();
-                    let s = solver.solve_distribution(&p.dist, zf)?;
-                    let us = t0.elapsed().as_secs_f64() * 1e6;
-                    if rep == 0 {
-                        out.fast_us.push(us);
-                    } else {
-                        out.fast_us[k] = out.fast_us[k].min(us);
-                    }
-                    out.sols.push(s);
-                    k += 1;
-                }
-            }
-            if rep + 1 == repeats.max(1) {
-                // Counters of the last pass only (the statuses are the last pass's too).
-                let after = solver.stats();
-                out.stats.escalations += after.escalations - before.escalations;
-                out.stats.exact += after.exact - before.exact;
-                out.stats.fallbacks += after.fallbacks - before.fallbacks;
-                out.stats.same_moments += after.same_moments - before.same_moments;
-                out.stats.pivots += after.pivots - before.pivots;
-            }
-        }
+        time_stretch(&mut solver, stretch, repeats, &mut out)?;
+        // The reference on the first fragment depth of the stretch's problems in the prefix.
         let mut k = k0;
         for (i, p) in stretch.iter().enumerate() {
-            if first + i < reference_per_group {
+            if s * STRETCH + i < reference_per_group {
                 let b = distribution_moments(&g.table, &p.dist)?;
                 let t0 = Instant::now();
                 let r = reference.solve(&b, p.zf[0]);
@@ -270,9 +241,50 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
             }
             k += p.zf.len();
         }
-        first += stretch.len();
     }
     Ok(out)
+}
+
+/// `repeats` passes of the fast solver over one stretch, each from the warm state the stretch
+/// started with: appends the minimum µs and the last pass's answers and counters to `out`.
+fn time_stretch(
+    solver: &mut FastSolver,
+    stretch: &[Problem],
+    repeats: usize,
+    out: &mut Timed,
+) -> Result<()> {
+    let start = solver.warm_state();
+    let k0 = out.fast_us.len();
+    for rep in 0..repeats.max(1) {
+        solver.restore_warm_state(&start);
+        out.sols.truncate(k0);
+        let before = solver.stats();
+        let mut k = k0;
+        for p in stretch {
+            for &zf in &p.zf {
+                let t0 = Instant::now();
+                let s = solver.solve_distribution(&p.dist, zf)?;
+                let us = t0.elapsed().as_secs_f64() * 1e6;
+                if rep == 0 {
+                    out.fast_us.push(us);
+                } else {
+                    out.fast_us[k] = out.fast_us[k].min(us);
+                }
+                out.sols.push(s);
+                k += 1;
+            }
+        }
+        if rep + 1 == repeats.max(1) {
+            // Counters of the last pass only (the statuses are the last pass's too).
+            let after = solver.stats();
+            out.stats.escalations += after.escalations - before.escalations;
+            out.stats.exact += after.exact - before.exact;
+            out.stats.fallbacks += after.fallbacks - before.fallbacks;
+            out.stats.same_moments += after.same_moments - before.same_moments;
+            out.stats.pivots += after.pivots - before.pivots;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -295,7 +307,7 @@ mod tests {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
         let kinds = [Kind::Flat, Kind::Cluster, Kind::Mixture, Kind::Adjacent];
         // Some problems with two fragment depths (the same moments twice: a warm start).
-        let problems: Vec<_> = (0..2 * STRETCH + 9)
+        let mut problems: Vec<_> = (0..2 * STRETCH + 9)
             .map(|k| {
                 let mut p = problem(&mut rng, 256, 4, kinds[k % kinds.len()]);
                 if k % 3 == 0 {
@@ -304,11 +316,10 @@ mod tests {
                 }
                 p
             })
-            .collect::<Vec<_>>();
+            .collect();
         // The first problem of the second stretch has the moments of the last of the first:
         // solved from the warm basis only if each repeat starts from the state the first
         // stretch left.
-        let mut problems = problems;
         problems[STRETCH] = problems[STRETCH - 1].clone();
         let g = Group {
             name: "test".into(),
