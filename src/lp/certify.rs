@@ -44,6 +44,9 @@ pub const SCALE_FLOOR: f64 = 1e-30;
 /// the grid the floor of σ_j is CANCEL · max_i |f_j(z_i)| (sin(4πz) at z = 1 is 4.9e-16, a
 /// rounding error, not a scale).
 pub const CANCEL: f64 = 1e-5;
+/// Mass below z_f up to which the zero duals certify an answer (no grid pass; the gap is then
+/// at most this, far inside [`TOL_GAP`]).
+const ZERO_MASS: f64 = 1e-12;
 /// Weights (≤ 1, the total mass) below this are rounding-level in the ratio test.
 const TOL_WEIGHT: f64 = 1e-12;
 /// Accurate pivots by Dantzig's rule before Bland's.
@@ -344,6 +347,11 @@ impl Certifier {
             ));
         }
         let g: f64 = (0..r).filter(|&t| basis[t] < kf).map(|t| self.x[t]).sum();
+        if g <= ZERO_MASS {
+            // No mass below z_f: the duals y = 0 certify it (d_i = p_i ≥ 0, L = 0 ≥ G − 1e-9),
+            // with no pass over the grid.
+            return Ok(self.certified(basis, g, residual, g, 0.0));
+        }
         self.dual(basis, kf);
         let lower = self.lower_bound(kf);
         let gap = g - lower;
@@ -359,18 +367,31 @@ impl Certifier {
         if !ok || gap.is_nan() {
             return Err(format!("dual bound {lower:.12} does not match G = {g:.12}"));
         }
-        let mut support: Vec<(f64, f64)> = (0..r)
+        let min_reduced = self.min_lower().min(0.0);
+        Ok(self.certified(basis, g, residual, gap, min_reduced))
+    }
+
+    /// The certified answer of `basis` with the weights in `x`.
+    fn certified(
+        &self,
+        basis: &[usize],
+        g: f64,
+        residual: f64,
+        gap: f64,
+        min_reduced: f64,
+    ) -> Certified {
+        let mut support: Vec<(f64, f64)> = (0..basis.len())
             .filter(|&t| self.x[t] > 0.0)
             .map(|t| (self.z[basis[t]], self.x[t]))
             .collect();
         support.sort_by(|a, b| a.0.total_cmp(&b.0));
-        Ok(Certified {
+        Certified {
             g: g.clamp(0.0, 1.0),
             support,
             residual,
             gap,
-            min_reduced: self.min_lower().min(0.0),
-        })
+            min_reduced,
+        }
     }
 
     /// Certify `basis`, and where that fails make up to `steps` simplex pivots in these

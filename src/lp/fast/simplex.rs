@@ -9,6 +9,8 @@ use super::{
     TOL_PIV, TOL_P_LOOSE,
 };
 
+/// Phase-2 cost (mass below z_f) taken as zero: the run ends there.
+const ZERO_COST: f64 = 1e-13;
 /// Rescues ([`FastSolver::rescue`]) allowed per run.
 const MAX_RESCUES: usize = 3;
 
@@ -224,6 +226,12 @@ impl FastSolver {
         if st.degenerate >= DEGENERATE_LIMIT && !st.perturbed {
             self.perturb(st);
         }
+        if self.partial_optimum && !st.phase1 && !st.perturbed && self.no_mass_below(st.kf) {
+            // Cost 0 is the least possible: optimal whatever the reduced costs say (the
+            // certificate's zero duals prove it, see `solve_inner`).
+            self.full_pass_skipped = true;
+            return self.at_optimum(st, 0.0);
+        }
         let bland = st.bland_always || st.degenerate >= DEGENERATE_LIMIT;
         let (q, dq) = self.price_step(st, bland)?;
         if dq >= -TOL_D {
@@ -243,6 +251,20 @@ impl FastSolver {
         let l = self.ratio_test(bland).ok_or(Jump::End(Outcome::Failed))?;
         self.pivot_step(st, l, q, dq);
         Ok(())
+    }
+
+    /// The basic solution is feasible and puts no mass below z_f (grid points 0..kf).
+    fn no_mass_below(&self, kf: usize) -> bool {
+        let mut below = 0.0;
+        for t in 0..self.r {
+            if self.x[t] < -TOL_P {
+                return false;
+            }
+            if self.basis[t] < kf {
+                below += self.x[t].max(0.0);
+            }
+        }
+        below <= ZERO_COST
     }
 
     /// Refactorise, else rescue (at most `MAX_RESCUES` per run), else fail. After a rescue the
