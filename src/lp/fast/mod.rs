@@ -182,6 +182,8 @@ pub struct FastSolver {
     /// that factorisation (no pivot since, no artificial column).
     factored: Vec<usize>,
     factored_ok: bool,
+    /// The crossover has just left a basic feasible solution with its (updated) inverse.
+    crossed: bool,
     /// Last optimal basis (warm start), if any, and the transformed moments it was optimal for.
     warm_basis: Option<Vec<usize>>,
     last_c: Vec<f64>,
@@ -290,6 +292,7 @@ impl FastSolver {
             last_bound: 0.0,
             factored: vec![usize::MAX; r],
             factored_ok: false,
+            crossed: false,
             warm_basis: None,
             last_c: vec![f64::NAN; r],
             warm: true,

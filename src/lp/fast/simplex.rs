@@ -147,7 +147,9 @@ impl FastSolver {
 
     /// One simplex run from `self.basis`. `kf` = number of grid points below z_f.
     pub(super) fn run(&mut self, kf: usize, bland_always: bool) -> Outcome {
-        if self.factored_ok && self.basis == self.factored {
+        if std::mem::take(&mut self.crossed) {
+            // Straight from the crossover: B⁻¹ and x = B⁻¹c are up to date.
+        } else if self.factored_ok && self.basis == self.factored {
             // B⁻¹ is still the fresh factorisation of this basis (the warm start after a
             // problem that ended on it): only the weights are new.
             self.basic_solution();

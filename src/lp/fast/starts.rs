@@ -47,6 +47,7 @@ impl FastSolver {
         let mut cold_runs = 0;
         let mut stash: Option<Vec<usize>> = None;
         for _attempt in 0..6 {
+            self.crossed = false;
             if let Start::Hint = start {
                 self.c.copy_from_slice(&self.c0);
                 if !self.crossover(hint.unwrap_or(&[]), kf) {
@@ -217,7 +218,10 @@ impl FastSolver {
         if !self.factor() {
             return false;
         }
-        self.push_out_superbasic(kf)
+        // The basis inverse and weights the pushes leave are the run's start as they stand
+        // (at most REFACTOR_EVERY updates since a factorisation, like any simplex iterate).
+        self.crossed = self.push_out_superbasic(kf);
+        self.crossed
     }
 
     /// The start's positive atoms into `hint`, their squared column norms into `hint_nrm`,
