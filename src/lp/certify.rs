@@ -394,6 +394,64 @@ impl Certifier {
         }
     }
 
+    /// Certify that a distribution [(grid index, weight)] with no positive weight below z_f
+    /// (every such index ≥ `kf`) is optimal for moments `b`: G = 0, proven by the zero duals
+    /// (d_i = p_i ≥ 0, L = 0), provided its weights, normalised to mass 1, reproduce every
+    /// moment to [`TOL_MOMENT`] of its scale (double-double residuals). The support is the
+    /// distribution itself, duplicates merged, sorted by z.
+    pub fn zero_mass(
+        &mut self,
+        b: &[f64],
+        kf: usize,
+        dist: &[(u32, f64)],
+    ) -> Result<Certified, String> {
+        let total: f64 = dist.iter().map(|e| e.1).sum();
+        let valid = |&(i, w): &(u32, f64)| (i as usize) < self.n && w.is_finite() && w >= 0.0;
+        if !(total > 0.0 && total.is_finite() && dist.iter().all(valid)) {
+            return Err("invalid distribution".into());
+        }
+        if dist.iter().any(|&(i, w)| w > 0.0 && (i as usize) < kf) {
+            return Err("mass below z_f".into());
+        }
+        self.set_moments(b);
+        let mut atoms: Vec<(usize, f64)> = dist
+            .iter()
+            .filter(|e| e.1 > 0.0)
+            .map(|&(i, w)| (i as usize, w / total))
+            .collect();
+        atoms.sort_by_key(|a| a.0);
+        atoms.dedup_by(|a, b| {
+            let same = a.0 == b.0;
+            if same {
+                b.1 += a.1;
+            }
+            same
+        });
+        let residual = (0..=self.m)
+            .map(|j| {
+                let terms = atoms.iter().map(|&(i, w)| (self.entry(j, i), w));
+                let mag: f64 = atoms
+                    .iter()
+                    .map(|&(i, w)| (self.entry(j, i) * w).abs())
+                    .sum();
+                residual2(self.bbar[j], terms).abs() / self.sigma[j].max(CANCEL * mag)
+            })
+            .fold(0.0, f64::max);
+        // (NaN fails too.)
+        if residual.is_nan() || residual > TOL_MOMENT {
+            return Err(format!(
+                "distribution reproduces the moments only to {residual:.1e} (relative)"
+            ));
+        }
+        Ok(Certified {
+            g: 0.0,
+            support: atoms.iter().map(|&(i, w)| (self.z[i], w)).collect(),
+            residual,
+            gap: 0.0,
+            min_reduced: 0.0,
+        })
+    }
+
     /// Certify `basis`, and where that fails make up to `steps` simplex pivots in these
     /// accurate coordinates (every step from a fresh factorisation with refined weights and
     /// duals): a primal step on the most negative capped reduced cost u_i·d_i, or a dual step

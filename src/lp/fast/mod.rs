@@ -129,6 +129,9 @@ pub struct FastStats {
     pub same_moments: u64,
     /// Of which the start could not be turned into a basis (the usual start was used).
     pub hint_rejected: u64,
+    /// Solves given a distribution with no atom below z_f: G = 0 with that distribution as
+    /// the support, certified by the zero duals (no simplex).
+    pub zero_mass: u64,
     /// Crossover pivots (start distribution → basic feasible solution).
     pub crossover_pivots: u64,
     /// Optima whose weights, refined against the LP as stated, were infeasible: solved again
@@ -540,6 +543,13 @@ impl FastSolver {
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        if let Some(dist) = hint.filter(|d| d.iter().all(|&(i, w)| i as usize >= kf || w <= 0.0)) {
+            // No atom below z_f: the distribution itself has the least possible mass, 0.
+            if let Ok(c) = self.cert.zero_mass(moments, kf, dist) {
+                self.stats.zero_mass += 1;
+                return Ok(certified(c));
+            }
+        }
         let mut verdict = if c_given || self.transform(moments) {
             self.c0.copy_from_slice(&self.c);
             self.partial_optimum = true;
