@@ -559,7 +559,12 @@ impl Certifier {
         }
         // Primal step on the most negative capped reduced cost.
         let mut best: Option<(usize, f64)> = None;
-        for (i, low) in row_kernels::below(&self.d, &self.e, self.gamma) {
+        // Only the flagged blocks hold values below their bound (and e is only set there).
+        let below = self.flagged_blocks().flat_map(|(lo, hi)| {
+            row_kernels::below(&self.d[lo..hi], &self.e[lo..hi], self.gamma)
+                .map(move |(i, low)| (lo + i, low))
+        });
+        for (i, low) in below {
             if !basis.contains(&i) {
                 let v = low * self.cap(i);
                 if best.is_none_or(|(_, v0)| v < v0) {
@@ -940,6 +945,17 @@ impl Certifier {
         let (d, e, flagged) = (&mut self.d, &mut self.e, &mut self.flagged);
         let (fcols, offs) = (&self.fcols, &self.offs);
         let (ys, gamma) = (&y[1..], self.gamma);
+        // e_i ≤ E = 1 + |y₀| + Σ_k |y_k| max_i |f_k(z_i)| (with room for rounding): e is only
+        // needed where d_i < γ E. The Farkas check reads e everywhere.
+        let ebound = kf.map(|_| {
+            let rows = &self.rows[1..];
+            let sum: f64 = ys
+                .iter()
+                .zip(rows)
+                .map(|(y, &j)| y.abs() * self.fmax[j])
+                .sum();
+            (1.0 + y[0].abs() + sum) * (1.0 + 1e-9)
+        });
         row_kernels::reduced_costs(
             d,
             e,
@@ -947,7 +963,7 @@ impl Certifier {
             ys,
             fcols,
             offs,
-            gamma,
+            (gamma, ebound),
             flagged,
             self.avx512,
         );
