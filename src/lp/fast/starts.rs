@@ -277,18 +277,15 @@ impl FastSolver {
         let (r, s) = (self.r, self.hint.len());
         let mut chosen = 0usize;
         while chosen < limit.min(r) {
-            let mut best = usize::MAX;
-            let mut best_v = 1e-10;
-            // Chosen points have norm −∞ (and keep it through the downdates).
-            for (k, &v) in self.hint_nrm.iter().enumerate() {
-                if v >= best_v {
-                    best_v = v;
-                    best = k;
-                }
-            }
-            if best == usize::MAX {
+            // The last of the largest norms ≥ 1e-10 (chosen points have norm −∞ and keep it
+            // through the downdates): a vectorised maximum, then its position.
+            let top = self.hint_nrm.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v));
+            if !(top >= 1e-10) {
                 break;
             }
+            let Some(best) = self.hint_nrm.iter().rposition(|&v| v == top) else {
+                break;
+            };
             let i = self.hint[best].0;
             let v = &mut self.hint_v;
             v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
