@@ -138,9 +138,139 @@ pub fn reduced_costs(
     reduced_costs_generic(d, e, y, ys, mat, offs, g, flagged);
 }
 
+/// [`reduced_costs_rows`] for the number of function rows at hand (unrolled up to 12).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn reduced_costs_generic(
+    d: &mut [f64],
+    e: &mut [f64],
+    y: (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    g: (f64, Option<f64>),
+    flagged: &mut Vec<usize>,
+) {
+    macro_rules! by_rows {
+        ($($k:literal)*) => {
+            match ys.len() {
+                $($k => reduced_costs_rows::<$k>(d, e, y, ys, mat, offs, g, flagged),)*
+                _ => reduced_costs_any(d, e, y, ys, mat, offs, g, flagged),
+            }
+        };
+    }
+    by_rows!(0 1 2 3 4 5 6 7 8 9 10 11 12)
+}
+
+/// [`reduced_costs`] for K function rows: the rows as K slices of length n, the row loop
+/// unrolled (the same operations in the same order as [`reduced_costs_any`]).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn reduced_costs_rows<const K: usize>(
+    d: &mut [f64],
+    e: &mut [f64],
+    (kf, y0): (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    (gamma, ebound): (f64, Option<f64>),
+    flagged: &mut Vec<usize>,
+) {
+    let n = d.len();
+    let rows: [&[f64]; K] = std::array::from_fn(|k| &mat[offs[k]..offs[k] + n]);
+    let yk: [f64; K] = std::array::from_fn(|k| ys[k]);
+    let full = n - n % BLOCK;
+    let ay0 = y0.abs();
+    let open = ebound.map(|b| gamma * b);
+    let (dfull, efull) = (&mut d[..full], &mut e[..full]);
+    for (b, (dc, ec)) in dfull
+        .chunks_exact_mut(BLOCK)
+        .zip(efull.chunks_exact_mut(BLOCK))
+        .enumerate()
+    {
+        let lo = b * BLOCK;
+        let f: [&[f64; BLOCK]; K] =
+            std::array::from_fn(|k| rows[k][lo..lo + BLOCK].try_into().expect("block"));
+        let mut db = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            db[t] = p - y0;
+        }
+        for k in 0..K {
+            for t in 0..BLOCK {
+                db[t] -= yk[k] * f[k][t];
+            }
+        }
+        dc.copy_from_slice(&db);
+        if let Some(open) = open {
+            let mut candidate = false;
+            for t in 0..BLOCK {
+                candidate |= db[t] < open;
+            }
+            if !candidate {
+                continue;
+            }
+        }
+        let mut eb = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            eb[t] = p + ay0;
+        }
+        for k in 0..K {
+            for t in 0..BLOCK {
+                eb[t] += (yk[k] * f[k][t]).abs();
+            }
+        }
+        let mut hit = false;
+        for t in 0..BLOCK {
+            hit |= db[t] - gamma * eb[t] < 0.0;
+        }
+        ec.copy_from_slice(&eb);
+        if hit {
+            flagged.push(lo);
+        }
+    }
+    reduced_costs_tail(d, e, (kf, y0), ys, mat, offs, gamma, flagged);
+}
+
+/// The points after the last whole block, one by one.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn reduced_costs_tail(
+    d: &mut [f64],
+    e: &mut [f64],
+    (kf, y0): (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    gamma: f64,
+    flagged: &mut Vec<usize>,
+) {
+    let n = d.len();
+    let full = n - n % BLOCK;
+    let ay0 = y0.abs();
+    let mut hit = false;
+    for i in full..n {
+        let p = if i < kf { 1.0 } else { 0.0 };
+        let (mut di, mut ei) = (p - y0, p + ay0);
+        for (&y, &o) in ys.iter().zip(offs) {
+            let v = y * mat[o + i];
+            di -= v;
+            ei += v.abs();
+        }
+        d[i] = di;
+        e[i] = ei;
+        hit |= di - gamma * ei < 0.0;
+    }
+    if hit {
+        flagged.push(full);
+    }
+}
+
+/// [`reduced_costs`] for any number of function rows.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn reduced_costs_any(
     d: &mut [f64],
     e: &mut [f64],
     (kf, y0): (usize, f64),
@@ -197,22 +327,7 @@ fn reduced_costs_generic(
             flagged.push(lo);
         }
     }
-    let mut hit = false;
-    for i in full..n {
-        let p = if i < kf { 1.0 } else { 0.0 };
-        let (mut di, mut ei) = (p - y0, p + ay0);
-        for (&y, &o) in ys.iter().zip(offs) {
-            let v = y * mat[o + i];
-            di -= v;
-            ei += v.abs();
-        }
-        d[i] = di;
-        e[i] = ei;
-        hit |= di - gamma * ei < 0.0;
-    }
-    if hit {
-        flagged.push(full);
-    }
+    reduced_costs_tail(d, e, (kf, y0), ys, mat, offs, gamma, flagged);
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -428,10 +543,19 @@ mod tests {
 
     #[test]
     fn reduced_costs_is_fill_then_rows_bit_for_bit_and_flags_every_negative_block() {
-        for n in [1usize, 15, 16, 37, 64, 100] {
-            let mat: Vec<f64> = (0..4 * n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
-            let ys = [-0.3e-3, 1.7e-4, 2.5e-7];
-            let offs = [3 * n, 0, n];
+        // Row counts of the unrolled kernels (0…12) and of the general one (13).
+        for (n, rows) in [1usize, 15, 16, 37, 64, 100]
+            .into_iter()
+            .flat_map(|n| [0usize, 1, 3, 5, 12, 13].map(|k| (n, k)))
+        {
+            let mat: Vec<f64> = (0..(rows + 1) * n)
+                .map(|i| (i as f64 * 0.37).sin() * 1e3)
+                .collect();
+            let ys: Vec<f64> = (0..rows)
+                .map(|k| [-0.3e-3, 1.7e-4, 2.5e-7][k % 3] * (1.0 + k as f64))
+                .collect();
+            // Rows in a shuffled order of the matrix's rows.
+            let offs: Vec<usize> = (0..rows).map(|k| ((k * 7 + 3) % (rows + 1)) * n).collect();
             for kf in [0, n / 3, n] {
                 for y0 in [0.25f64, -0.5] {
                     let (mut d1, mut e1) = (vec![0.0; n], vec![0.0; n]);

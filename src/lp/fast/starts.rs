@@ -279,8 +279,11 @@ impl FastSolver {
         while chosen < limit.min(r) {
             // The last of the largest norms ≥ 1e-10 (chosen points have norm −∞ and keep it
             // through the downdates): a vectorised maximum, then its position.
-            let top = self.hint_nrm.iter().fold(f64::NEG_INFINITY, |a, &v| a.max(v));
-            if !(top >= 1e-10) {
+            let top = self
+                .hint_nrm
+                .iter()
+                .fold(f64::NEG_INFINITY, |a, &v| a.max(v));
+            if top.is_nan() || top < 1e-10 {
                 break;
             }
             let Some(best) = self.hint_nrm.iter().rposition(|&v| v == top) else {
