@@ -531,7 +531,8 @@ impl FastSolver {
         let mut best = 0.0;
         for t in 0..r {
             let a = self.alpha[t];
-            if a > TOL_PIV && self.x[t].max(0.0) / a <= theta_max {
+            // x_t / a ≤ θ_max, without a division (a > 0).
+            if a > TOL_PIV && self.x[t].max(0.0) <= theta_max * a {
                 let better = if bland {
                     l == usize::MAX || self.basis[t] < self.basis[l]
                 } else {

@@ -433,19 +433,23 @@ impl FastSolver {
     /// Ratio test of [`Self::push_out`]: the step (at most w when decreasing) and the basis
     /// position whose weight reaches 0 first (usize::MAX if none).
     fn push_ratio(&self, decrease: bool, w: f64) -> (f64, usize) {
-        let mut step = if decrease { w } else { f64::INFINITY };
+        // The least ratio x_t / a_t as a fraction num / den (one division at the end):
+        // x_t / a < num / den ⟺ x_t · den < num · a for a, den > 0.
+        let (mut num, mut den) = (if decrease { w } else { f64::INFINITY }, 1.0);
         let mut l = usize::MAX;
         for t in 0..self.r {
             let a = self.alpha[t];
             let a = if decrease { -a } else { a };
-            if a > PIV {
-                let v = self.x[t].max(0.0) / a;
-                if v < step {
-                    step = v;
-                    l = t;
-                }
+            let xt = self.x[t].max(0.0);
+            if a > PIV && xt * den < num * a {
+                (num, den) = (xt, a);
+                l = t;
             }
         }
-        (step, l)
+        if l == usize::MAX {
+            (num, l)
+        } else {
+            (num / den, l)
+        }
     }
 }
