@@ -515,12 +515,14 @@ impl FastSolver {
     fn ratio_test(&self, bland: bool) -> Option<usize> {
         let r = self.r;
         let mut theta_max = f64::INFINITY;
+        let mut first = usize::MAX;
         for t in 0..r {
             let a = self.alpha[t];
             if a > TOL_PIV {
                 let v = (self.x[t].max(0.0) + TOL_P) / a;
                 if v < theta_max {
                     theta_max = v;
+                    first = t;
                 }
             }
         }
@@ -531,8 +533,9 @@ impl FastSolver {
         let mut best = 0.0;
         for t in 0..r {
             let a = self.alpha[t];
-            // x_t / a ≤ θ_max, without a division (a > 0).
-            if a > TOL_PIV && self.x[t].max(0.0) <= theta_max * a {
+            // x_t / a ≤ θ_max, without a division (a > 0); the row that set θ_max always
+            // qualifies (the product can round below x_t where x_t ≫ TOL_P).
+            if a > TOL_PIV && (t == first || self.x[t].max(0.0) <= theta_max * a) {
                 let better = if bland {
                     l == usize::MAX || self.basis[t] < self.basis[l]
                 } else {
