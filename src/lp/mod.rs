@@ -14,6 +14,7 @@ pub mod corpus;
 mod dense;
 pub mod exact;
 pub mod fast;
+mod gi_pricing;
 pub mod instances;
 mod pricing;
 pub mod reference;

@@ -134,6 +134,26 @@ impl ColumnTable {
         (&self.data, self.ld)
     }
 
+    /// Number of rows r.
+    pub(crate) fn r(&self) -> usize {
+        self.r
+    }
+
+    /// Number of columns (without the padding).
+    pub(crate) fn len(&self) -> usize {
+        self.len
+    }
+
+    /// The exclusion penalties (0, or +∞ for excluded and padding columns), one per column.
+    pub(crate) fn penalties(&self) -> &[f64] {
+        &self.pen
+    }
+
+    /// The kernel detected for this CPU.
+    pub(crate) fn kernel(&self) -> Kernel {
+        self.kernel
+    }
+
     /// Exclude column j < len from (or readmit it to) pricing; padding is always excluded.
     pub(crate) fn set_excluded(&mut self, j: usize, excluded: bool) {
         assert!(j < self.len, "column {j} out of range");

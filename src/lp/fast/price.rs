@@ -2,8 +2,14 @@
 //! neighbours of z_f and of the support, the fine window around the best), the full pass that
 //! proves optimality, Bland's rule, and the dense Dantzig kernel (AVX2/FMA or generic).
 
-use super::{FastSolver, ART, TOL_D};
+use super::{FastSolver, ART, TOL_D, TOL_PIV};
+use crate::lp::gi_pricing;
 use crate::lp::pricing::ColumnTable;
+
+/// A reduced cost below this (costs are 0 or 1, columns have RMS 1) triggers greatest-
+/// improvement pricing on the coarse subgrid ([`gi_pricing`]): stacks corpus at n = 1024,
+/// 10.2 → 7.4 pivots per window, with about one such scan per window.
+const GI_TRIGGER: f64 = -1.0;
 
 impl FastSolver {
     /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point and the last
@@ -54,6 +60,19 @@ impl FastSolver {
         best = self.fine.scan_ranges(y, kf, &ranges[..distinct], best);
         if best.0 == usize::MAX {
             return best;
+        }
+        if best.1 < GI_TRIGGER {
+            // A reduced cost this large comes from the dual polynomial extrapolating the basis
+            // (an end of the grid): the coarse point of greatest improvement enters instead.
+            let basis = gi_pricing::Basis {
+                binv: &self.binv,
+                x: &self.x,
+                tol_d: TOL_D,
+                tol_piv: TOL_PIV,
+            };
+            if let Some(g) = gi_pricing::scan(coarse, y, csplit, &basis) {
+                best = (self.coarse_idx[g.j], g.d);
+            }
         }
         // The reduced cost is smooth between coarse points: the minimum of the whole fine
         // window around the best point is the entering column.
