@@ -65,11 +65,31 @@ pub(crate) fn scan(
         // SAFETY: the table's kernel is supported by this CPU (detected); sizes asserted.
         #[cfg(target_arch = "x86_64")]
         Kernel::Avx512 => unsafe { by_rows!(scan_avx512) },
+        // SAFETY: the AVX2 kernel is only detected with FMA.
+        #[cfg(target_arch = "x86_64")]
+        Kernel::Avx2 => unsafe { scan_fma(table, y, split, basis) },
         _ => scan_scalar(table, y, split, basis),
     }
 }
 
+/// [`scan_scalar`] compiled with FMA, so that its fused multiply-adds are instructions, not
+/// calls.
+///
+/// # Safety
+/// The CPU must support FMA.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "fma")]
+unsafe fn scan_fma(
+    table: &ColumnTable,
+    y: &[f64],
+    split: usize,
+    basis: &Basis,
+) -> Option<Improving> {
+    scan_scalar(table, y, split, basis)
+}
+
 /// [`scan`] without SIMD (any row count; the reference of the AVX-512 kernel).
+#[inline(always)]
 pub(crate) fn scan_scalar(
     table: &ColumnTable,
     y: &[f64],
