@@ -189,8 +189,9 @@ impl FastSolver {
     /// Gram–Schmidt), completed from the cold-start basis; every other support point is then
     /// pushed out, to weight 0 or into the basis, in the direction that does not increase
     /// Σ_{z_i<z_f} w_i (one ratio test and exchange each). This replaces phase 1. False when
-    /// the start is unusable (then the caller starts as usual); `run` re-verifies feasibility
-    /// from the true moments in any case, so a wrong start cannot change the answer.
+    /// the start is unusable (then the caller starts as usual). The run goes on from the
+    /// inverse and weights the pushes leave; the certificate recomputes the weights of the
+    /// final basis from the true moments, so a drifted start cannot change the answer.
     fn crossover(&mut self, start: &[(u32, f64)], kf: usize) -> bool {
         self.stats.hinted += 1;
         if !self.load_hint(start) {
