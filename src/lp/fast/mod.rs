@@ -13,7 +13,9 @@
 //!   is checked for consistency instead.
 //! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
 //!   subgrid, the neighbours of z_f and of the support, the fine window around the best) with
-//!   the blocked SIMD kernels of [`super::pricing`], a Harris-style ratio test, Bland's rule
+//!   the blocked SIMD kernels of [`super::pricing`] (greatest improvement on the coarse
+//!   subgrid when the column found has a reduced cost below −1, see [`super::gi_pricing`]), a
+//!   Harris-style ratio test, Bland's rule
 //!   after repeated degenerate pivots, a refactorisation every 16 pivots. When partial pricing
 //!   finds no entering column in phase 2, the certificate ([`super::certify`]) prices every
 //!   grid point with refined duals in the original coordinates: that proves optimality (no
@@ -32,7 +34,9 @@
 //!   point: a crossover turns it into a basic feasible solution of no greater cost (the first
 //!   grid point at or above z_f and the last grid point, which the optimum nearly always holds,
 //!   and the support columns of greatest volume as the basis, every other support point
-//!   pushed to weight 0 or into the basis by one ratio test), so phase 1 is skipped.
+//!   pushed to weight 0 or into the basis by one ratio test), so phase 1 is skipped. A
+//!   distribution with no atom below z_f is the answer itself (G = 0), and a basic solution
+//!   with no mass below z_f ends phase 2: the zero duals certify both.
 //! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
 //!   original system in double-double arithmetic); weights that turn out infeasible trigger a
 //!   rerun in accurate mode (see `finish_optimal`).
