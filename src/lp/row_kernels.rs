@@ -169,81 +169,19 @@ fn reduced_costs_generic(
 fn reduced_costs_rows<const K: usize>(
     d: &mut [f64],
     e: &mut [f64],
-    y: (usize, f64),
+    (kf, y0): (usize, f64),
     ys: &[f64],
     mat: &[f64],
     offs: &[usize],
-    g: (f64, Option<f64>),
+    (gamma, ebound): (f64, Option<f64>),
     flagged: &mut Vec<usize>,
 ) {
     let n = d.len();
     let rows: [&[f64]; K] = std::array::from_fn(|k| &mat[offs[k]..offs[k] + n]);
     let yk: [f64; K] = std::array::from_fn(|k| ys[k]);
-    blocks(d, e, y, g, flagged, |lo, acc, abs| {
-        let f: [&[f64; BLOCK]; K] =
-            std::array::from_fn(|k| rows[k][lo..lo + BLOCK].try_into().expect("block"));
-        for k in 0..K {
-            rows_into(acc, yk[k], f[k], abs);
-        }
-    });
-    reduced_costs_tail(d, e, y, ys, mat, offs, g.0, flagged);
-}
-
-/// [`reduced_costs`] for any number of function rows.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn reduced_costs_any(
-    d: &mut [f64],
-    e: &mut [f64],
-    y: (usize, f64),
-    ys: &[f64],
-    mat: &[f64],
-    offs: &[usize],
-    g: (f64, Option<f64>),
-    flagged: &mut Vec<usize>,
-) {
-    blocks(d, e, y, g, flagged, |lo, acc, abs| {
-        for (&yk, &o) in ys.iter().zip(offs) {
-            let f: &[f64; BLOCK] = mat[o + lo..o + lo + BLOCK].try_into().expect("block");
-            rows_into(acc, yk, f, abs);
-        }
-    });
-    reduced_costs_tail(d, e, y, ys, mat, offs, g.0, flagged);
-}
-
-/// acc_t −= y f_t, or with `abs` acc_t += |y f_t|.
-#[inline(always)]
-fn rows_into(acc: &mut [f64; BLOCK], y: f64, f: &[f64; BLOCK], abs: bool) {
-    if abs {
-        for t in 0..BLOCK {
-            acc[t] += (y * f[t]).abs();
-        }
-    } else {
-        for t in 0..BLOCK {
-            acc[t] -= y * f[t];
-        }
-    }
-}
-
-/// The whole blocks of [`reduced_costs`]: d per block, then e (only in the blocks where some
-/// d_i < γE when the bound E is given) and the flag. `rows(lo, acc, abs)` applies every
-/// function row of the block from `lo` to `acc` (see [`rows_into`]).
-#[inline(always)]
-fn blocks(
-    d: &mut [f64],
-    e: &mut [f64],
-    (kf, y0): (usize, f64),
-    (gamma, ebound): (f64, Option<f64>),
-    flagged: &mut Vec<usize>,
-    rows: impl Fn(usize, &mut [f64; BLOCK], bool),
-) {
-    let full = d.len() - d.len() % BLOCK;
+    let full = n - n % BLOCK;
     let ay0 = y0.abs();
-    // d_i < γ E is necessary for d_i − γ e_i < 0.
     let open = ebound.map(|b| gamma * b);
-    let cost = |lo: usize, c: f64| -> [f64; BLOCK] {
-        std::array::from_fn(|t| if lo + t < kf { 1.0 + c } else { c })
-    };
     let (dfull, efull) = (&mut d[..full], &mut e[..full]);
     for (b, (dc, ec)) in dfull
         .chunks_exact_mut(BLOCK)
@@ -251,21 +189,48 @@ fn blocks(
         .enumerate()
     {
         let lo = b * BLOCK;
-        let mut db = cost(lo, -y0);
-        rows(lo, &mut db, false);
+        let f: [&[f64; BLOCK]; K] =
+            std::array::from_fn(|k| rows[k][lo..lo + BLOCK].try_into().expect("block"));
+        let mut db = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            db[t] = p - y0;
+        }
+        for k in 0..K {
+            for t in 0..BLOCK {
+                db[t] -= yk[k] * f[k][t];
+            }
+        }
         dc.copy_from_slice(&db);
         if let Some(open) = open {
-            if !db.iter().fold(false, |c, &v| c | (v < open)) {
+            let mut candidate = false;
+            for t in 0..BLOCK {
+                candidate |= db[t] < open;
+            }
+            if !candidate {
                 continue;
             }
         }
-        let mut eb = cost(lo, ay0);
-        rows(lo, &mut eb, true);
+        let mut eb = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            eb[t] = p + ay0;
+        }
+        for k in 0..K {
+            for t in 0..BLOCK {
+                eb[t] += (yk[k] * f[k][t]).abs();
+            }
+        }
+        let mut hit = false;
+        for t in 0..BLOCK {
+            hit |= db[t] - gamma * eb[t] < 0.0;
+        }
         ec.copy_from_slice(&eb);
-        if (0..BLOCK).fold(false, |h, t| h | (db[t] - gamma * eb[t] < 0.0)) {
+        if hit {
             flagged.push(lo);
         }
     }
+    reduced_costs_tail(d, e, (kf, y0), ys, mat, offs, gamma, flagged);
 }
 
 /// The points after the last whole block, one by one.
@@ -300,6 +265,69 @@ fn reduced_costs_tail(
     if hit {
         flagged.push(full);
     }
+}
+
+/// [`reduced_costs`] for any number of function rows.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn reduced_costs_any(
+    d: &mut [f64],
+    e: &mut [f64],
+    (kf, y0): (usize, f64),
+    ys: &[f64],
+    mat: &[f64],
+    offs: &[usize],
+    (gamma, ebound): (f64, Option<f64>),
+    flagged: &mut Vec<usize>,
+) {
+    let n = d.len();
+    let full = n - n % BLOCK;
+    let ay0 = y0.abs();
+    // d_i < γ E is necessary for d_i − γ e_i < 0.
+    let open = ebound.map(|b| gamma * b);
+    for lo in (0..full).step_by(BLOCK) {
+        let mut db = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            db[t] = p - y0;
+        }
+        for (&y, &o) in ys.iter().zip(offs) {
+            let f = &mat[o + lo..o + lo + BLOCK];
+            for t in 0..BLOCK {
+                db[t] -= y * f[t];
+            }
+        }
+        d[lo..lo + BLOCK].copy_from_slice(&db);
+        if let Some(open) = open {
+            let mut candidate = false;
+            for t in 0..BLOCK {
+                candidate |= db[t] < open;
+            }
+            if !candidate {
+                continue;
+            }
+        }
+        let mut eb = [0.0; BLOCK];
+        for t in 0..BLOCK {
+            let p = if lo + t < kf { 1.0 } else { 0.0 };
+            eb[t] = p + ay0;
+        }
+        for (&y, &o) in ys.iter().zip(offs) {
+            let f = &mat[o + lo..o + lo + BLOCK];
+            for t in 0..BLOCK {
+                eb[t] += (y * f[t]).abs();
+            }
+        }
+        let mut hit = false;
+        for t in 0..BLOCK {
+            hit |= db[t] - gamma * eb[t] < 0.0;
+        }
+        e[lo..lo + BLOCK].copy_from_slice(&eb);
+        if hit {
+            flagged.push(lo);
+        }
+    }
+    reduced_costs_tail(d, e, (kf, y0), ys, mat, offs, gamma, flagged);
 }
 
 #[cfg(target_arch = "x86_64")]
