@@ -245,6 +245,8 @@ pub struct FastSolver {
     fine: ColumnTable,
     coarse: ColumnTable,
     coarse_idx: Vec<usize>,
+    /// For grid index i: its position in `coarse`, or u32::MAX when it is not a coarse point.
+    coarse_pos: Vec<u32>,
     ls_sup: Vec<usize>,
     ls_a: Vec<f64>,
     ls_q: Vec<f64>,
@@ -333,6 +335,7 @@ impl FastSolver {
             fine,
             coarse: ColumnTable::default(),
             coarse_idx: Vec::new(),
+            coarse_pos: vec![u32::MAX; n],
             ls_sup: vec![0; r],
             ls_a: vec![0.0; r * r],
             ls_q: vec![0.0; r * r],
@@ -424,6 +427,10 @@ impl FastSolver {
         self.coarse_idx = (0..n).step_by(self.stride).collect();
         if self.coarse_idx.last() != Some(&(n - 1)) {
             self.coarse_idx.push(n - 1);
+        }
+        self.coarse_pos.iter_mut().for_each(|v| *v = u32::MAX);
+        for (c, &i) in self.coarse_idx.iter().enumerate() {
+            self.coarse_pos[i] = c as u32;
         }
         let (fine, idx) = (&self.fine, &self.coarse_idx);
         self.coarse = ColumnTable::new(self.r, idx.len(), |k, j| fine.entry(k, idx[j]));

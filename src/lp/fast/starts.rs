@@ -279,17 +279,11 @@ impl FastSolver {
         let mut chosen = 0usize;
         while chosen < limit.min(r) {
             // The last of the largest norms ≥ 1e-10 (chosen points have norm −∞ and keep it
-            // through the downdates): a vectorised maximum, then its position.
-            let top = self
-                .hint_nrm
-                .iter()
-                .fold(f64::NEG_INFINITY, |a, &v| a.max(v));
-            if top.is_nan() || top < 1e-10 {
+            // through the downdates).
+            let (top, best) = last_max(&self.hint_nrm);
+            if top < 1e-10 {
                 break;
             }
-            let Some(best) = self.hint_nrm.iter().rposition(|&v| v == top) else {
-                break;
-            };
             let i = self.hint[best].0;
             let v = &mut self.hint_v;
             v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
@@ -451,6 +445,71 @@ impl FastSolver {
             (num, l)
         } else {
             (num / den, l)
+        }
+    }
+}
+
+/// The largest value of `v` (NaN never counts) and the last index holding it; (−∞, 0) when
+/// there is none. Eight independent lanes, so the comparisons vectorise.
+fn last_max(v: &[f64]) -> (f64, usize) {
+    const L: usize = 8;
+    let mut bv = [f64::NEG_INFINITY; L];
+    let mut bi = [0usize; L];
+    let chunks = v.len() / L;
+    for c in 0..chunks {
+        let ch = &v[c * L..c * L + L];
+        for l in 0..L {
+            // `>=`: a later index wins among equals.
+            if ch[l] >= bv[l] {
+                bv[l] = ch[l];
+                bi[l] = c * L + l;
+            }
+        }
+    }
+    for (i, &x) in v.iter().enumerate().skip(chunks * L) {
+        let l = i % L;
+        if x >= bv[l] {
+            bv[l] = x;
+            bi[l] = i;
+        }
+    }
+    let mut best = (f64::NEG_INFINITY, 0usize);
+    for l in 0..L {
+        if bv[l] > best.0 || (bv[l] == best.0 && bi[l] > best.1) {
+            best = (bv[l], bi[l]);
+        }
+    }
+    best
+}
+
+#[cfg(test)]
+mod tests {
+    use super::last_max;
+    use rand::{Rng, SeedableRng};
+
+    /// Against the definition (fold then rposition) on random vectors with ties, −∞ and NaN.
+    #[test]
+    fn last_max_is_the_last_of_the_largest() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..3000 {
+            let len = rng.gen_range(0..40);
+            let v: Vec<f64> = (0..len)
+                .map(|_| match rng.gen_range(0..10) {
+                    0 => f64::NEG_INFINITY,
+                    1 => f64::NAN,
+                    2..=4 => rng.gen_range(0..3) as f64,
+                    _ => rng.gen_range(-1.0..1.0),
+                })
+                .collect();
+            let top = v
+                .iter()
+                .filter(|x| !x.is_nan())
+                .fold(f64::NEG_INFINITY, |a, &x| a.max(x));
+            let (got, at) = last_max(&v);
+            assert_eq!(got, top, "{v:?}");
+            if top > f64::NEG_INFINITY {
+                assert_eq!(Some(at), v.iter().rposition(|&x| x == top), "{v:?}");
+            }
         }
     }
 }
