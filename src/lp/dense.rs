@@ -79,6 +79,25 @@ pub fn pow2(e: i32) -> f64 {
     f64::from_bits(((1023 + e) as u64) << 52)
 }
 
+/// `f::<R>(r, args)` with R = r for r ≤ 9 (loops unrolled at compile time), else `f::<0>`
+/// (any r): the same operations in the same order either way.
+macro_rules! by_size {
+    ($r:expr, $f:ident, $($arg:expr),*) => {
+        match $r {
+            1 => $f::<1>(1, $($arg),*),
+            2 => $f::<2>(2, $($arg),*),
+            3 => $f::<3>(3, $($arg),*),
+            4 => $f::<4>(4, $($arg),*),
+            5 => $f::<5>(5, $($arg),*),
+            6 => $f::<6>(6, $($arg),*),
+            7 => $f::<7>(7, $($arg),*),
+            8 => $f::<8>(8, $($arg),*),
+            9 => $f::<9>(9, $($arg),*),
+            r => $f::<0>(r, $($arg),*),
+        }
+    };
+}
+
 /// LU factorisation P A = L U of a row-major r × r matrix with partial pivoting.
 #[derive(Clone, Debug, Default)]
 pub struct Lu {
@@ -138,46 +157,58 @@ impl Lu {
 
     /// Solve A x = b in place (x holds b on entry).
     pub fn solve(&self, x: &mut [f64]) {
-        let (r, lu) = (self.r, &self.lu);
-        let mut y = [0.0f64; 32];
-        for i in 0..r {
-            y[i] = x[self.perm[i]];
-        }
-        for i in 0..r {
-            for c in 0..i {
-                y[i] -= lu[i * r + c] * y[c];
-            }
-        }
-        for i in (0..r).rev() {
-            for c in i + 1..r {
-                y[i] -= lu[i * r + c] * y[c];
-            }
-            y[i] /= lu[i * r + i];
-        }
-        x[..r].copy_from_slice(&y[..r]);
+        by_size!(self.r, lu_solve, &self.lu, &self.perm, x)
     }
 
     /// Solve Aᵀ x = b in place (x holds b on entry).
     pub fn solve_t(&self, x: &mut [f64]) {
-        let (r, lu) = (self.r, &self.lu);
-        let mut y = [0.0f64; 32];
-        y[..r].copy_from_slice(&x[..r]);
-        // Uᵀ z = b
-        for i in 0..r {
-            for c in 0..i {
-                y[i] -= lu[c * r + i] * y[c];
-            }
-            y[i] /= lu[i * r + i];
+        by_size!(self.r, lu_solve_t, &self.lu, &self.perm, x)
+    }
+}
+
+/// L U y = P b by forward then back substitution, in place in x (R = r, or 0 for any r).
+#[inline(always)]
+fn lu_solve<const R: usize>(r: usize, lu: &[f64], perm: &[usize], x: &mut [f64]) {
+    let r = if R > 0 { R } else { r };
+    let (lu, perm) = (&lu[..r * r], &perm[..r]);
+    let mut y = [0.0f64; 32];
+    for i in 0..r {
+        y[i] = x[perm[i]];
+    }
+    for i in 0..r {
+        for c in 0..i {
+            y[i] -= lu[i * r + c] * y[c];
         }
-        // Lᵀ w = z
-        for i in (0..r).rev() {
-            for c in i + 1..r {
-                y[i] -= lu[c * r + i] * y[c];
-            }
+    }
+    for i in (0..r).rev() {
+        for c in i + 1..r {
+            y[i] -= lu[i * r + c] * y[c];
         }
-        for i in 0..r {
-            x[self.perm[i]] = y[i];
+        y[i] /= lu[i * r + i];
+    }
+    x[..r].copy_from_slice(&y[..r]);
+}
+
+/// (P⁻¹ L U)ᵀ x = b: Uᵀ z = b, Lᵀ w = z, x = Pᵀ w, in place (R = r, or 0 for any r).
+#[inline(always)]
+fn lu_solve_t<const R: usize>(r: usize, lu: &[f64], perm: &[usize], x: &mut [f64]) {
+    let r = if R > 0 { R } else { r };
+    let (lu, perm) = (&lu[..r * r], &perm[..r]);
+    let mut y = [0.0f64; 32];
+    y[..r].copy_from_slice(&x[..r]);
+    for i in 0..r {
+        for c in 0..i {
+            y[i] -= lu[c * r + i] * y[c];
         }
+        y[i] /= lu[i * r + i];
+    }
+    for i in (0..r).rev() {
+        for c in i + 1..r {
+            y[i] -= lu[c * r + i] * y[c];
+        }
+    }
+    for i in 0..r {
+        x[perm[i]] = y[i];
     }
 }
 

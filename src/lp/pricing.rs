@@ -331,7 +331,8 @@ impl ColumnTable {
     }
 
     /// [`Self::scan`] for R rows with AVX-512: one register of eight columns per block, the
-    /// running minimum and its column index kept per lane.
+    /// running minimum and its column index kept per lane, in two accumulators (even and odd
+    /// blocks of a range) so that the min/compare chains of consecutive blocks overlap.
     ///
     /// # Safety
     /// The CPU must support AVX-512F; every range within `self.blocks()`, `y.len() ≥ R = self.r`.
@@ -355,27 +356,47 @@ impl ColumnTable {
         let one = _mm512_set1_pd(1.0);
         let splitv = _mm512_set1_pd(split as f64);
         let iota = _mm512_setr_pd(0.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0);
-        let mut bv = _mm512_set1_pd(best.1);
-        let mut bi = _mm512_set1_pd(-1.0);
-        for &(blo, bhi) in ranges {
-            for b in blo..bhi {
-                let base = b * LANES;
-                // SAFETY (all loads): k < R = self.r rows of ld ≥ base + LANES columns, and pen
-                // has ld entries.
+        let (mut bv0, mut bi0) = (_mm512_set1_pd(best.1), _mm512_set1_pd(-1.0));
+        let (mut bv1, mut bi1) = (bv0, bi0);
+        // Block b into the accumulator (bv, bi): its reduced costs d = [j < split] − s + pen,
+        // computed as (pen − s) + [j < split] (the same rounding), a running per-lane minimum.
+        macro_rules! block {
+            ($b:expr, $bv:ident, $bi:ident) => {{
+                let base = $b * LANES;
+                // SAFETY (all loads): k < R = self.r rows of ld ≥ base + LANES columns, and
+                // pen has ld entries.
                 let mut s = _mm512_mul_pd(yv[0], _mm512_loadu_pd(data.add(base)));
                 for k in 1..R {
                     s = _mm512_fmadd_pd(yv[k], _mm512_loadu_pd(data.add(k * ld + base)), s);
                 }
-                // d = [j < split] − s + pen, as (pen − s) + [j < split] (the same rounding).
                 let idx = _mm512_add_pd(_mm512_set1_pd(base as f64), iota);
                 let below = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(idx, splitv);
                 let d = _mm512_sub_pd(_mm512_loadu_pd(pen.add(base)), s);
                 let d = _mm512_mask_add_pd(d, below, d, one);
-                let m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, bv);
-                bv = _mm512_min_pd(d, bv);
-                bi = _mm512_mask_blend_pd(m, bi, idx);
+                let m = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(d, $bv);
+                $bv = _mm512_min_pd(d, $bv);
+                $bi = _mm512_mask_blend_pd(m, $bi, idx);
+            }};
+        }
+        for &(blo, bhi) in ranges {
+            let mut b = blo;
+            while b + 1 < bhi {
+                block!(b, bv0, bi0);
+                block!(b + 1, bv1, bi1);
+                b += 2;
+            }
+            if b < bhi {
+                block!(b, bv0, bi0);
             }
         }
+        // Per lane, the lower value of the two accumulators, the lower index among equals
+        // (an accumulator still at best.1 has index −1 and a value no lower than the other's).
+        let lt = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(bv1, bv0);
+        let eq = _mm512_cmp_pd_mask::<_CMP_EQ_OQ>(bv1, bv0);
+        let lower_ix = _mm512_cmp_pd_mask::<_CMP_LT_OQ>(bi1, bi0);
+        let take = lt | (eq & lower_ix);
+        let bv = _mm512_mask_blend_pd(take, bv0, bv1);
+        let bi = _mm512_mask_blend_pd(take, bi0, bi1);
         // Lane reduction without data-dependent branches: the lowest value, then the lowest
         // index among the lanes holding it (lanes still at best.1 never improved).
         let minv = _mm512_reduce_min_pd(bv);
@@ -461,7 +482,12 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for trial in 0..3000 {
             let r = 1 + trial % 15;
-            let len = rng.gen_range(1..70);
+            // Mostly a few blocks; every fifth trial long ranges (both accumulators, odd ends).
+            let len = if trial % 5 == 0 {
+                rng.gen_range(70..400)
+            } else {
+                rng.gen_range(1..70)
+            };
             let cols: Vec<Vec<f64>> = (0..len)
                 .map(|_| (0..r).map(|_| rng.gen_range(-1.0..1.0)).collect())
                 .collect();

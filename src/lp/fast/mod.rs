@@ -262,6 +262,7 @@ pub struct FastSolver {
     /// The support's columns coordinate-major (see [`FastSolver::load_hint`]) and their
     /// projections (see [`FastSolver::choose_support`]).
     hint_a: Vec<f64>,
+    hint_stride: usize,
     hint_h: Vec<f64>,
     hint_v: Vec<f64>,
     hint_u: Vec<f64>,
@@ -351,6 +352,7 @@ impl FastSolver {
             hint: Vec::new(),
             hint_nrm: Vec::new(),
             hint_a: Vec::new(),
+            hint_stride: 0,
             hint_h: Vec::new(),
             hint_v: vec![0.0; r],
             hint_u: Vec::new(),

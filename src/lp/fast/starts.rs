@@ -226,39 +226,39 @@ impl FastSolver {
     }
 
     /// The start's positive atoms into `hint`, their squared column norms into `hint_nrm`,
-    /// and every atom superbasic in `hint_pos`; false for an invalid or empty start.
+    /// their columns coordinate-major into `hint_a` (`hint_a[c·stride + k] = a_{i_k}[c]`,
+    /// stride = the start's length, so one pass fills it), and every atom superbasic in
+    /// `hint_pos`; false for an invalid or empty start.
     fn load_hint(&mut self, start: &[(u32, f64)]) -> bool {
         let (n, r) = (self.n, self.r);
+        let stride = start.len();
         self.hint.clear();
+        self.hint_nrm.clear();
+        // Entries past each coordinate's s atoms are never read: no need to clear them.
+        if self.hint_a.len() < r * stride {
+            self.hint_a.resize(r * stride, 0.0);
+        }
         for &(i, w) in start {
             let i = i as usize;
             if i >= n || !w.is_finite() || w < 0.0 {
                 return false;
             }
             if w > 0.0 {
+                let k = self.hint.len();
+                let a = &self.rows[i * r..(i + 1) * r];
+                let mut nrm = 0.0;
+                for (c, &ac) in a.iter().enumerate() {
+                    self.hint_a[c * stride + k] = ac;
+                    nrm += ac * ac;
+                }
                 self.hint.push((i, w));
+                self.hint_nrm.push(nrm);
             }
         }
+        self.hint_stride = stride;
         let s = self.hint.len();
         if s == 0 {
             return false;
-        }
-        // The support's columns coordinate by coordinate (hint_a[c·s + k] = a_{i_k}[c]), so the
-        // norms and their downdates below run over the support points at once.
-        self.hint_a.clear();
-        for c in 0..r {
-            let rows = &self.rows;
-            self.hint_a
-                .extend(self.hint.iter().map(|&(i, _)| rows[i * r + c]));
-        }
-        self.hint_nrm.clear();
-        self.hint_nrm.resize(s, 0.0);
-        for c in 0..r {
-            let a = &self.hint_a[c * s..(c + 1) * s];
-            self.hint_nrm
-                .iter_mut()
-                .zip(a)
-                .for_each(|(v, a)| *v += a * a);
         }
         self.hint_u.clear();
         // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
@@ -304,8 +304,9 @@ impl FastSolver {
             let h = &mut self.hint_h;
             h.clear();
             h.resize(s, 0.0);
+            let st = self.hint_stride;
             for (c, &vc) in v.iter().enumerate() {
-                let a = &self.hint_a[c * s..(c + 1) * s];
+                let a = &self.hint_a[c * st..c * st + s];
                 h.iter_mut().zip(a).for_each(|(h, a)| *h += a * vc);
             }
             self.hint_nrm
