@@ -57,7 +57,13 @@ pub(crate) fn scan(
                 7 => $f::<7>(table, y, split, basis),
                 8 => $f::<8>(table, y, split, basis),
                 9 => $f::<9>(table, y, split, basis),
-                _ => scan_scalar(table, y, split, basis),
+                10 => $f::<10>(table, y, split, basis),
+                11 => $f::<11>(table, y, split, basis),
+                12 => $f::<12>(table, y, split, basis),
+                13 => $f::<13>(table, y, split, basis),
+                // More rows (m ≥ 13): the loop compiled with FMA (AVX-512 implies it,
+                // see Kernel::supported), not the scalar one, whose mul_add is a libm call.
+                _ => scan_fma(table, y, split, basis),
             }
         };
     }
@@ -296,7 +302,7 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         let mut found = 0;
         for trial in 0..3000 {
-            let r = 1 + trial % 12;
+            let r = 1 + trial % 15;
             let len = rng.gen_range(1..60);
             let cols: Vec<Vec<f64>> = (0..len)
                 .map(|_| (0..r).map(|_| rng.gen_range(-3.0..3.0)).collect())
