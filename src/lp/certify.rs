@@ -843,7 +843,8 @@ impl Certifier {
     fn dual(&mut self, basis: &[usize], kf: usize) {
         let r = self.rows.len();
         // Mᵀ ỹ = K p_B (M = B̃ K).
-        let colscale = self.colscale.clone();
+        // Taken out for the closure below (no copy) and put back at the end.
+        let colscale = std::mem::take(&mut self.colscale);
         let cost = |t: usize| (basis[t] < kf) as u8 as f64 * colscale[t];
         for t in 0..r {
             self.y[t] = cost(t);
@@ -872,6 +873,7 @@ impl Certifier {
             self.y[k] *= self.scale[self.rows[k]];
             self.ylo[k] *= self.scale[self.rows[k]];
         }
+        self.colscale = colscale;
     }
 
     /// (y·ρ, whether every ρ_k is rounding-level) with ρ_k = Σ_t x_t ā_{j_k}(z_{B_t}) − b̄_{j_k}
