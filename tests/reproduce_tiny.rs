@@ -39,7 +39,8 @@ fn all_numbers_finite(v: &serde_json::Value, path: &str, nulls: &mut Vec<String>
 fn tiny_reproduce_writes_a_complete_consistent_report() {
     let root = std::env::temp_dir().join(format!("momentlab-reproduce-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
-    let reports = root.join("reports");
+    // The default places (relative to the working directory), spelled out for the first run.
+    let reports = root.join("results/reports");
     let results = root.join("results");
     let out = Command::new(bin())
         .args(["reproduce", "--tiny", "--run", "t"])
@@ -139,17 +140,23 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     assert!((err - e2).abs() < 1e-12, "reproduce {err} vs evaluate {e2}");
     assert!(html.contains(&format!("{:.3} %", 100.0 * err)));
 
-    // Resumable: a second run reuses every artefact and gives the same numbers.
+    // Resumable: a second run, with the default folders, reuses every artefact and gives the
+    // same numbers; by default nothing goes to the tracked reports/ folder.
     let again = Command::new(bin())
         .args(["reproduce", "--tiny", "--run", "t"])
-        .arg("--reports")
-        .arg(&reports)
-        .arg("--results")
-        .arg(&results)
+        .current_dir(&root)
         .env("CI", "1")
         .output()
         .unwrap();
-    assert!(again.status.success());
+    assert!(
+        again.status.success(),
+        "{}",
+        String::from_utf8_lossy(&again.stderr)
+    );
+    assert!(
+        !root.join("reports").exists(),
+        "reproduce wrote to reports/"
+    );
     let h4b = std::fs::read_to_string(run.join("evaluate/hamburger4_f64.json")).unwrap();
     assert_eq!(serde_json::from_str::<serde_json::Value>(&h4b).unwrap(), h4);
     std::fs::remove_dir_all(&root).ok();

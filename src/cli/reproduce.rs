@@ -26,8 +26,9 @@ pub struct Args {
     /// (finite, ≥ 0).
     #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
     pub tolerance: f64,
-    /// Folder of reports.
-    #[arg(long, default_value = "reports")]
+    /// Folder of reports (the committed report is `--reports reports`; by default nothing
+    /// tracked is written).
+    #[arg(long, default_value = "results/reports")]
     pub reports: PathBuf,
     /// Folder of bulky results (stacks, sweep rows).
     #[arg(long, default_value = "results")]

@@ -35,7 +35,8 @@ pub struct Config {
     pub resolution: Option<usize>,
     /// Recommendation tolerance: absolute error above the best technique that is acceptable.
     pub tolerance: f64,
-    /// Folder of reports.
+    /// Folder of reports (default `results/reports`, untracked; the committed report is
+    /// `reports`).
     pub reports: PathBuf,
     /// Folder of bulky results (stacks, sweep rows).
     pub results: PathBuf,
@@ -52,7 +53,7 @@ impl Default for Config {
             preset: Preset::Default,
             resolution: None,
             tolerance: 0.002,
-            reports: "reports".into(),
+            reports: "results/reports".into(),
             results: "results".into(),
             skip_search: false,
             fresh: false,
