@@ -140,3 +140,48 @@ fn front_layer_of_tilted_lit_planes_is_lit_for_four_power_moments() {
         assert!(acne.error > 0.05, "plane ({a},{b}): {}", acne.error);
     }
 }
+
+/// `evaluate` with the fast LP gives the same bits on one thread and on two (each chunk of
+/// fragments starts from a cold solver, whatever ran before it on that thread).
+#[test]
+fn fast_lp_evaluation_is_the_same_on_any_number_of_threads() {
+    let mut r = rng(5);
+    let stacks = vec![
+        random_stack(&mut r, "a", 48, 40),
+        random_stack(&mut r, "b", 40, 48),
+    ];
+    let grid = Grid::uniform(1024).unwrap();
+    let basis = Catalog::embedded()
+        .basis(&["z", "z^2", "z^3", "z^4"])
+        .unwrap();
+    let cand = LpCandidate::new(basis, grid, "fast").unwrap();
+    let opts = EvalOptions {
+        keep_values: true,
+        ..Default::default()
+    };
+    let on = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let rep = pool
+            .install(|| metrics::evaluate(&stacks, &cand, &opts))
+            .unwrap();
+        let values: Vec<(usize, usize, u64)> = rep
+            .views
+            .iter()
+            .flat_map(|v| v.values.as_ref().unwrap().iter())
+            .map(|f| (f.texel, f.layer, f.g.to_bits()))
+            .collect();
+        values
+    };
+    let one = on(1);
+    assert!(
+        one.len() > 4 * 512,
+        "several chunks per view ({} fragments)",
+        one.len()
+    );
+    for _ in 0..3 {
+        assert_eq!(on(2), one);
+    }
+}

@@ -418,3 +418,68 @@ fn distribution_above_zf_is_its_own_optimum() {
     assert_eq!(checked, 240);
     assert!(agreed >= 200, "reference confirmed only {agreed}");
 }
+
+/// After `reset` a solver answers bit for bit as a new one (what `evaluate` relies on to give
+/// the same bits however its chunks are scheduled): random and kernel distributions, through
+/// `solve` (moments) and `solve_distribution`, on the power basis and a steep exponential one.
+#[test]
+fn reset_answers_as_a_new_solver() {
+    let mut rng = ChaCha8Rng::seed_from_u64(21);
+    let mut differs_without_reset = 0;
+    for (t, n) in [(0, 1024), (1, 256), (0, 4096)] {
+        let grid = Grid::uniform(n).unwrap();
+        let table = if t == 0 {
+            power_table(&grid, 4).unwrap()
+        } else {
+            GridTable::from_fn(&grid, 4, |z, out| {
+                out.copy_from_slice(&[(40.0 * z).exp(), z, z * z, (10.0 * (z - 0.5)).tanh()])
+            })
+            .unwrap()
+        };
+        let problems: Vec<(Vec<(u32, f64)>, f64)> = (0..400)
+            .map(|_| {
+                let d = random_distribution(&mut rng, &grid);
+                let zf = pick_zf(&mut rng, grid.points(), &d);
+                (d, zf)
+            })
+            .collect();
+        let (a, b) = problems.split_at(200);
+        for by_moments in [false, true] {
+            let solve = |s: &mut FastSolver, (d, zf): &(Vec<(u32, f64)>, f64)| {
+                if by_moments {
+                    let m = distribution_moments(&table, d).unwrap();
+                    s.solve(&m, *zf).unwrap()
+                } else {
+                    s.solve_distribution(d, *zf).unwrap()
+                }
+            };
+            let bits = |s: &Solution| {
+                let sup: Vec<(u64, u64)> = s
+                    .support
+                    .iter()
+                    .map(|&(z, w)| (z.to_bits(), w.to_bits()))
+                    .collect();
+                (s.status, s.g.to_bits(), sup)
+            };
+            let mut used = FastSolver::new(table.clone());
+            let mut warm = FastSolver::new(table.clone());
+            for p in a {
+                solve(&mut used, p);
+                solve(&mut warm, p);
+            }
+            MomentSolver::reset(&mut used);
+            let mut fresh = FastSolver::new(table.clone());
+            for (k, p) in b.iter().enumerate() {
+                let (u, f, w) = (
+                    solve(&mut used, p),
+                    solve(&mut fresh, p),
+                    solve(&mut warm, p),
+                );
+                assert_eq!(bits(&u), bits(&f), "table {t}, n = {n}, problem {k}");
+                differs_without_reset += (bits(&w) != bits(&f)) as usize;
+            }
+        }
+    }
+    // The warm state does change bits (else this test would show nothing).
+    assert!(differs_without_reset > 0);
+}

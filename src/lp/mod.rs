@@ -146,6 +146,11 @@ pub trait MomentSolver: Send {
 
     /// The table the solver works on.
     fn table(&self) -> &GridTable;
+
+    /// Forget any warm-start state: the answers that follow are bit for bit those of a new
+    /// solver on the same table (so work split into chunks gives the same bits however the
+    /// chunks are scheduled). Stateless solvers: nothing to do.
+    fn reset(&mut self) {}
 }
 
 /// The solver of the given name on `table`: "reference" or "fast" ("fast-strict", the name

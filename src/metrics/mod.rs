@@ -625,6 +625,11 @@ pub fn evaluate_subject(
                     )
                 },
                 |(ev, buf), chunk| {
+                    // Each chunk from a cold solver: the bits do not depend on which thread
+                    // ran which chunks before.
+                    if let Some(e) = ev.as_mut() {
+                        e.reset();
+                    }
                     let mut p = Partial::default();
                     let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
                     for f in chunk {
@@ -776,6 +781,9 @@ pub fn front_shadows(
                 )
             },
             |(ev, buf), chunk| {
+                if let Some(e) = ev.as_mut() {
+                    e.reset();
+                }
                 chunk
                     .iter()
                     .map(|f| shader.shade(ev, buf, f).0)

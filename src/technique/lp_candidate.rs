@@ -95,6 +95,11 @@ impl Evaluator for LpEvaluator {
     fn unsettled(&self) -> usize {
         self.unsettled
     }
+    fn reset(&mut self) {
+        if let Some(s) = self.solver.as_mut() {
+            s.reset();
+        }
+    }
 }
 
 impl Technique for LpCandidate {

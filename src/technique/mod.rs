@@ -40,6 +40,9 @@ pub trait Evaluator {
     fn unsettled(&self) -> usize {
         0
     }
+    /// Forget warm-start state (the next answers are those of a new evaluator, the counters
+    /// stay). Closed forms: nothing to do.
+    fn reset(&mut self) {}
 }
 
 /// Closed-form techniques: a pure function of (b, z_f).

@@ -486,6 +486,10 @@ impl MomentSolver for FastSolver {
         &self.table
     }
 
+    fn reset(&mut self) {
+        FastSolver::reset(self)
+    }
+
     /// Moments in the orthonormalised coordinates straight from the distribution,
     /// c = Σ w_i a_i / Σ w_i (no cancellation however badly scaled the functions are), and the
     /// distribution itself as the phase-1-free start (see [`FastSolver::crossover`]).
