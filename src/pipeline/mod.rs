@@ -4,7 +4,7 @@
 //! ```text
 //! 1 stacks      render (or read back) the depth stacks          results/<run>/stacks/
 //! 2 techniques  every technique against PCF on the same fragments, speed, pictures
-//!                                                               reports/<run>/evaluate/, pictures/
+//!                                                               <reports>/<run>/evaluate/, pictures/
 //! 3 grid        LP grid refinement per scene                    grid_refinement.{json,svg}
 //! 4 sweep       candidate sweeps (racing)                       results/<run>/search-m<m>/, search/
 //! 5 theta       optimal quantization transforms θ               theta/
@@ -14,7 +14,8 @@
 //! 9 report      index.html + report.md
 //! ```
 //!
-//! `momentlab reproduce` is a thin caller of [`run`].
+//! `<reports>` is `results/reports` by default (untracked); the committed report is the run
+//! with `reports`. `momentlab reproduce` is a thin caller of [`run`].
 
 pub mod config;
 pub mod grid;
