@@ -348,13 +348,31 @@ pub enum Subject<'a> {
     Cdf,
 }
 
-impl Subject<'_> {
+impl<'a> Subject<'a> {
     pub fn name(&self) -> String {
         match self {
             Subject::Technique(t) => t.name(),
             Subject::Pcf => "pcf".to_string(),
             Subject::Cdf => "cdf".to_string(),
         }
+    }
+
+    /// One thread's state for the chunk loops: the technique's evaluator (None for PCF and
+    /// the CDF) and a buffer of m moments.
+    fn chunk_state(self, m: usize) -> (Option<Box<dyn Evaluator + 'a>>, Vec<f64>) {
+        let ev = match self {
+            Subject::Technique(t) => Some(t.evaluator()),
+            Subject::Pcf | Subject::Cdf => None,
+        };
+        (ev, vec![0.0; m])
+    }
+}
+
+/// Start a chunk from a cold evaluator, so that its bits do not depend on which chunks its
+/// thread ran before.
+fn cold(ev: &mut Option<Box<dyn Evaluator + '_>>) {
+    if let Some(e) = ev.as_mut() {
+        e.reset();
     }
 }
 
@@ -615,21 +633,9 @@ pub fn evaluate_subject(
         let partials: Vec<Partial> = frags
             .par_chunks(512)
             .map_init(
-                || {
-                    (
-                        match subject {
-                            Subject::Technique(t) => Some(t.evaluator()),
-                            Subject::Pcf | Subject::Cdf => None,
-                        },
-                        vec![0.0; m],
-                    )
-                },
+                || subject.chunk_state(m),
                 |(ev, buf), chunk| {
-                    // Each chunk from a cold solver: the bits do not depend on which thread
-                    // ran which chunks before.
-                    if let Some(e) = ev.as_mut() {
-                        e.reset();
-                    }
+                    cold(ev);
                     let mut p = Partial::default();
                     let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
                     for f in chunk {
@@ -771,19 +777,9 @@ pub fn front_shadows(
     let gs: Vec<f64> = frags
         .par_chunks(512)
         .map_init(
-            || {
-                (
-                    match subject {
-                        Subject::Technique(t) => Some(t.evaluator()),
-                        Subject::Pcf | Subject::Cdf => None,
-                    },
-                    vec![0.0; m],
-                )
-            },
+            || subject.chunk_state(m),
             |(ev, buf), chunk| {
-                if let Some(e) = ev.as_mut() {
-                    e.reset();
-                }
+                cold(ev);
                 chunk
                     .iter()
                     .map(|f| shader.shade(ev, buf, f).0)
