@@ -177,8 +177,6 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
     let out_q = f.p("q");
     let theta_dir = format!("{}/reports/theta", env!("CARGO_MANIFEST_DIR"));
     let big = "18446744073709551615";
-    let shadow_zf_neg = shadow_batch("[0.5, 0.3, 0.2, 0.1]", "-3");
-    let shadow_zf_7 = shadow_batch("[0.5, 0.3, 0.2, 0.1]", "7");
     let shadow_huge = shadow_batch("[1e308, 0.3, 0.2, 0.1]", "0.5");
     let shadow_nan = shadow_batch("[0.5, 0.3, 0.2]", "0.5");
     // (arguments, stdin, expected exit code, expected part of the one-line error)
@@ -277,18 +275,6 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             None,
             1,
             "0 fragments",
-        ),
-        (
-            args(&["shadow"]),
-            Some(shadow_zf_neg),
-            1,
-            "zf = -3 is outside [0,1]",
-        ),
-        (
-            args(&["shadow", "-"]),
-            Some(shadow_zf_7),
-            1,
-            "zf = 7 is outside [0,1]",
         ),
         (
             args(&["shadow"]),

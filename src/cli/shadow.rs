@@ -1,19 +1,42 @@
 //! `momentlab shadow [FILE]`: closed-form shadow intensities for a JSON batch (stdin if no
 //! file). Input: {"technique": "hamburger4", "alpha": 3e-5, "precision": "f32",
 //! "problems": [{"moments": [b1, …], "zf": 0.4}, …]} plus optional technique parameters (the
-//! fields of `technique::registry::Params`). Output: {"results": [{"g": 0.31}, …]}.
+//! fields of `technique::registry::Params`). Output: {"results": [{"g": 0.31}, …]}. Any finite
+//! z_f is answered ([`crate::technique::DepthDomain`]).
 
 use crate::technique::registry::{build, Params};
 use anyhow::{anyhow, bail, Context, Result};
 use serde_json::{Map, Value};
 
+/// The input and output format, shown by `momentlab shadow --help`.
+pub const SCHEMA_HELP: &str = r#"Input (JSON object; stdin when FILE is omitted or `-`):
+  technique   string, required: vsm, esm, evsm, csm, hamburger, hamburger4, hausdorff4,
+              hamburger6, tmsm, or "lp:f1,f2,…" (catalog names or formulas)
+  problems    array, required: {"moments": [b1, …, bm], "zf": z_f}
+              moments: the filtered moments b = E[b(Z)] of the technique's basis (m values,
+              each within the range of its basis function over [0,1])
+              zf: any finite receiver depth. Hamburger MSM (hamburger, hamburger4,
+              hamburger6), vsm, esm and evsm evaluate their formula at z_f; techniques on
+              [0,1] (hausdorff4, tmsm, csm, lp:…) answer G = 0 for z_f < 0 and
+              G = F_Z(1) = 1 for z_f > 1 (the sharp bound over distributions on [0,1]).
+  optional technique parameters (docs/techniques.md): alpha, b_star, bias ("standard" |
+  "clamped"), quant_bits (32 | 16), precision ("f64" | "f32"), moment_count (hamburger;
+  default: the first problem's), esm_c, evsm_c_pos, evsm_c_neg, csm_terms, min_variance
+
+Output (one line of JSON on stdout): {"results": [{"g": G}, …]}, one per problem in order;
+G in [0,1] is the shadow intensity (0 = lit), null when not finite.
+
+Example:
+  echo '{"technique":"hamburger4","alpha":3e-5,"precision":"f32",
+         "problems":[{"moments":[0.5,0.25,0.125,0.0625],"zf":0.6},
+                     {"moments":[0.5,0.25,0.125,0.0625],"zf":-0.002}]}' | momentlab shadow
+  {"results":[{"g":0.9992789030075073},{"g":0.0}]}"#;
+
 #[derive(clap::Args, Debug)]
+#[command(after_long_help = SCHEMA_HELP)]
 pub struct Args {
-    /// Input JSON file (stdin when omitted or `-`).
+    /// Input JSON file (stdin when omitted or `-`); the format is under --help.
     pub file: Option<std::path::PathBuf>,
-    /// Print JSON (the only output format of this command; accepted for uniformity).
-    #[arg(long)]
-    pub json: bool,
 }
 
 #[derive(serde::Deserialize)]
@@ -58,6 +81,7 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
     .with_context(|| src.to_string())?;
     let m = t.moment_count();
     let range = moment_box(t.as_ref());
+    let domain = t.depth_domain();
     let mut ev = t.evaluator();
     let mut results = Vec::with_capacity(problems.len());
     for (i, p) in problems.iter().enumerate() {
@@ -70,8 +94,8 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
         if let Some(j) = p.moments.iter().position(|x| !x.is_finite()) {
             bail!("{src}: problem {i}: moment {} is not finite", j + 1);
         }
-        if !(0.0..=1.0).contains(&p.zf) {
-            bail!("{src}: problem {i}: zf = {} is outside [0,1]", p.zf);
+        if !p.zf.is_finite() {
+            bail!("{src}: problem {i}: zf = {} is not finite", p.zf);
         }
         if let Some(j) = (0..m).find(|&j| !(range[j].0..=range[j].1).contains(&p.moments[j])) {
             bail!(
@@ -83,7 +107,7 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
                 range[j].1
             );
         }
-        let g = ev.shadow(&p.moments, p.zf);
+        let g = domain.shadow(ev.as_mut(), &p.moments, p.zf);
         results.push(
             serde_json::json!({ "g": if g.is_finite() { Value::from(g) } else { Value::Null } }),
         );

@@ -7,7 +7,7 @@
 
 use super::linalg::{bias, Precision, Real};
 use super::vsm::vsm;
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
 
 /// Default positive exponent c₊.
 pub const DEFAULT_C_POS: f64 = 40.0;
@@ -82,5 +82,8 @@ impl Technique for Evsm {
     }
     fn evaluator(&self) -> Box<dyn Evaluator + '_> {
         Box::new(Stateless(self))
+    }
+    fn depth_domain(&self) -> DepthDomain {
+        DepthDomain::Real
     }
 }

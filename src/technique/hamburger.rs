@@ -10,7 +10,7 @@
 
 use super::hamburger4::power_basis;
 use super::linalg::{bias, ldlt_solve, pivot_tol, real_roots, weight_sum, Precision, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
 
 /// Algorithm 2 for already biased moments b' (length m, even), unclamped G and the support
 /// (z_f first, then the roots ascending).
@@ -125,5 +125,8 @@ impl Technique for Hamburger {
     }
     fn evaluator(&self) -> Box<dyn Evaluator + '_> {
         Box::new(Stateless(self))
+    }
+    fn depth_domain(&self) -> DepthDomain {
+        DepthDomain::Real
     }
 }

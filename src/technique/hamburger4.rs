@@ -7,7 +7,7 @@
 //! else 1 − w₁ = 1 − (z₂ z₃ − b'₁(z₂ + z₃) + b'₂) / ((z_f − z₂)(z_f − z₃)).
 
 use super::linalg::{above, bias, pivot_tol, quadratic_roots, Precision, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
 
 /// Relative floor of the last LDLᵀ pivot D33, in units of ε² of the arithmetic type:
 /// singular B (two Diracs, Proposition 4) then yields a huge but finite c whose direction is
@@ -155,6 +155,9 @@ impl Technique for Hamburger4 {
     }
     fn evaluator(&self) -> Box<dyn Evaluator + '_> {
         Box::new(Stateless(self))
+    }
+    fn depth_domain(&self) -> DepthDomain {
+        DepthDomain::Real
     }
 }
 

@@ -9,7 +9,7 @@
 use super::hamburger::msm_hamburger;
 use super::hamburger4::power_basis;
 use super::linalg::{bias, cubic_roots, ldlt_solve, pivot_tol, weight_sum, Precision, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
 
 /// b* = (½, …, ½): Z* = ½(δ₀ + δ₁).
 pub const B_STAR_STANDARD: [f64; 6] = [0.5; 6];
@@ -105,5 +105,8 @@ impl Technique for Hamburger6 {
     }
     fn evaluator(&self) -> Box<dyn Evaluator + '_> {
         Box::new(Stateless(self))
+    }
+    fn depth_domain(&self) -> DepthDomain {
+        DepthDomain::Real
     }
 }

@@ -29,6 +29,37 @@ pub trait Technique: Send + Sync {
     /// A per-thread evaluator. Closed-form techniques return a stateless wrapper
     /// ([`Stateless`]); LP candidates keep warm-start state in theirs.
     fn evaluator(&self) -> Box<dyn Evaluator + '_>;
+    /// The receiver depths z_f on which the technique's formula is defined (see
+    /// [`DepthDomain`]). Default: [0,1].
+    fn depth_domain(&self) -> DepthDomain {
+        DepthDomain::UnitInterval
+    }
+}
+
+/// The receiver depths z_f a technique's formula is defined on. Engines pass biased depths
+/// z − ε that can leave [0,1] near the light or the far plane; [`DepthDomain::shadow`] answers
+/// every finite z_f.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum DepthDomain {
+    /// Every real z_f: Hamburger MSM (sharp bound over distributions on ℝ, Peters & Klein 2015,
+    /// Section 3), VSM (Chebyshev–Cantelli), ESM and EVSM (exponential warps of any depth).
+    Real,
+    /// z_f in [0,1]: Hausdorff MSM, TMSM, CSM and LP candidates bound P(Z < z_f) over depth
+    /// distributions on [0,1]. Outside, the sharp bound extends exactly: G = 0 for z_f < 0
+    /// (no mass below 0) and G = F_Z(1) = 1 for z_f > 1 (all mass below z_f).
+    UnitInterval,
+}
+
+impl DepthDomain {
+    /// G(b, z_f) for any finite z_f: the evaluator's answer inside the domain; for
+    /// [`DepthDomain::UnitInterval`] 0 below 0 and 1 above 1 without calling it.
+    pub fn shadow(self, ev: &mut (impl Evaluator + ?Sized), moments: &[f64], zf: f64) -> f64 {
+        match self {
+            DepthDomain::UnitInterval if zf < 0.0 => 0.0,
+            DepthDomain::UnitInterval if zf > 1.0 => 1.0,
+            _ => ev.shadow(moments, zf),
+        }
+    }
 }
 
 /// Evaluates shadow intensities; may keep state between calls (LP warm start).
