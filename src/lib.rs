@@ -18,6 +18,7 @@
 //! * [`metrics`]: error of a technique against PCF over all fragments of all layers.
 //! * [`quantize`]: optimal affine quantization transforms θ.
 //! * [`search`]: the candidate sweep (racing, shards, resumable).
+//! * [`shader`]: straight-line f32 shader functions printed as GLSL/HLSL and interpreted in f32.
 //! * [`report`]: plots and HTML/Markdown reports, the stability study's files.
 //! * [`pipeline`]: the whole study (typed configuration, resumable steps) behind
 //!   `momentlab reproduce`.
@@ -38,6 +39,7 @@ pub mod quantize;
 pub mod render;
 pub mod report;
 pub mod search;
+pub mod shader;
 pub mod stack;
 pub mod technique;
 

@@ -1,0 +1,109 @@
+//! f32 interpreter of a [`Func`]: every statement in order, each operation rounded to f32
+//! (IEEE add/sub/mul/div/sqrt are exact roundings, as in a shader with `precise`; Rust never
+//! contracts a·b + c into an FMA). Transcendentals (cos, sin, acos, atan2, exp, log) use the
+//! Rust f32 functions; GPUs implement them to a few ulp, so only they can differ.
+
+use super::ir::{Cmp, Func, Node, Op};
+use anyhow::{bail, Result};
+
+impl Func {
+    /// Run the function on flattened inputs (parameters in order); returns the flattened
+    /// outputs (return value first, then the out parameters in order).
+    pub fn eval(&self, inputs: &[f32]) -> Result<Vec<f32>> {
+        let mut scratch = Vec::new();
+        let mut out = vec![0.0; self.n_outputs()];
+        self.eval_into(inputs, &mut scratch, &mut out)?;
+        Ok(out)
+    }
+
+    /// As [`Func::eval`], reusing `scratch` and writing into `out` (length n_outputs).
+    pub fn eval_into(&self, inputs: &[f32], scratch: &mut Vec<f32>, out: &mut [f32]) -> Result<()> {
+        if inputs.len() != self.n_inputs() {
+            bail!(
+                "{}: {} inputs given, the function takes {}",
+                self.name,
+                inputs.len(),
+                self.n_inputs()
+            );
+        }
+        if out.len() != self.n_outputs() {
+            bail!(
+                "{}: room for {} outputs, the function has {}",
+                self.name,
+                out.len(),
+                self.n_outputs()
+            );
+        }
+        let offsets: Vec<usize> = self
+            .inputs
+            .iter()
+            .scan(0, |acc, p| {
+                let o = *acc;
+                *acc += p.shape.len();
+                Some(o)
+            })
+            .collect();
+        scratch.clear();
+        scratch.reserve(self.nodes.len());
+        for (i, n) in self.nodes.iter().enumerate() {
+            let v = match n {
+                Node::Input(p, c) => inputs[offsets[*p] + c],
+                Node::Const(c) => *c,
+                Node::Op(op) => {
+                    if op.args().iter().any(|a| a.0 as usize >= i) {
+                        bail!("{}: statement {i} uses a later value", self.name);
+                    }
+                    apply(op, scratch)
+                }
+            };
+            scratch.push(v);
+        }
+        let vals = self
+            .ret
+            .iter()
+            .flat_map(|r| r.1.iter())
+            .chain(self.outs.iter().flat_map(|o| o.1.iter()));
+        for (o, v) in out.iter_mut().zip(vals) {
+            *o = *scratch
+                .get(v.0 as usize)
+                .ok_or_else(|| anyhow::anyhow!("{}: output value out of range", self.name))?;
+        }
+        Ok(())
+    }
+}
+
+fn apply(op: &Op, s: &[f32]) -> f32 {
+    let g = |v: &super::ir::V| s[v.0 as usize];
+    match op {
+        Op::Add(a, b) => g(a) + g(b),
+        Op::Sub(a, b) => g(a) - g(b),
+        Op::Mul(a, b) => g(a) * g(b),
+        Op::Div(a, b) => g(a) / g(b),
+        Op::Neg(a) => -g(a),
+        Op::Abs(a) => g(a).abs(),
+        Op::Sqrt(a) => g(a).sqrt(),
+        Op::Min(a, b) => g(a).min(g(b)),
+        Op::Max(a, b) => g(a).max(g(b)),
+        Op::Clamp(x, lo, hi) => g(x).max(g(lo)).min(g(hi)),
+        Op::Select(c, a, b, x, y) => {
+            let (a, b) = (g(a), g(b));
+            let t = match c {
+                Cmp::Lt => a < b,
+                Cmp::Le => a <= b,
+                Cmp::Gt => a > b,
+                Cmp::Ge => a >= b,
+            };
+            if t {
+                g(x)
+            } else {
+                g(y)
+            }
+        }
+        Op::Cos(a) => g(a).cos(),
+        Op::Sin(a) => g(a).sin(),
+        Op::Acos(a) => g(a).acos(),
+        Op::Atan2(y, x) => g(y).atan2(g(x)),
+        Op::Exp(a) => g(a).exp(),
+        Op::Log(a) => g(a).ln(),
+    }
+}
