@@ -1,45 +1,50 @@
-//! Artefact files: JSON written atomically (parent folders created, temporary file + rename, so
-//! a killed run never leaves a torn file) and JSON lines appended and flushed per batch. The one
-//! place where the pipeline, the sweep and the commands read and write their JSON.
+//! Artefact files, the one place where commands, the pipeline and the sweep read and write:
+//!
+//! * [`OutDir`] (module [`out`]): the one output writer — confined to its folder, refusing to
+//!   overwrite unless forced, atomic (temporary file, fsync, rename), one file per name and run,
+//!   and an advisory lock for folders that grow across runs (results);
+//! * [`input`]: the one bounded reader — every JSON or text input, with a named size [`Limit`],
+//!   regular files only;
+//! * JSON lines appended and flushed per batch (resumable sweeps) and read back with a torn
+//!   last line dropped.
+
+pub mod input;
+pub mod out;
+
+pub use input::{read_bytes, read_input, read_text, Limit};
+pub use out::{check_name, safe_name, DirLock, OutDir, LOCK_FILE};
 
 use anyhow::{Context, Result};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::fs;
-use std::io::Write;
 use std::path::Path;
 
-/// Write `value` as pretty JSON (with a final newline) to `path`, atomically.
+/// Write `value` as pretty JSON (with a final newline) to `path`, atomically, replacing an
+/// existing file: for the pipeline's own caches. Command outputs go through [`OutDir`].
 pub fn write_json<T: Serialize + ?Sized>(path: &Path, value: &T) -> Result<()> {
     write_text(path, &(serde_json::to_string_pretty(value)? + "\n"))
 }
 
-/// Write `text` to `path` atomically, creating the parent folders.
+/// Write `text` to `path` atomically, creating the parent folders and replacing an existing
+/// file (see [`write_json`]).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
-    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
-    }
-    let mut tmp = path.as_os_str().to_owned();
-    tmp.push(".tmp");
-    let tmp = std::path::PathBuf::from(tmp);
-    fs::write(&tmp, text).with_context(|| format!("writing {}", tmp.display()))?;
-    fs::rename(&tmp, path).with_context(|| format!("writing {}", path.display()))
+    let (dir, name) = OutDir::for_file(path, true)?;
+    dir.write_text(&name, text).map(|_| ())
 }
 
-/// Read a JSON file.
+/// Read a JSON file (bounded by [`Limit::ARTEFACT`]; regular files only).
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: invalid", path.display()))
+    input::read_json(path, Limit::ARTEFACT)
 }
 
-/// Read a JSON-lines file. A last line without '\n' is a torn write: it is ignored and, with
-/// `repair`, cut off the file. A missing file reads as empty.
+/// Read a JSON-lines file (bounded by [`Limit::ROWS`]). A last line without '\n' is a torn
+/// write: it is ignored and, with `repair`, cut off the file. A missing file reads as empty.
 pub fn read_jsonl<T: DeserializeOwned>(path: &Path, repair: bool) -> Result<Vec<T>> {
-    let text = match fs::read(path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(e).with_context(|| format!("reading {}", path.display())),
-    };
+    if fs::symlink_metadata(path).is_err() {
+        return Ok(Vec::new());
+    }
+    let text = read_bytes(path, Limit::ROWS)?;
     let keep = text.iter().rposition(|&c| c == b'\n').map_or(0, |p| p + 1);
     if keep < text.len() && repair {
         let f = fs::OpenOptions::new()
@@ -61,29 +66,18 @@ pub fn read_jsonl<T: DeserializeOwned>(path: &Path, repair: bool) -> Result<Vec<
         .collect()
 }
 
-/// Append rows (one JSON line each) and flush.
+/// Append rows (one JSON line each) to `path` and flush; never follows a symbolic link.
 pub fn append_jsonl<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
     if rows.is_empty() {
         return Ok(());
     }
-    let mut buf = Vec::new();
-    for r in rows {
-        serde_json::to_writer(&mut buf, r)?;
-        buf.push(b'\n');
-    }
-    let mut f = fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(path)
-        .with_context(|| format!("opening {}", path.display()))?;
-    f.write_all(&buf)
-        .and_then(|_| f.flush())
-        .with_context(|| format!("writing {}", path.display()))
+    out::append_jsonl_nofollow(path, rows)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::io::Write;
 
     #[test]
     fn torn_last_line_is_dropped_and_repaired() {
