@@ -79,9 +79,26 @@ window.__momentlabErrors = [];
     for (var i = 0; i < imgs.length; i++) {
       if (!(imgs[i].complete && imgs[i].naturalWidth > 0)) broken.push(imgs[i].getAttribute('src'));
     }
+    // Figures without a caption (an <img>/<svg> outside a <figure> with a <figcaption>, or a
+    // caption that is only a file name), <pre> blocks holding Markdown tables, provenance.
+    var uncaptioned = [];
+    var figs = document.querySelectorAll('img, svg');
+    for (var j = 0; j < figs.length; j++) {
+      var f = figs[j].closest('figure');
+      var c = f && f.querySelector('figcaption');
+      var t = c ? c.textContent.trim() : '';
+      if (!t || /^[\w.\/-]+\.(svg|png)$/.test(t)) uncaptioned.push(figs[j].getAttribute('src') || 'inline svg');
+    }
+    var mdpre = 0, pres = document.querySelectorAll('pre');
+    for (var k = 0; k < pres.length; k++) {
+      if (/^\s*\|.*\|\s*$/m.test(pres[k].textContent) && /\|\s*:?-{3,}/.test(pres[k].textContent)) mdpre++;
+    }
+    var text = document.body.innerText;
+    var provenance = ['git commit', 'command', 'CPU', 'threads', 'date (UTC)'].filter(function (w) { return text.indexOf(w) < 0; });
     var r = document.createElement('pre');
     r.id = 'momentlab-check';
-    r.textContent = JSON.stringify({ images: imgs.length, broken: broken, errors: errs });
+    r.textContent = JSON.stringify({ images: imgs.length, broken: broken, errors: errs,
+      uncaptioned: uncaptioned, markdown_pre: mdpre, provenance_missing: provenance });
     document.body.appendChild(r);
   });
 })();
@@ -175,6 +192,27 @@ fn report_loads_in_headless_chromium() {
     assert_eq!(v["images"].as_u64(), Some(img_tags as u64), "{v}");
     assert_eq!(v["broken"], serde_json::json!([]), "broken images: {v}");
     assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
+    assert_eq!(
+        v["uncaptioned"],
+        serde_json::json!([]),
+        "uncaptioned figures: {v}"
+    );
+    assert_eq!(
+        v["markdown_pre"],
+        serde_json::json!(0),
+        "Markdown in <pre>: {v}"
+    );
+    assert_eq!(
+        v["provenance_missing"],
+        serde_json::json!([]),
+        "provenance: {v}"
+    );
+    // Provenance on the first screen: before the first figure and the first section.
+    let prov = html.find("git commit").expect("no provenance");
+    assert!(prov < html.find("<figure").unwrap_or(usize::MAX));
+    assert!(prov < html.find("<h2>").unwrap_or(usize::MAX));
+    // Sub-reports are HTML: their tables are <table>s, not Markdown text.
+    assert!(!html.contains("|---"), "Markdown table text in the HTML");
 
     // Control: a missing image and a console error are caught.
     let control = run.join("index.control.html");
@@ -182,7 +220,8 @@ fn report_loads_in_headless_chromium() {
         &control,
         with_checker(
             &html,
-            "<img src=\"no-such-figure.svg\"><script>console.error('planted')</script>",
+            "<img src=\"no-such-figure.svg\"><pre>| a | b |\n|---|---|\n| 1 | 2 |</pre>\
+             <script>console.error('planted')</script>",
         ),
     )
     .unwrap();
@@ -192,6 +231,12 @@ fn report_loads_in_headless_chromium() {
         serde_json::json!(["no-such-figure.svg"]),
         "{c}"
     );
+    assert_eq!(
+        c["uncaptioned"],
+        serde_json::json!(["no-such-figure.svg"]),
+        "{c}"
+    );
+    assert_eq!(c["markdown_pre"], serde_json::json!(1), "{c}");
     let errs = c["errors"].to_string();
     assert!(
         errs.contains("no-such-figure.svg") && errs.contains("planted"),

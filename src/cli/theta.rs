@@ -174,7 +174,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
         return summary(dir);
     }
-    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let command = crate::report::provenance::command_line();
     let opts = options(&args)?;
     let curve = build_curve(args.moments, args.basis.as_deref())?;
     let m = curve.dim();
@@ -237,6 +237,7 @@ pub fn run(args: Args) -> Result<()> {
         "basin": basin,
         "lps_solved": out.lps,
         "command": command,
+        "commit": crate::report::provenance::COMMIT,
     });
     // canonical storage: every basis function rescaled from its own range to [0,1]
     let canonical: f64 = (0..m)

@@ -166,6 +166,16 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     doc.write(&p.out)?;
 
     let seconds = step.elapsed();
+    // The run's provenance and wall time (README's quick-start figures read it).
+    crate::artefact::write_json(
+        &p.out.join("run.json"),
+        &serde_json::json!({
+            "run": cfg.run,
+            "configuration": cfg.preset.name(),
+            "seconds": seconds,
+            "provenance": crate::report::provenance::Provenance::current(),
+        }),
+    )?;
     eprintln!("\nSummary ({seconds:.0} s):");
     for r in &recs {
         eprintln!(

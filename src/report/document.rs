@@ -16,6 +16,9 @@ pub enum Block {
     Figure(String, String),
     /// Preformatted text (commands, terminal output).
     Code(String),
+    /// Markdown text (a sub-report), rendered as HTML; its headings sit two levels below the
+    /// report's (`#` becomes `<h3>`).
+    Markdown(String),
 }
 
 /// A report: a title and a flat list of blocks.
@@ -61,6 +64,9 @@ impl Document {
     pub fn code(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Code(s.into()));
     }
+    pub fn markdown(&mut self, s: impl Into<String>) {
+        self.blocks.push(Block::Markdown(s.into()));
+    }
 
     /// The relative file names of all figures.
     pub fn figures(&self) -> Vec<&str> {
@@ -81,7 +87,8 @@ impl Document {
              <style>body{{font-family:sans-serif;max-width:1100px;margin:2em auto;padding:0 1em;line-height:1.45}}\
              table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}\
              th{{background:#eee}}td:first-child{{text-align:left}}img{{max-width:100%;border:1px solid #ddd}}\
-             figure{{margin:1.5em 0}}pre{{background:#f4f4f4;padding:.6em;overflow-x:auto}}</style></head><body>\n<h1>{}</h1>\n",
+             figure{{margin:1.5em 0}}figcaption{{color:#333;font-size:.95em;margin-top:.3em}}\
+             .provenance td{{text-align:left}}pre{{background:#f4f4f4;padding:.6em;overflow-x:auto}}</style></head><body>\n<h1>{}</h1>\n",
             esc(&self.title),
             esc(&self.title)
         );
@@ -96,6 +103,7 @@ impl Document {
                 Block::Code(s) => {
                     let _ = writeln!(h, "<pre>{}</pre>", esc(s));
                 }
+                Block::Markdown(s) => h.push_str(&markdown_to_html(s)),
                 Block::Figure(f, c) => {
                     let _ = writeln!(
                         h,
@@ -138,6 +146,9 @@ impl Document {
                 Block::Code(s) => {
                     let _ = writeln!(m, "```\n{s}\n```\n");
                 }
+                Block::Markdown(s) => {
+                    let _ = writeln!(m, "{}\n", demote_headings(s.trim()));
+                }
                 Block::Figure(f, c) => {
                     let _ = writeln!(m, "![{}]({f})\n\n*{c}*\n", md_cell(c));
                 }
@@ -168,14 +179,60 @@ impl Document {
     /// Write `index.html` and `report.md` into `dir` (which holds the figures).
     pub fn write(&self, dir: &Path) -> Result<()> {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        let html = dir.join("index.html");
-        std::fs::write(&html, self.to_html())
-            .with_context(|| format!("writing {}", html.display()))?;
-        let md = dir.join("report.md");
-        std::fs::write(&md, self.to_markdown())
-            .with_context(|| format!("writing {}", md.display()))?;
-        Ok(())
+        crate::artefact::write_text(&dir.join("index.html"), &self.to_html())?;
+        crate::artefact::write_text(&dir.join("report.md"), &self.to_markdown())
     }
+}
+
+/// A sub-report's Markdown as HTML (CommonMark with tables, by pulldown-cmark), headings two
+/// levels down so that they nest under the report's `<h2>` sections.
+pub fn markdown_to_html(md: &str) -> String {
+    use pulldown_cmark::{Event, HeadingLevel, Options, Parser, Tag, TagEnd};
+    fn down(l: HeadingLevel) -> HeadingLevel {
+        match l {
+            HeadingLevel::H1 => HeadingLevel::H3,
+            HeadingLevel::H2 => HeadingLevel::H4,
+            HeadingLevel::H3 => HeadingLevel::H5,
+            _ => HeadingLevel::H6,
+        }
+    }
+    let events = Parser::new_ext(md, Options::ENABLE_TABLES).map(|e| match e {
+        Event::Start(Tag::Heading {
+            level,
+            id,
+            classes,
+            attrs,
+        }) => Event::Start(Tag::Heading {
+            level: down(level),
+            id,
+            classes,
+            attrs,
+        }),
+        Event::End(TagEnd::Heading(level)) => Event::End(TagEnd::Heading(down(level))),
+        e => e,
+    });
+    let mut html = String::new();
+    pulldown_cmark::html::push_html(&mut html, events);
+    html
+}
+
+/// Markdown with every ATX heading two levels down (outside fenced code), as in
+/// [`markdown_to_html`].
+pub fn demote_headings(md: &str) -> String {
+    let mut fenced = false;
+    md.lines()
+        .map(|l| {
+            if l.trim_start().starts_with("```") {
+                fenced = !fenced;
+            }
+            if !fenced && l.starts_with('#') {
+                format!("##{l}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// Every `src="…"` / `href="…"` target in an HTML text (for checking a report's links).
@@ -215,5 +272,29 @@ mod tests {
         assert!(m.contains("| a | b\\|c |"));
         assert!(m.contains("![caption](fig.svg)"));
         assert_eq!(d.figures(), vec!["fig.svg"]);
+    }
+
+    #[test]
+    fn markdown_blocks_become_html_tables_and_nested_headings() {
+        let mut d = Document::new("r");
+        d.markdown("# Sweep\n\n| a | b |\n|---:|---|\n| 1 | x < y |\n\n## Part\n\ntext *em*\n");
+        let h = d.to_html();
+        assert!(h.contains("<h3>Sweep</h3>"), "{h}");
+        assert!(h.contains("<h4>Part</h4>"), "{h}");
+        assert!(
+            h.contains("<table>") && h.contains("<td>x &lt; y</td>"),
+            "{h}"
+        );
+        assert!(h.contains("<em>em</em>"), "{h}");
+        assert!(!h.contains("<pre>") && !h.contains("|---"), "{h}");
+        let m = d.to_markdown();
+        assert!(
+            m.contains("### Sweep\n") && m.contains("#### Part\n"),
+            "{m}"
+        );
+        assert_eq!(
+            demote_headings("```\n# x\n```\n# y"),
+            "```\n# x\n```\n### y"
+        );
     }
 }

@@ -4,5 +4,7 @@ pub mod chart;
 pub mod document;
 pub mod pareto;
 pub mod pictures;
+pub mod provenance;
+pub mod readme;
 pub mod recommend;
 pub mod stability;

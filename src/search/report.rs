@@ -62,6 +62,11 @@ pub fn paper_bases(grid: &crate::Grid) -> Result<FunctionTable> {
 }
 
 /// Column sets of [`paper_bases`]: polynomial and trigonometric bases with m functions.
+/// Display names of the columns of [`paper_bases`] (Fig. 3 legends).
+const FIG3_NAMES: [&str; 8] = [
+    "z", "z²", "z³", "z⁴", "sin 2πz", "cos 2πz", "sin 4πz", "cos 4πz",
+];
+
 pub fn poly_cols(m: usize) -> Vec<usize> {
     (0..m).collect()
 }
@@ -364,12 +369,14 @@ pub fn write(
     plot_fig3(&dir.join("fig3.svg"), &panels)?;
     let sampled = data.sampled_fraction();
     let mut md = format!(
-        "# Candidate sweep, m = {m}\n\nResults: `{}`. {} fragments, {} non-trivial; the sweep's dataset \
+        "# Candidate sweep, m = {m}\n\nWritten by {}.\n\nResults: `{}`. {} fragments, {} non-trivial; the sweep's dataset \
          holds {} of the non-trivial ones ({:.2} %, stratified by view and layer), trivial fragments \
          (G = 0 for every candidate) are counted exactly.\n\n![Fig. 4 analogue](fig4_m{m}.svg)\n\n\
          ## What the race resolved\n\n{}\n## The winner, the paper's bases and the closed forms\n\n{}\n\
-         ## Ranking\n\n{}\n## Tied for first\n\n{}\n## Top 20\n\n{}\n\
+         ## Ranking\n\n{}\n## Tied for first\n\n{}\n## Top 20\n\nCandidates scored on every fragment of the sample are ranked first; below them, \
+         unranked (–), the lowest estimates of candidates that left the race on fewer fragments.\n\n{}\n\
          ![error distributions](distributions.svg)\n\n![Fig. 3 analogue](fig3.svg)\n",
+        crate::report::provenance::Provenance::current().line(),
         opts.results_label,
         data.total_count(),
         data.nontrivial_population(),
@@ -760,11 +767,16 @@ pub fn fig3_panels(
         ] {
             let mut bounds = Vec::new();
             for m in 2..=4 {
-                let g = bound_curve(&table, &cols(m), dist, &idx, solver)?;
-                bounds.push((format!("m = {m}"), g));
+                let c = cols(m);
+                let g = bound_curve(&table, &c, dist, &idx, solver)?;
+                let names: Vec<&str> = c.iter().map(|&j| FIG3_NAMES[j]).collect();
+                bounds.push((format!("({})", names.join(", ")), g));
             }
             out.push(Fig3Panel {
-                title: format!("kernel {k}, {family}"),
+                title: format!(
+                    "{family} bases; a filter window with {} distinct depths",
+                    dist.len()
+                ),
                 z: z.clone(),
                 cdf: cdf.clone(),
                 bounds,
@@ -839,20 +851,30 @@ pub fn plot_fig3(path: &Path, panels: &[Fig3Panel]) -> Result<()> {
     Ok(())
 }
 
-/// Markdown table of the `count` best candidates.
+/// Markdown table of the `count` best candidates: the candidates scored on every fragment
+/// first, ranked by error; then, unranked ("–"), the lowest estimates of candidates that left
+/// the race on fewer fragments (an estimate on a sample is not a rank among finished scores).
 pub fn top_table(rows: &[Row], count: usize) -> String {
     let by_index: std::collections::HashMap<u64, &Row> =
         rows.iter().map(|r| (r.index, r)).collect();
     let mut s = String::from("| rank | index | functions | error (%) | ± s.e. (%) | fragments | race |\n|---:|---:|---|---:|---:|---:|---|\n");
-    for (k, r) in ranking(rows).iter().take(count).enumerate() {
+    let (full, partial): (Vec<Row>, Vec<Row>) = ranking(rows).into_iter().partition(|r| r.full);
+    let mut rank = 0;
+    for r in full.iter().chain(&partial).take(count) {
         let own = r
             .duplicate_of
             .and_then(|d| by_index.get(&d))
             .map_or(r, |x| *x);
+        let shown = if r.full {
+            rank += 1;
+            rank.to_string()
+        } else {
+            "–".to_string()
+        };
         let _ = writeln!(
             s,
             "| {} | {} | {} | {:.4} | {:.4} | {} | {}{} |",
-            k + 1,
+            shown,
             r.index,
             r.functions.join(", "),
             r.error.unwrap() * 100.0,
@@ -1219,6 +1241,21 @@ mod tests {
             full: true,
             ..Row::plain(index, vec![format!("f{index}")])
         }
+    }
+
+    #[test]
+    fn top_table_ranks_only_candidates_scored_on_every_fragment() {
+        // Candidate 7 left the race early with the lowest estimate: it is listed below the
+        // finished candidates without a rank, and rank 1 goes to the best finished one.
+        let mut early = row(7, Some(0.01), None);
+        early.full = false;
+        early.fragments = 3;
+        let rows = vec![row(0, Some(0.03), None), row(1, Some(0.02), None), early];
+        let t = top_table(&rows, 3);
+        let body: Vec<&str> = t.lines().skip(2).collect();
+        assert!(body[0].starts_with("| 1 | 1 | f1 |"), "{t}");
+        assert!(body[1].starts_with("| 2 | 0 | f0 |"), "{t}");
+        assert!(body[2].starts_with("| – | 7 | f7 |"), "{t}");
     }
 
     #[test]

@@ -1,0 +1,349 @@
+//! The figures of README.md, rendered from the committed artefacts under `reports/`.
+//!
+//! README holds marked blocks `<!-- generated:NAME -->` … `<!-- end -->`; [`render`] writes the
+//! exact text of each block from the artefacts, [`blocks`] reads README's blocks and [`splice`]
+//! replaces them. tests/readme_figures.rs asserts that README's blocks equal the rendered ones
+//! (and rewrites them with `MOMENTLAB_UPDATE_README=1`), so a changed artefact fails the test
+//! until README is regenerated.
+
+use anyhow::{anyhow, bail, Context, Result};
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::path::Path;
+
+const OPEN: &str = "<!-- generated:";
+const CLOSE: &str = "<!-- end -->";
+
+/// The names of the blocks [`render`] knows, in README order.
+pub const NAMES: [&str; 5] = ["quickstart", "techniques", "paper", "sweeps", "theta"];
+
+/// Nanoseconds at a sensible precision: integers from 100 ns, three significant digits below.
+pub fn fmt_ns(x: f64) -> String {
+    if !x.is_finite() {
+        "n/a".into()
+    } else if x >= 100.0 {
+        format!("{x:.0}")
+    } else if x >= 10.0 {
+        format!("{x:.1}")
+    } else {
+        format!("{x:.2}")
+    }
+}
+
+fn read_json(path: &Path) -> Result<Value> {
+    let s = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    serde_json::from_str(&s).with_context(|| format!("parsing {}", path.display()))
+}
+
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+}
+
+fn f(v: &Value, key: &str, file: &Path) -> Result<f64> {
+    v.get(key)
+        .and_then(Value::as_f64)
+        .ok_or_else(|| anyhow!("{}: no number '{key}'", file.display()))
+}
+
+/// Render block `name` from the artefacts under `reports` (the repository's `reports/`).
+pub fn render(name: &str, reports: &Path) -> Result<String> {
+    match name {
+        "quickstart" => quickstart(reports),
+        "techniques" => techniques(reports),
+        "paper" => paper(reports),
+        "sweeps" => sweeps(reports),
+        "theta" => theta(reports),
+        _ => bail!("unknown README block '{name}'"),
+    }
+}
+
+/// Wall times of the two set-up commands: `reports/default/run.json` (written by
+/// `momentlab reproduce`) and `reports/tests_wall_time.json` (scripts/time-tests.sh).
+fn quickstart(reports: &Path) -> Result<String> {
+    let mut s = String::new();
+    let run = reports.join("default/run.json");
+    if run.is_file() {
+        let v = read_json(&run)?;
+        let p = v.get("provenance").cloned().unwrap_or(Value::Null);
+        let _ = writeln!(
+            s,
+            "`reproduce` took {:.0} s wall on {} threads of a {} (reports/default/run.json).",
+            f(&v, "seconds", &run)?,
+            p.get("threads").and_then(Value::as_u64).unwrap_or(0),
+            p.get("cpu")
+                .and_then(Value::as_str)
+                .unwrap_or("unknown CPU")
+        );
+    } else {
+        s.push_str(
+            "`reproduce` records its wall time in reports/default/run.json (not yet written).\n",
+        );
+    }
+    let tests = reports.join("tests_wall_time.json");
+    if tests.is_file() {
+        let v = read_json(&tests)?;
+        let _ = writeln!(
+            s,
+            "`cargo test --release` took {:.0} s wall on {} threads of a {} (reports/tests_wall_time.json, `scripts/time-tests.sh`).",
+            f(&v, "seconds", &tests)?,
+            v.get("threads").and_then(Value::as_u64).unwrap_or(0),
+            v.get("cpu").and_then(Value::as_str).unwrap_or("unknown CPU")
+        );
+    } else {
+        s.push_str("`scripts/time-tests.sh` records the tests' wall time in reports/tests_wall_time.json (not yet written).\n");
+    }
+    Ok(s)
+}
+
+/// Display name of a technique id.
+fn display(name: &str) -> String {
+    match name {
+        "hamburger4" => "Hamburger 4MSM".into(),
+        "hausdorff4" => "Hausdorff 4MSM".into(),
+        "hamburger6" => "6MSM".into(),
+        "tmsm" => "TMSM (closed form)".into(),
+        "vsm" => "VSM".into(),
+        "esm" => "ESM".into(),
+        "evsm" => "EVSM".into(),
+        "csm" => "CSM".into(),
+        n => match n.strip_prefix("lp:") {
+            Some("z,z^2,z^3,z^4") => "Algorithm 1, b_MSM".into(),
+            Some("sin(2πz),cos(2πz),sin(4πz),cos(4πz)") => "Algorithm 1, b_TMSM".into(),
+            Some(b) => format!("Algorithm 1, ({})", b.replace(',', ", ")),
+            None => n.into(),
+        },
+    }
+}
+
+/// Techniques against PCF: closed forms in f32, LP candidates (f64), from
+/// `reports/default/evaluate/*.json`, sorted by error.
+fn techniques(reports: &Path) -> Result<String> {
+    let dir = reports.join("default/evaluate");
+    let mut files: Vec<_> = std::fs::read_dir(&dir)
+        .with_context(|| format!("reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .collect();
+    files.sort();
+    let mut rows = Vec::new();
+    for file in &files {
+        let v = read_json(file)?;
+        let name = v.get("name").and_then(Value::as_str).unwrap_or("?");
+        let prec = v.get("precision").and_then(Value::as_str).unwrap_or("?");
+        let lp = name.starts_with("lp:");
+        if (lp && prec != "f64") || (!lp && prec != "f32") {
+            continue;
+        }
+        let frags = f(&v, "fragments", file)?;
+        rows.push((
+            f(&v, "error", file)?,
+            display(name),
+            f(&v, "ns_per_fragment", file)?,
+            f(&v, "bits_per_texel", file)?,
+            frags,
+        ));
+    }
+    rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut s = String::from(
+        "| technique | error | ns / fragment | bits / texel | fragments |\n| --- | ---: | ---: | ---: | ---: |\n",
+    );
+    for (e, n, ns, bits, frags) in rows {
+        let _ = writeln!(
+            s,
+            "| {n} | {:.2} % | {} | {bits:.0} | {frags:.0} |",
+            100.0 * e,
+            fmt_ns(ns)
+        );
+    }
+    Ok(s)
+}
+
+/// The paper's line of the m = 4 sweep report (the paper's numbers, quoted as the paper's).
+fn paper(reports: &Path) -> Result<String> {
+    let file = reports.join("search/search_m4.md");
+    let text = read(&file)?;
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("Paper ("))
+        .ok_or_else(|| anyhow!("{}: no 'Paper (' line", file.display()))?;
+    Ok(format!("{line}\n"))
+}
+
+/// The full sweeps of reports/search: one row per m from `search_m<m>.md`.
+fn sweeps(reports: &Path) -> Result<String> {
+    let mut s = String::from(
+        "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. |\n| ---: | ---: | ---: | ---: | --- | ---: |\n",
+    );
+    let mut notes = Vec::new();
+    for m in 2..=4 {
+        let file = reports.join(format!("search/search_m{m}.md"));
+        if !file.is_file() {
+            continue;
+        }
+        let text = read(&file)?;
+        let missing = |what: &str| anyhow!("{}: no {what}", file.display());
+        let w = text
+            .lines()
+            .find_map(|l| l.strip_prefix("The winner of "))
+            .ok_or_else(|| missing("winner line"))?;
+        // "<N> scored candidates is <index> = (<functions>) with <e> % ± <se> %…"
+        let (count, rest) = w
+            .split_once(" scored candidates is ")
+            .ok_or_else(|| missing("candidate count"))?;
+        let open = rest
+            .find("= (")
+            .ok_or_else(|| missing("winner functions"))?;
+        let close = rest
+            .rfind(") with ")
+            .ok_or_else(|| missing("winner error"))?;
+        let functions = &rest[open + 3..close];
+        let err = rest[close + ") with ".len()..]
+            .split(" %")
+            .take(2)
+            .map(|x| x.trim_start_matches(" ± ").trim())
+            .collect::<Vec<_>>();
+        let sampled = text
+            .split_once("dataset holds ")
+            .and_then(|x| x.1.split_whitespace().next())
+            .ok_or_else(|| missing("sample size"))?;
+        let tied = text
+            .lines()
+            .find_map(|l| l.strip_suffix(" candidates are statistically tied for first."))
+            .unwrap_or("–");
+        let _ = writeln!(
+            s,
+            "| {m} | {count} | {sampled} | {tied} | ({functions}) | {} % ± {} % |",
+            err.first().copied().unwrap_or("?"),
+            err.get(1).copied().unwrap_or("?")
+        );
+        for l in text.lines() {
+            if let Some(x) = l.strip_prefix("- b_MSM (LP): ") {
+                notes.push(format!("m = {m}: b_MSM (LP) {}", x.trim_end_matches('.')));
+            }
+        }
+    }
+    for n in notes {
+        let _ = writeln!(s, "\n{n}.");
+    }
+    Ok(s)
+}
+
+/// θ transforms: `reports/theta/summary.json`.
+fn theta(reports: &Path) -> Result<String> {
+    let file = reports.join("theta/summary.json");
+    let v = read_json(&file)?;
+    let rows = v
+        .get("rows")
+        .and_then(Value::as_array)
+        .ok_or_else(|| anyhow!("{}: no rows", file.display()))?;
+    let mut s = String::from(
+        "| m | ours (bits) | published (paper) | volume bound (bits) |\n| ---: | ---: | ---: | ---: |\n",
+    );
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "| {:.0} | {:.4} | {} | {:.3} |",
+            f(r, "m", &file)?,
+            f(r, "ours_gain_bits", &file)?,
+            r.get("quoted").and_then(Value::as_str).unwrap_or("—"),
+            f(r, "volume_bound_bits", &file)?
+        );
+    }
+    if let Some(fig5) = v.get("fig5") {
+        let _ = writeln!(
+            s,
+            "\nFig. 5 analogue: θ₃ multiplies the hull volume of the moment curve by {:.1} (paper: 73.9).",
+            f(fig5, "ratio", &file)?
+        );
+    }
+    Ok(s)
+}
+
+/// The (name, text) of every generated block of a README text, in order.
+pub fn blocks(readme: &str) -> Result<Vec<(String, String)>> {
+    let mut out = Vec::new();
+    let mut rest = readme;
+    while let Some(p) = rest.find(OPEN) {
+        let after = &rest[p + OPEN.len()..];
+        let e = after
+            .find("-->")
+            .ok_or_else(|| anyhow!("README: unterminated block marker"))?;
+        let name = after[..e].trim().to_string();
+        let body = after[e + 3..]
+            .strip_prefix('\n')
+            .ok_or_else(|| anyhow!("README: block '{name}': marker not on its own line"))?;
+        let end = body
+            .find(CLOSE)
+            .ok_or_else(|| anyhow!("README: block '{name}' has no {CLOSE}"))?;
+        out.push((name, body[..end].to_string()));
+        rest = &body[end + CLOSE.len()..];
+    }
+    Ok(out)
+}
+
+/// README with every generated block replaced by `render(name)`.
+pub fn splice(readme: &str, render: impl Fn(&str) -> Result<String>) -> Result<String> {
+    let mut out = String::new();
+    let mut rest = readme;
+    while let Some(p) = rest.find(OPEN) {
+        let after = &rest[p + OPEN.len()..];
+        let e = after
+            .find("-->")
+            .ok_or_else(|| anyhow!("README: unterminated block marker"))?;
+        let name = after[..e].trim();
+        let body = &after[e + 3..];
+        let end = body
+            .find(CLOSE)
+            .ok_or_else(|| anyhow!("README: block '{name}' has no {CLOSE}"))?;
+        out.push_str(&rest[..p]);
+        let _ = write!(out, "{OPEN}{name} -->\n{}{CLOSE}", render(name)?);
+        rest = &body[end + CLOSE.len()..];
+    }
+    out.push_str(rest);
+    Ok(out)
+}
+
+/// README text with the generated blocks removed (what must hold no unchecked numbers).
+pub fn outside_blocks(readme: &str) -> String {
+    let mut out = String::new();
+    let mut rest = readme;
+    while let Some(p) = rest.find(OPEN) {
+        out.push_str(&rest[..p]);
+        match rest[p..].find(CLOSE) {
+            Some(e) => rest = &rest[p + e + CLOSE.len()..],
+            None => return out,
+        }
+    }
+    out.push_str(rest);
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn blocks_round_trip_and_splice_replaces_only_their_text() {
+        let readme =
+            "a 1\n<!-- generated:x -->\nold\n<!-- end -->\nb\n<!-- generated:y -->\n<!-- end -->\n";
+        let b = blocks(readme).unwrap();
+        assert_eq!(
+            b,
+            vec![("x".into(), "old\n".into()), ("y".into(), String::new())]
+        );
+        let s = splice(readme, |n| Ok(format!("new {n}\n"))).unwrap();
+        assert_eq!(
+            s,
+            "a 1\n<!-- generated:x -->\nnew x\n<!-- end -->\nb\n<!-- generated:y -->\nnew y\n<!-- end -->\n"
+        );
+        assert_eq!(outside_blocks(&s), "a 1\n\nb\n\n");
+        assert!(blocks("<!-- generated:z -->\nno end").is_err());
+    }
+
+    #[test]
+    fn ns_precision() {
+        assert_eq!(fmt_ns(8981.2), "8981");
+        assert_eq!(fmt_ns(27.84), "27.8");
+        assert_eq!(fmt_ns(6.87), "6.87");
+    }
+}
