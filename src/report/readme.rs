@@ -84,7 +84,7 @@ fn quickstart(reports: &Path) -> Result<String> {
         let v = read_json(&tests)?;
         let _ = writeln!(
             s,
-            "`cargo test --release` took {:.0} s wall on {} threads of a {} (reports/tests_wall_time.json, `scripts/time-tests.sh`).",
+            "`cargo test --release` ran in {:.0} s wall after its build, on {} threads of a {} (reports/tests_wall_time.json, `scripts/time-tests.sh`).",
             f(&v, "seconds", &tests)?,
             v.get("threads").and_then(Value::as_u64).unwrap_or(0),
             v.get("cpu").and_then(Value::as_str).unwrap_or("unknown CPU")
