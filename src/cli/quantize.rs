@@ -412,9 +412,16 @@ fn plot(all: &[Sweep]) -> Result<String> {
             chart
                 .configure_mesh()
                 .x_desc("α")
-                .y_desc("mean |G − PCF|")
+                .y_desc("mean |G − PCF| (%)")
                 .x_label_formatter(&|v| format!("{v:.0e}"))
-                .y_label_formatter(&|v| format!("{v:.1e}"))
+                .y_label_formatter(&|v| {
+                    let p = 100.0 * v;
+                    if p >= 0.1 {
+                        pct_tick(p)
+                    } else {
+                        format!("{p:.0e}")
+                    }
+                })
                 .draw()
                 .map_err(|e| anyhow::anyhow!("plot: {e}"))?;
             for (i, s) in sw.iter().enumerate() {
@@ -442,4 +449,15 @@ fn plot(all: &[Sweep]) -> Result<String> {
         root.present().map_err(|e| anyhow::anyhow!("plot: {e}"))?;
     }
     Ok(out)
+}
+
+/// A percentage tick label with two significant digits (1.5, 12, 0.35).
+fn pct_tick(p: f64) -> String {
+    if p >= 10.0 {
+        format!("{p:.0}")
+    } else if p >= 1.0 {
+        format!("{p:.1}")
+    } else {
+        format!("{p:.2}")
+    }
 }

@@ -112,13 +112,19 @@ fn series_of(refinement: &Refinement, scene: &str) -> Vec<(f64, f64)> {
 pub fn chart(refinement: &Refinement, chosen: &[(String, usize)], file: &Path) -> Result<()> {
     let series: Vec<(String, Vec<(f64, f64)>)> = chosen
         .iter()
-        .map(|(scene, _)| (scene.clone(), series_of(refinement, scene)))
+        .map(|(scene, _)| {
+            let pts = series_of(refinement, scene);
+            (
+                scene.clone(),
+                pts.iter().map(|&(n, e)| (n, 100.0 * e)).collect(),
+            )
+        })
         .collect();
     chart::lines_svg(
         file,
         "LP b_MSM error against grid size n",
         "grid points n (log scale)",
-        "mean |G − PCF|",
+        "mean |G − PCF| (%)",
         &series,
         true,
     )

@@ -70,9 +70,10 @@ pub fn figure_caption(file: &str) -> String {
              θ₃ with their convex hulls. θ₃ spreads the curve over the unit cube, so rounding \
              to 16 bits moves the moments relatively less (volume ratio in the θ table)."
             .into(),
-        "quantize_alpha" => "Mean deviation from the unquantized moments' shadow against the \
-             moment bias α, per storage (32-bit float, 16-bit canonical, 16-bit with θ): read \
-             which storage needs which α, and how close optimized 16-bit gets to 32-bit."
+        "quantize_alpha" => "Mean error against PCF over the moment bias α, one panel per \
+             technique, one line per storage (32-bit float, 16-bit canonical, 16-bit with θ): \
+             read how close optimized 16-bit storage gets to 32-bit, and which α each storage \
+             needs before rounding stops adding error."
             .into(),
         _ => format!("Figure of this section ({stem})."),
     }
