@@ -352,7 +352,9 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     );
     d.figure(
         "grid_refinement.svg",
-        "LP b_MSM error per scene against the grid size n.",
+        "LP b_MSM error per scene against the grid size n (log scale): read where each \
+         scene's curve settles; the chosen n is the smallest within the tolerance of the \
+         finest grid, and a curve can rise before it settles (snapping to the grid).",
     );
 
     d.heading("Shadow pictures (Hamburger 4MSM)");
