@@ -206,3 +206,212 @@ fn render_cli_rejects_bad_input_with_one_line() {
     assert_eq!(st.len(), 4);
     assert_eq!(st[0].file_stem(), "thin_light0");
 }
+
+/// A z-up box (x, y in [0, 2], z from 0 to 4) as OBJ.
+const Z_UP_BOX: &[u8] = b"v 0 0 0\nv 2 0 0\nv 2 2 0\nv 0 2 0\nv 0 0 4\nv 2 0 4\nv 2 2 4\nv 0 2 4\n\
+f 1 2 3 4\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+
+#[test]
+fn z_up_meshes_are_rotated_before_they_are_fitted_onto_the_ground() {
+    let load = |mesh_fields: &str, transform: &str| {
+        let text = format!(
+            r#"{{"name":"z","lights":[{{"dir":[0,-1,0]}}],"objects":[{{"type":"mesh",
+            "path":"box.obj","fit":2.0{mesh_fields}{transform}}}]}}"#
+        );
+        Scene::from_json(&text, &|_| Ok(Z_UP_BOX.to_vec())).unwrap()
+    };
+    // up_axis z and an explicit −90° about X give the same: standing upright on y = 0,
+    // height (the file's z extent 4) scaled to 2, centred in x/z
+    for fields in [r#","up_axis":"z""#, r#","rotate":[-90,0,0]"#] {
+        let (lo, hi) = bounds(&load(fields, ""));
+        let want_lo = [-0.5, 0.0, -0.5];
+        let want_hi = [0.5, 2.0, 0.5];
+        for k in 0..3 {
+            assert!((lo[k] - want_lo[k]).abs() < 1e-12, "{fields}: {lo:?}");
+            assert!((hi[k] - want_hi[k]).abs() < 1e-12, "{fields}: {hi:?}");
+        }
+        // the object transform comes after: translate moves the grounded mesh
+        let (lo, _) = bounds(&load(fields, r#","transform":{"translate":[0,3,0]}"#));
+        assert!((lo[1] - 3.0).abs() < 1e-12, "{lo:?}");
+    }
+    // without up_axis the z-up box lies on its side (height 1 after fitting its 4 long z edge)
+    let (lo, hi) = bounds(&load("", ""));
+    assert!(
+        lo[1].abs() < 1e-12 && (hi[1] - 1.0).abs() < 1e-12,
+        "{lo:?} {hi:?}"
+    );
+    let e = Scene::from_json(
+        r#"{"name":"z","lights":[{"dir":[0,-1,0]}],"objects":[{"type":"mesh","path":"b.obj","up_axis":"x"}]}"#,
+        &|_| Ok(Z_UP_BOX.to_vec()),
+    )
+    .unwrap_err();
+    assert!(format!("{e:#}").contains("unknown variant `x`"), "{e:#}");
+}
+
+#[test]
+fn lights_must_shine_down_onto_the_receivers() {
+    let scene = |light: &str| {
+        parse(&format!(
+            r#"{{"name":"l","lights":[{light}],"objects":[{{"type":"plane","size":[1,1]}}]}}"#
+        ))
+    };
+    for (light, want) in [
+        (r#"{"dir":[0,1,0]}"#, "travels upward"),
+        (r#"{"dir":[0.3,0.2,0]}"#, "travels upward"),
+        (r#"{"dir":[1,0,0]}"#, "is (nearly) horizontal"),
+        (r#"{"dir":[1,-0.01,0]}"#, "is (nearly) horizontal"),
+        (
+            r#"{"azimuth_deg":10,"elevation_deg":0}"#,
+            "elevation_deg 0 outside [1, 90]",
+        ),
+        (
+            r#"{"azimuth_deg":10,"elevation_deg":95}"#,
+            "elevation_deg 95 outside",
+        ),
+    ] {
+        let e = format!("{:#}", scene(light).unwrap_err());
+        assert!(e.contains(want) && !e.contains('\n'), "{light}: {e}");
+    }
+    // just above the limit is accepted, in both forms
+    assert!(scene(r#"{"dir":[1,-0.02,0]}"#).is_ok());
+    assert!(scene(r#"{"azimuth_deg":10,"elevation_deg":1}"#).is_ok());
+}
+
+#[test]
+fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
+    let bin = env!("CARGO_BIN_EXE_momentlab");
+    let dir = std::env::temp_dir().join(format!("momentlab_scenes_arg_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("box.obj"), Z_UP_BOX).unwrap();
+    std::fs::write(
+        dir.join("one.json"),
+        r#"{"name":"one","lights":[{"dir":[0,-1,0]},{"dir":[0.3,-1,0]}],"objects":[
+        {"type":"plane","size":[8,8]},{"type":"mesh","path":"box.obj","up_axis":"z","fit":2}]}"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = out.to_str().unwrap();
+    let run = |args: &[&str]| std::process::Command::new(bin).args(args).output().unwrap();
+    let ok = |args: &[&str]| {
+        let r = run(args);
+        assert!(
+            r.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&r.stderr)
+        );
+    };
+    let fails = |args: &[&str]| {
+        let r = run(args);
+        assert_eq!(r.status.code(), Some(1), "{args:?}");
+        let e = String::from_utf8_lossy(&r.stderr).to_string();
+        assert_eq!(e.lines().count(), 1, "{e}");
+        e
+    };
+    let scene_file = dir.join("one.json");
+    ok(&[
+        "render",
+        "--scenes",
+        scene_file.to_str().unwrap(),
+        "--resolution",
+        "16",
+        "--out",
+        o,
+    ]);
+    assert_eq!(momentlab::stack::load_dir(&out).unwrap().len(), 2);
+
+    // a mesh file directly: lights on the command line (two views), z up
+    let mesh = dir.join("box.obj");
+    let m = mesh.to_str().unwrap();
+    let out2 = dir.join("out2");
+    let o2 = out2.to_str().unwrap();
+    ok(&[
+        "render",
+        "--scenes",
+        m,
+        "--light",
+        "30,60",
+        "--light",
+        "0.2,-1,0",
+        "--up-axis",
+        "z",
+        "--resolution",
+        "16",
+        "--out",
+        o2,
+    ]);
+    let st = momentlab::stack::load_dir(&out2).unwrap();
+    assert_eq!(st.len(), 2);
+    assert_eq!(st[0].file_stem(), "box_light0");
+    // the same from the sidecar box.lights.json
+    std::fs::write(
+        dir.join("box.lights.json"),
+        r#"{"lights":[{"azimuth_deg":30,"elevation_deg":60},{"dir":[0.2,-1,0]}],"up_axis":"z"}"#,
+    )
+    .unwrap();
+    let out3 = dir.join("out3");
+    ok(&[
+        "render",
+        "--scenes",
+        m,
+        "--resolution",
+        "16",
+        "--out",
+        out3.to_str().unwrap(),
+    ]);
+    let st3 = momentlab::stack::load_dir(&out3).unwrap();
+    assert_eq!(st3, st);
+    // the folder skips the sidecar (it is not a scene file)
+    ok(&[
+        "render",
+        "--scenes",
+        dir.to_str().unwrap(),
+        "--resolution",
+        "8",
+        "--out",
+        o,
+    ]);
+
+    // errors: no lights; an upward light; --light for a folder; an unsupported mesh format
+    std::fs::remove_file(dir.join("box.lights.json")).unwrap();
+    let e = fails(&["render", "--scenes", m, "--out", o]);
+    assert!(e.contains("no lights") && e.contains("--light"), "{e}");
+    let e = fails(&["render", "--scenes", m, "--light", "0,1,0", "--out", o]);
+    assert!(e.contains("travels upward"), "{e}");
+    // a malformed --light is a usage error (exit 2) naming the value
+    let r = run(&["render", "--scenes", m, "--light", "1,2,3,4", "--out", o]);
+    assert_eq!(r.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&r.stderr).contains("expected AZ,EL or X,Y,Z"));
+    let e = fails(&[
+        "render",
+        "--scenes",
+        dir.to_str().unwrap(),
+        "--light",
+        "30,60",
+        "--out",
+        o,
+    ]);
+    assert!(e.contains("apply to a mesh file"), "{e}");
+    std::fs::write(dir.join("x.fbx"), b"Kaydara FBX Binary").unwrap();
+    let e = fails(&[
+        "render",
+        "--scenes",
+        dir.join("x.fbx").to_str().unwrap(),
+        "--light",
+        "30,60",
+        "--out",
+        o,
+    ]);
+    assert!(
+        e.contains("FBX (.fbx) is not a supported mesh format"),
+        "{e}"
+    );
+    let e = fails(&[
+        "render",
+        "--scenes",
+        dir.join("gone.glb").to_str().unwrap(),
+        "--out",
+        o,
+    ]);
+    assert!(e.contains("no such file or folder"), "{e}");
+}

@@ -1,8 +1,9 @@
 //! `momentlab render`: ray-cast depth stacks of the scenes (embedded default dataset unless
-//! `--scenes DIR`) and write one `<scene>_<view>.exr` + `.json` per view.
+//! `--scenes FOLDER|FILE`) and write one `<scene>_<view>.exr` + `.json` per view.
 
 use super::common::{usize_in, MAX_RESOLUTION};
 use crate::progress::Bar;
+use crate::render::scene::{LightDesc, UpAxis};
 use crate::render::{self, Scene};
 use crate::stack;
 use anyhow::{bail, Context, Result};
@@ -11,9 +12,17 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Directory of scene JSON files (default: the embedded dataset).
+    /// A folder of scene JSON files, one scene file, or a mesh file (.gltf, .glb, .obj,
+    /// .ply, .stl) rendered directly (default: the embedded dataset).
     #[arg(long)]
     pub scenes: Option<PathBuf>,
+    /// A light for a mesh file given to --scenes: AZ,EL (degrees; where it comes from) or
+    /// X,Y,Z (direction of travel); repeat for several views. Replaces the sidecar's lights.
+    #[arg(long = "light", allow_hyphen_values = true)]
+    pub lights: Vec<LightDesc>,
+    /// Up axis of a mesh file given to --scenes (y or z; z-up meshes are turned −90° about X).
+    #[arg(long)]
+    pub up_axis: Option<UpAxis>,
     /// Output directory for the depth stacks.
     #[arg(long, default_value = "stacks/default")]
     pub out: PathBuf,
@@ -55,7 +64,7 @@ fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Resul
 
 pub fn run(args: Args) -> Result<()> {
     let mut scenes: Vec<Scene> = match &args.scenes {
-        Some(dir) => render::load_scenes(dir)?,
+        Some(p) => render::load_scenes(p, &args.lights, args.up_axis)?,
         None => render::embedded_scenes()?,
     };
     if let Some(only) = &args.only {

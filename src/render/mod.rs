@@ -12,6 +12,7 @@
 
 pub mod bvh;
 mod embedded;
+pub mod mesh;
 pub mod scene;
 
 pub use embedded::{embedded_scenes, EMBEDDED_SCENE_NAMES};
@@ -229,20 +230,54 @@ pub fn render_view_with(
     }
 }
 
-/// All `*.json` scenes of `dir`, sorted by file name.
-pub fn load_scenes(dir: &Path) -> Result<Vec<Scene>> {
-    let mut files = Vec::new();
-    for e in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
-        let p = e?.path();
-        if p.is_file() && p.extension().is_some_and(|x| x == "json") {
-            files.push(p);
+/// The scenes of `path`: a folder gives all its `*.json` scene files (sorted by file name;
+/// `*.lights.json` mesh sidecars skipped); a `.json` file is one scene file; a mesh file
+/// (.obj, .gltf, .glb, .ply, .stl) is rendered directly ([`Scene::load_mesh_file`], with
+/// `lights` and `up_axis` from the command line). `lights`/`up_axis` only apply to a mesh file.
+pub fn load_scenes(
+    path: &Path,
+    lights: &[scene::LightDesc],
+    up_axis: Option<scene::UpAxis>,
+) -> Result<Vec<Scene>> {
+    let mesh_only = |what: &str| -> Result<()> {
+        if !lights.is_empty() || up_axis.is_some() {
+            bail!(
+                "{}: --light and --up-axis apply to a mesh file given to --scenes, not to {what}",
+                path.display()
+            );
         }
+        Ok(())
+    };
+    if path.is_dir() {
+        mesh_only("a folder of scene files")?;
+        let mut files = Vec::new();
+        for e in std::fs::read_dir(path).with_context(|| format!("reading {}", path.display()))? {
+            let p = e?.path();
+            let name = p.file_name().unwrap_or_default().to_string_lossy();
+            if p.is_file() && name.ends_with(".json") && !name.ends_with(".lights.json") {
+                files.push(p);
+            }
+        }
+        files.sort();
+        if files.is_empty() {
+            bail!("no *.json scenes in {}", path.display());
+        }
+        return files.iter().map(|p| Scene::load(p)).collect();
     }
-    files.sort();
-    if files.is_empty() {
-        bail!("no *.json scenes in {}", dir.display());
+    if !path.is_file() {
+        bail!("{}: no such file or folder", path.display());
     }
-    files.iter().map(|p| Scene::load(p)).collect()
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext == "json" {
+        mesh_only("a scene file")?;
+        return Ok(vec![Scene::load(path)?]);
+    }
+    // any other extension: a mesh file (an unsupported format is a one-line error naming it)
+    mesh::MeshFormat::from_path(&path.to_string_lossy())?;
+    Ok(vec![Scene::load_mesh_file(path, lights, up_axis)?])
 }
 
 /// The embedded default dataset (every view of every embedded scene), rendered at

@@ -2,7 +2,9 @@
 //! Loaded from JSON (procedural primitives and OBJ meshes with transforms; format in
 //! docs/stacks.md) or built in code.
 
-use anyhow::{anyhow, bail, Context, Result};
+use super::mesh::load_mesh;
+pub use super::mesh::load_obj_bytes;
+use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
@@ -76,6 +78,72 @@ impl Scene {
     /// as written in the JSON.
     pub fn from_json(text: &str, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Scene> {
         let desc: SceneDesc = serde_json::from_str(text).context("malformed scene JSON")?;
+        Scene::from_desc(desc, mesh)
+    }
+
+    /// A scene made of one mesh file (OBJ, glTF, PLY, STL) rendered directly. Its lights and
+    /// placement come from the sidecar `<stem>.lights.json` next to it (a [`MeshSidecar`]) if
+    /// there is one, and from `lights` / `up_axis` (command line), which replace the sidecar's.
+    pub fn load_mesh_file(
+        path: &Path,
+        lights: &[LightDesc],
+        up_axis: Option<UpAxis>,
+    ) -> Result<Scene> {
+        let side = mesh_sidecar_path(path);
+        let mut sc: MeshSidecar = if side.is_file() {
+            let text = std::fs::read_to_string(&side)
+                .with_context(|| format!("reading {}", side.display()))?;
+            serde_json::from_str(&text)
+                .with_context(|| format!("malformed light sidecar {}", side.display()))?
+        } else {
+            MeshSidecar::default()
+        };
+        if !lights.is_empty() {
+            sc.lights = lights.to_vec();
+        }
+        if let Some(u) = up_axis {
+            sc.up_axis = u;
+        }
+        if sc.lights.is_empty() {
+            bail!(
+                "{}: no lights; give --light AZIMUTH,ELEVATION (degrees) or --light X,Y,Z, or \
+                 write {}",
+                path.display(),
+                side.display()
+            );
+        }
+        let file = path
+            .file_name()
+            .with_context(|| format!("{}: no file name", path.display()))?
+            .to_string_lossy()
+            .to_string();
+        let name = sc.name.clone().unwrap_or_else(|| {
+            path.file_stem()
+                .map_or("mesh".into(), |s| s.to_string_lossy().to_string())
+        });
+        let desc = SceneDesc {
+            name,
+            description: String::new(),
+            lights: sc.lights,
+            objects: vec![Object {
+                shape: Shape::Mesh {
+                    path: file,
+                    fit: sc.fit,
+                    up_axis: sc.up_axis,
+                    rotate: sc.rotate,
+                },
+                transform: Transform::default(),
+            }],
+        };
+        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+        Scene::from_desc(desc, &|rel: &str| {
+            let p = dir.join(rel);
+            std::fs::read(&p).with_context(|| format!("reading mesh {}", p.display()))
+        })
+        .with_context(|| format!("{}", path.display()))
+    }
+
+    fn from_desc(desc: SceneDesc, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Scene> {
         let mut tris = Vec::new();
         for (i, obj) in desc.objects.iter().enumerate() {
             let mut local = obj
@@ -96,21 +164,7 @@ impl Scene {
             .enumerate()
             .map(|(i, l)| {
                 let name = l.name.clone().unwrap_or_else(|| format!("light{i}"));
-                let d = match (l.dir, l.azimuth_deg, l.elevation_deg) {
-                    (Some(d), None, None) => d,
-                    (None, Some(az), Some(el)) => {
-                        if !(0.0 < el && el <= 90.0) {
-                            bail!("light '{name}': elevation_deg {el} outside (0, 90]");
-                        }
-                        let (az, el) = (az.to_radians(), el.to_radians());
-                        [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
-                    }
-                    _ => bail!(
-                        "light '{name}': give either \"dir\" or both \"azimuth_deg\" and \
-                         \"elevation_deg\""
-                    ),
-                };
-                Ok((name, d))
+                Ok((name.clone(), l.direction(&name)?))
             })
             .collect::<Result<Vec<_>>>()?;
         if lights.is_empty() {
@@ -123,6 +177,110 @@ impl Scene {
     }
 }
 
+/// The light sidecar of a mesh file rendered directly: `<stem>.lights.json`.
+pub fn mesh_sidecar_path(path: &Path) -> std::path::PathBuf {
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    path.with_file_name(format!("{stem}.lights.json"))
+}
+
+/// The light sidecar of a mesh file rendered directly (`<stem>.lights.json`): lights as in a
+/// scene file and the mesh placement of [`orient_mesh`].
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MeshSidecar {
+    pub name: Option<String>,
+    #[serde(default)]
+    pub lights: Vec<LightDesc>,
+    #[serde(default)]
+    pub up_axis: UpAxis,
+    pub rotate: Option<V3>,
+    pub fit: Option<f64>,
+}
+
+/// Smallest light elevation above the horizon, in degrees: a light must shine down onto the
+/// receivers (y is up), so a direction of travel with y ≥ −sin 1° is rejected.
+pub const MIN_ELEVATION_DEG: f64 = 1.0;
+
+/// A light as written in a scene file: `dir` (direction of travel) or `azimuth_deg` +
+/// `elevation_deg` (where it comes from). On the command line: `AZ,EL` or `X,Y,Z`.
+#[derive(Deserialize, Clone, Debug, Default, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct LightDesc {
+    pub name: Option<String>,
+    pub dir: Option<V3>,
+    pub azimuth_deg: Option<f64>,
+    pub elevation_deg: Option<f64>,
+}
+
+impl LightDesc {
+    /// The (unnormalized) direction of travel, checked to point down onto the ground: the
+    /// elevation asin(−d_y/|d|) must be in [`MIN_ELEVATION_DEG`], 90°].
+    pub fn direction(&self, name: &str) -> Result<V3> {
+        let d = match (self.dir, self.azimuth_deg, self.elevation_deg) {
+            (Some(d), None, None) => d,
+            (None, Some(az), Some(el)) => {
+                if !((MIN_ELEVATION_DEG..=90.0).contains(&el) && az.is_finite()) {
+                    bail!(
+                        "light '{name}': elevation_deg {el} outside [{MIN_ELEVATION_DEG}, 90] \
+                         (a light must shine down onto the receivers)"
+                    );
+                }
+                let (az, el) = (az.to_radians(), el.to_radians());
+                [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
+            }
+            _ => bail!(
+                "light '{name}': give either \"dir\" or both \"azimuth_deg\" and \
+                 \"elevation_deg\""
+            ),
+        };
+        let n = norm(d);
+        if !(n.is_finite() && n > 0.0) {
+            bail!("light '{name}': direction {d:?} is zero or not finite");
+        }
+        let el = (-d[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
+        if el < MIN_ELEVATION_DEG {
+            let how = if d[1] > 0.0 {
+                "travels upward"
+            } else {
+                "is (nearly) horizontal"
+            };
+            bail!(
+                "light '{name}': dir {d:?} {how} (elevation {el:.2}°); dir is the direction the \
+                 light travels and must point down onto the receivers (y < 0, elevation ≥ \
+                 {MIN_ELEVATION_DEG}°)"
+            );
+        }
+        Ok(d)
+    }
+}
+
+impl std::str::FromStr for LightDesc {
+    type Err = anyhow::Error;
+    /// `AZ,EL` (degrees; where the light comes from) or `X,Y,Z` (direction of travel).
+    fn from_str(s: &str) -> Result<LightDesc> {
+        let v: Vec<f64> = s
+            .split(',')
+            .map(|t| t.trim().parse::<f64>())
+            .collect::<std::result::Result<_, _>>()
+            .map_err(|_| anyhow::anyhow!("light '{s}': expected AZ,EL or X,Y,Z (numbers)"))?;
+        match v[..] {
+            [az, el] => Ok(LightDesc {
+                azimuth_deg: Some(az),
+                elevation_deg: Some(el),
+                ..Default::default()
+            }),
+            [x, y, z] => Ok(LightDesc {
+                dir: Some([x, y, z]),
+                ..Default::default()
+            }),
+            _ => bail!(
+                "light '{s}': expected AZ,EL or X,Y,Z ({} numbers given)",
+                v.len()
+            ),
+        }
+    }
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct SceneDesc {
@@ -132,15 +290,6 @@ struct SceneDesc {
     description: String,
     lights: Vec<LightDesc>,
     objects: Vec<Object>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct LightDesc {
-    name: Option<String>,
-    dir: Option<V3>,
-    azimuth_deg: Option<f64>,
-    elevation_deg: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -207,22 +356,71 @@ impl Transform {
             Some(Scale::Uniform(s)) => [s; 3],
             Some(Scale::Axes(s)) => s,
         };
-        let mut a = [[s[0], 0.0, 0.0], [0.0, s[1], 0.0], [0.0, 0.0, s[2]]];
-        let r = self.rotate.unwrap_or([0.0; 3]);
-        let (sx, cx) = r[0].to_radians().sin_cos();
-        let (sy, cy) = r[1].to_radians().sin_cos();
-        let (sz, cz) = r[2].to_radians().sin_cos();
-        let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
-        let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
-        let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
-        a = matmul(rx, a);
-        a = matmul(ry, a);
-        a = matmul(rz, a);
+        let a = [[s[0], 0.0, 0.0], [0.0, s[1], 0.0], [0.0, 0.0, s[2]]];
         Affine {
-            a,
+            a: matmul(euler(self.rotate.unwrap_or([0.0; 3])), a),
             t: self.translate.unwrap_or([0.0; 3]),
         }
     }
+}
+
+/// R = R_z · R_y · R_x for Euler angles `r` in degrees (about X first, then Y, then Z).
+fn euler(r: V3) -> [[f64; 3]; 3] {
+    let (sx, cx) = r[0].to_radians().sin_cos();
+    let (sy, cy) = r[1].to_radians().sin_cos();
+    let (sz, cz) = r[2].to_radians().sin_cos();
+    let rx = [[1.0, 0.0, 0.0], [0.0, cx, -sx], [0.0, sx, cx]];
+    let ry = [[cy, 0.0, sy], [0.0, 1.0, 0.0], [-sy, 0.0, cy]];
+    let rz = [[cz, -sz, 0.0], [sz, cz, 0.0], [0.0, 0.0, 1.0]];
+    matmul(rz, matmul(ry, rx))
+}
+
+/// Which axis of a mesh file points up. momentlab's world is y-up; a z-up mesh (common for
+/// STL and PLY scans) is turned by −90° about X, which maps (x, y, z) to (x, z, −y).
+#[derive(Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[serde(rename_all = "lowercase")]
+pub enum UpAxis {
+    #[default]
+    Y,
+    Z,
+}
+
+impl std::str::FromStr for UpAxis {
+    type Err = anyhow::Error;
+    fn from_str(s: &str) -> Result<UpAxis> {
+        match s {
+            "y" | "Y" => Ok(UpAxis::Y),
+            "z" | "Z" => Ok(UpAxis::Z),
+            _ => bail!("up axis '{s}': expected y or z"),
+        }
+    }
+}
+
+/// Places a loaded mesh in its object's local frame, in this order: `up_axis` (z-up → y-up),
+/// then `rotate` (Euler degrees, X then Y then Z), then `fit` (uniform scale so the largest
+/// extent is `fit`, centred in x/z, lowest point at y = 0). The object's `transform` is applied
+/// after this, so a fitted mesh always stands on the ground before it is moved.
+pub fn orient_mesh(
+    tris: &mut [Tri],
+    up_axis: UpAxis,
+    rotate: Option<V3>,
+    fit: Option<f64>,
+) -> Result<()> {
+    let mut r = euler(rotate.unwrap_or([0.0; 3]));
+    if up_axis == UpAxis::Z {
+        r = matmul(r, euler([-90.0, 0.0, 0.0]));
+    }
+    if up_axis != UpAxis::Y || rotate.is_some() {
+        let m = Affine { a: r, t: [0.0; 3] };
+        for v in tris.iter_mut().flatten() {
+            *v = m.apply(*v);
+        }
+    }
+    if let Some(f) = fit {
+        pos("mesh fit", f)?;
+        fit_mesh(tris, f);
+    }
+    Ok(())
 }
 
 /// Procedural primitives (local coordinates; y is up, solids stand on y = 0 unless noted).
@@ -301,9 +499,15 @@ enum Shape {
         depth: f64,
         roof: f64,
     },
-    /// Triangle mesh from an OBJ file (path relative to the scene file). With `fit`, it is
-    /// scaled uniformly so that its largest extent is `fit`, centred in x/z, base at y = 0.
-    Mesh { path: String, fit: Option<f64> },
+    /// Triangle mesh from an OBJ, glTF (.gltf/.glb), PLY or STL file (path relative to the
+    /// scene file), placed by [`orient_mesh`]: `up_axis`, then `rotate`, then `fit`.
+    Mesh {
+        path: String,
+        fit: Option<f64>,
+        #[serde(default)]
+        up_axis: UpAxis,
+        rotate: Option<V3>,
+    },
 }
 
 fn default_segments() -> usize {
@@ -556,53 +760,21 @@ impl Shape {
                     [half + m, height + roof, depth / 2.0 + m],
                 );
             }
-            Shape::Mesh { ref path, fit } => {
+            Shape::Mesh {
+                ref path,
+                fit,
+                up_axis,
+                rotate,
+            } => {
                 let bytes = mesh(path)?;
-                let mut tris = load_obj_bytes(&bytes).with_context(|| format!("mesh '{path}'"))?;
-                if let Some(f) = fit {
-                    pos("mesh fit", f)?;
-                    fit_mesh(&mut tris, f);
-                }
+                let mut tris =
+                    load_mesh(path, &bytes, mesh).with_context(|| format!("mesh '{path}'"))?;
+                orient_mesh(&mut tris, up_axis, rotate, fit)?;
                 out = tris;
             }
         }
         Ok(out)
     }
-}
-
-/// Triangles of an OBJ file (all models, faces triangulated).
-pub fn load_obj_bytes(bytes: &[u8]) -> Result<Vec<Tri>> {
-    let opts = tobj::LoadOptions {
-        triangulate: true,
-        single_index: true,
-        ..Default::default()
-    };
-    let mut reader = std::io::BufReader::new(bytes);
-    let (models, _) =
-        tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
-            .map_err(|e| anyhow!("OBJ parse error: {e}"))?;
-    let mut tris = Vec::new();
-    for m in &models {
-        let p = &m.mesh.positions;
-        let idx = &m.mesh.indices;
-        let vert = |i: u32| -> Result<V3> {
-            let i = i as usize * 3;
-            if i + 2 >= p.len() {
-                bail!("OBJ index out of range in model '{}'", m.name);
-            }
-            Ok([p[i] as f64, p[i + 1] as f64, p[i + 2] as f64])
-        };
-        for f in idx.chunks_exact(3) {
-            tris.push([vert(f[0])?, vert(f[1])?, vert(f[2])?]);
-        }
-    }
-    if tris.is_empty() {
-        bail!("OBJ has no triangles");
-    }
-    if tris.iter().flatten().flatten().any(|c| !c.is_finite()) {
-        bail!("OBJ has non-finite vertex coordinates");
-    }
-    Ok(tris)
 }
 
 fn fit_mesh(tris: &mut [Tri], fit: f64) {
