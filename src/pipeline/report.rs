@@ -488,3 +488,48 @@ fn full_sweeps_section(d: &mut Document, out: &Path) {
         ));
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::report::document::Block;
+
+    #[test]
+    fn sub_reports_become_markdown_and_captioned_figures_in_place() {
+        let out = std::env::temp_dir().join(format!("momentlab-include-{}", std::process::id()));
+        let dir = out.join("search");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(
+            dir.join("search_m4.md"),
+            "# Sweep\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n![Fig. 4 analogue](fig4_m4.svg)\n\nafter\n\n![gone](missing.svg)\n",
+        )
+        .unwrap();
+        std::fs::write(dir.join("fig4_m4.svg"), "<svg/>").unwrap();
+        std::fs::write(dir.join("fig3.svg"), "<svg/>").unwrap();
+        let mut d = Document::new("t");
+        include_folder(&mut d, &dir, &out).unwrap();
+        let kinds: Vec<String> = d
+            .blocks
+            .iter()
+            .map(|b| match b {
+                Block::Markdown(s) => format!("md:{}", s.trim().lines().next().unwrap_or("")),
+                Block::Figure(f, c) => {
+                    assert!(!c.contains(".svg") && c.len() > 40, "caption of {f}: {c}");
+                    format!("fig:{f}")
+                }
+                other => format!("{other:?}"),
+            })
+            .collect();
+        assert_eq!(
+            kinds,
+            vec![
+                "md:# Sweep",
+                "fig:search/fig4_m4.svg",
+                "md:after",
+                "fig:search/fig3.svg"
+            ]
+        );
+        assert!(!d.to_html().contains("<pre>"));
+        std::fs::remove_dir_all(&out).ok();
+    }
+}
