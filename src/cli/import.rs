@@ -1,5 +1,6 @@
 //! `momentlab import`: validate depth stacks written by another renderer (layout in
-//! docs/stacks.md) and, with `--out`, copy them there in canonical form.
+//! docs/stacks.md), or convert deep OpenEXR images (detected by their version bits) to stacks,
+//! and, with `--out`, write them there in canonical form.
 
 use crate::stack;
 use anyhow::{bail, Context, Result};
@@ -21,6 +22,10 @@ pub struct Args {
     /// Print the validated stacks as JSON instead of lines.
     #[arg(long)]
     pub json: bool,
+    /// Deep OpenEXR inputs: sort each pixel's samples by Z (without it, unsorted samples are
+    /// an error).
+    #[arg(long)]
+    pub sort: bool,
 }
 
 /// Refuse, before reading anything, two inputs that would land on the same file in `out`, and
@@ -82,16 +87,25 @@ pub fn run(args: Args) -> Result<()> {
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }
     // read (= validate) everything before writing anything
-    let stacks = files
-        .iter()
-        .map(|f| stack::read(f))
-        .collect::<Result<Vec<_>>>()?;
+    let mut deep_stats = Vec::new();
+    let mut stacks = Vec::new();
+    for f in &files {
+        if stack::is_deep_file(f)? {
+            let (st, stats) = stack::deep::read_deep_stack(f, args.sort)
+                .with_context(|| format!("{}", f.display()))?;
+            stacks.push(st);
+            deep_stats.push(Some(stats));
+        } else {
+            stacks.push(stack::read(f)?);
+            deep_stats.push(None);
+        }
+    }
     let mut rows = Vec::new();
-    for (f, st) in files.iter().zip(&stacks) {
+    for ((f, st), deep) in files.iter().zip(&stacks).zip(&deep_stats) {
         let m = &st.meta;
         rows.push(serde_json::json!({
             "file": f, "scene": m.scene, "view": m.view, "width": m.width, "height": m.height,
-            "layers": m.layers, "fragments": st.fragment_count(),
+            "layers": m.layers, "fragments": st.fragment_count(), "deep": deep,
         }));
         if let Some(out) = &args.out {
             let name = f.file_name().context("input has no file name")?;
@@ -100,8 +114,15 @@ pub fn run(args: Args) -> Result<()> {
         if args.json {
             continue;
         }
+        let note = deep.as_ref().map_or(String::new(), |d| {
+            format!(
+                " (deep: {} samples, {} merged, {} transparent dropped, {} partly transparent \
+                 and {} volumetric kept as opaque)",
+                d.samples, d.merged, d.transparent, d.partial_alpha, d.volumetric
+            )
+        });
         println!(
-            "ok {}: {}/{} {}x{} {} layers {} fragments",
+            "ok {}: {}/{} {}x{} {} layers {} fragments{note}",
             f.display(),
             m.scene,
             m.view,

@@ -62,6 +62,9 @@ pub fn read(path: &Path) -> Result<DepthStack> {
 }
 
 fn read_inner(path: &Path) -> Result<DepthStack> {
+    if is_deep_file(path)? {
+        return Ok(super::deep::read_deep_stack(path, false)?.0);
+    }
     let side = sidecar_path(path);
     let text = match std::fs::read_to_string(&side) {
         Ok(t) => t,
@@ -150,6 +153,16 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
     Ok(stack)
 }
 
+/// Whether `path` is a deep OpenEXR image (from its first 8 bytes).
+pub fn is_deep_file(path: &Path) -> Result<bool> {
+    use std::io::Read;
+    let mut head = Vec::with_capacity(8);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(8).read_to_end(&mut head))
+        .with_context(|| format!("reading {}", path.display()))?;
+    Ok(super::deep::is_deep_exr(&head))
+}
+
 /// Largest width or height of a stack.
 pub const MAX_SIDE: usize = 16384;
 /// Largest layer count of a stack.
@@ -158,7 +171,7 @@ pub const MAX_LAYERS: usize = 4096;
 pub const MAX_STACK_BYTES: u64 = 4 << 30;
 
 /// The sidecar's size fields within the limits, checked before anything is allocated.
-fn check_size(m: &StackMeta) -> Result<()> {
+pub(super) fn check_size(m: &StackMeta) -> Result<()> {
     if m.width == 0 || m.height == 0 || m.width > MAX_SIDE || m.height > MAX_SIDE {
         bail!(
             "{}x{} texels: width and height must be in 1..={MAX_SIDE}",

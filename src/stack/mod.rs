@@ -5,9 +5,10 @@
 //! OWNER: render/stack helper. Other modules rely on [`DepthStack`] and [`StackMeta`] as below
 //! and on `stack::read(path)` / `stack::write(path, &stack)` / `stack::load_dir(dir)`.
 
+pub mod deep;
 mod io;
 
-pub use io::{channel_name, exr_files, load_dir, read, sidecar_path, write};
+pub use io::{channel_name, exr_files, is_deep_file, load_dir, read, sidecar_path, write};
 
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
