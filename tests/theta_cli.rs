@@ -49,6 +49,32 @@ fn theta2_json_and_snippets() {
         let s = std::fs::read_to_string(dir.join(f)).unwrap();
         assert!(s.contains("ncodeMoments2") && s.contains("ecodeMoments2"));
     }
+    assert_eq!(v["snippet_channel_order"], "paper");
+    // --snippets re-emits the same snippets from the JSON alone
+    let before = std::fs::read_to_string(dir.join("theta2.glsl")).unwrap();
+    assert!(
+        before.contains("vec2 encodeMoments2Vec(float z)"),
+        "{before}"
+    );
+    std::fs::remove_file(dir.join("theta2.glsl")).unwrap();
+    std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
+    let out = bin()
+        .args(["theta", "--snippets"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("theta2.glsl")).unwrap(),
+        before
+    );
+    assert!(std::fs::read_to_string(dir.join("theta2.hlsl"))
+        .unwrap()
+        .contains("float2 EncodeMoments2Vec(float z)"));
     // the JSON file is what was printed; both starts reach the single θ2 basin
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("theta2.json")).unwrap()).unwrap();
@@ -122,6 +148,8 @@ fn bad_input_gives_one_line_errors() {
         vec!["theta", "--moments", "2", "--hop-sigma", "0"],
         vec!["theta", "--moments", "2", "--max-sweeps", "0"],
         vec!["theta"],
+        vec!["theta", "--snippets", "/nonexistent/momentlab"],
+        vec!["theta", "--snippets", "/", "--moments", "2"],
     ] {
         let out = bin().args(&args).output().unwrap();
         assert!(!out.status.success(), "{args:?} succeeded");

@@ -1,28 +1,132 @@
-// Optimized moment quantization θ (momentlab theta; Peters & Klein 2015, Section 4.3).
-// basis b = (z, z^2, z^3), m = 3
-// stored s = A*b + t lies in [0,1]^3; entropy gain log2|det A| = 6.2075 bits.
-// Encode before writing the shadow map; decode the filtered sample.
+// Moment quantization θ3 (momentlab theta; Peters & Klein 2015, Section 4.3): stored s = A*b(z) + t in [0,1]^3.
+// Basis b = (z, z^2, z^3), m = 3; entropy gain log2|det A| = 6.2075 bits.
+// Depth range: z in [0,1] (for depths d in [-1,1], e.g. HDRP's HDIMS path, encode z = 0.5*d + 0.5 and use [0,1] depths in the reconstruction).
+// Moment order: the decoder returns b = (z, z^2, z^3) of the filtered depth distribution, in this order.
+// Channel order: as found by momentlab's search.
+// Encoder: each channel as a Chebyshev series in x = 2z - 1 (Clenshaw's recurrence), accurate in f32; clamped to [0,1].
+// Store s (16-bit UNORM or 32-bit float), filter linearly, decode the filtered sample.
+// Moment bias α, b*: depend on the reconstruction (none recommended for this m).
+// MOMENTLAB_PRECISE (default `precise`) keeps the operations unfused as momentlab tests them; define it empty for GLSL ES 3.10.
+#ifndef MOMENTLAB_PRECISE
+#define MOMENTLAB_PRECISE precise
+#endif
+
 void EncodeMoments3(float z, out float s[3])
 {
-    float z1 = z;
-    float z2 = z1 * z;
-    float z3 = z2 * z;
-    float b[3];
-    b[0] = z1;
-    b[1] = z2;
-    b[2] = z3;
-    s[0] = 5.00000888178418801e-10 + 8.99999999085595981e0 * b[0] + -2.39999999756639077e1 * b[1] + 1.59999999838079461e1 * b[2];
-    s[1] = 9.81132546778839876e-1 + 5.77223228401400390e-1 * b[0] + -4.61852713789446234e0 * b[1] + 3.07904359779480963e0 * b[2];
-    s[2] = 5.00000000000000031e-10 + 3.99999096413668775e0 * b[0] + -3.99997290042026110e0 * b[1] + -1.80637164260390817e-5 * b[2];
+    MOMENTLAB_PRECISE float t_4 = z * 2e0;
+    MOMENTLAB_PRECISE float t_5 = t_4 - 1e0; // x = 2z - 1
+    MOMENTLAB_PRECISE float t_6 = t_5 + t_5;
+    MOMENTLAB_PRECISE float t_8 = t_6 * 5e-1;
+    MOMENTLAB_PRECISE float t_10 = t_8 + 6.001796282184557e-12;
+    MOMENTLAB_PRECISE float t_11 = t_6 * t_10;
+    MOMENTLAB_PRECISE float t_12 = t_11 - 5e-1;
+    MOMENTLAB_PRECISE float t_14 = t_12 + 6.001948937850443e-12;
+    MOMENTLAB_PRECISE float t_15 = t_5 * t_14;
+    MOMENTLAB_PRECISE float t_16 = t_15 - t_10;
+    MOMENTLAB_PRECISE float t_18 = t_16 + 5e-1;
+    MOMENTLAB_PRECISE float t_19 = clamp(t_18, 0e0, 1e0); // stored channel 0
+    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_23 = t_21 + 4.782349606102798e-6;
+    MOMENTLAB_PRECISE float t_24 = t_6 * t_23;
+    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_27 = t_25 + (-5.773502588272095e-1);
+    MOMENTLAB_PRECISE float t_28 = t_5 * t_27;
+    MOMENTLAB_PRECISE float t_29 = t_28 - t_23;
+    MOMENTLAB_PRECISE float t_31 = t_29 + 4.99997615814209e-1;
+    MOMENTLAB_PRECISE float t_32 = clamp(t_31, 0e0, 1e0); // stored channel 1
+    MOMENTLAB_PRECISE float t_34 = t_6 * (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_36 = t_34 + (-5e-1);
+    MOMENTLAB_PRECISE float t_37 = t_6 * t_36;
+    MOMENTLAB_PRECISE float t_38 = t_37 - (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_40 = t_38 + 5.644911311719625e-7;
+    MOMENTLAB_PRECISE float t_41 = t_5 * t_40;
+    MOMENTLAB_PRECISE float t_42 = t_41 - t_36;
+    MOMENTLAB_PRECISE float t_44 = t_42 + 5e-1;
+    MOMENTLAB_PRECISE float t_45 = clamp(t_44, 0e0, 1e0); // stored channel 2
+    s[0] = t_19;
+    s[1] = t_32;
+    s[2] = t_45;
 }
 
 void DecodeMoments3(float s[3], out float b[3])
 {
-    float d[3];
-    d[0] = s[0] - 5.00000888178418801e-10;
-    d[1] = s[1] - 9.81132546778839876e-1;
-    d[2] = s[2] - 5.00000000000000031e-10;
-    b[0] = 1.66658123863677010e-1 * d[0] + -8.66025405154923322e-1 * d[1] + -8.28327071410609027e-6 * d[2];
-    b[1] = 1.66657888656624370e-1 * d[0] + -8.66025649586756763e-1 * d[1] + -2.50008283523370622e-1 * d[2];
-    b[2] = 2.18741638374743447e-1 * d[0] + -8.11899183979841288e-1 * d[1] + -3.75007765944529114e-1 * d[2];
+    MOMENTLAB_PRECISE float t_4 = s[0] - 5.00000874037454e-10;
+    MOMENTLAB_PRECISE float t_6 = s[1] - 9.811325669288635e-1;
+    MOMENTLAB_PRECISE float t_8 = s[2] - 4.999999858590343e-10;
+    MOMENTLAB_PRECISE float t_10 = 1.6665811836719513e-1 * t_4;
+    MOMENTLAB_PRECISE float t_12 = (-8.660253882408142e-1) * t_6;
+    MOMENTLAB_PRECISE float t_13 = t_10 + t_12;
+    MOMENTLAB_PRECISE float t_15 = (-8.283270290121436e-6) * t_8;
+    MOMENTLAB_PRECISE float t_16 = t_13 + t_15;
+    MOMENTLAB_PRECISE float t_18 = 1.6665789484977722e-1 * t_4;
+    MOMENTLAB_PRECISE float t_20 = (-8.660256266593933e-1) * t_6;
+    MOMENTLAB_PRECISE float t_21 = t_18 + t_20;
+    MOMENTLAB_PRECISE float t_23 = (-2.500082850456238e-1) * t_8;
+    MOMENTLAB_PRECISE float t_24 = t_21 + t_23;
+    MOMENTLAB_PRECISE float t_26 = 2.1874164044857025e-1 * t_4;
+    MOMENTLAB_PRECISE float t_28 = (-8.118991851806641e-1) * t_6;
+    MOMENTLAB_PRECISE float t_29 = t_26 + t_28;
+    MOMENTLAB_PRECISE float t_31 = (-3.750077784061432e-1) * t_8;
+    MOMENTLAB_PRECISE float t_32 = t_29 + t_31;
+    b[0] = t_16;
+    b[1] = t_24;
+    b[2] = t_32;
+}
+
+float3 EncodeMoments3Vec(float z)
+{
+    MOMENTLAB_PRECISE float t_4 = z * 2e0;
+    MOMENTLAB_PRECISE float t_5 = t_4 - 1e0; // x = 2z - 1
+    MOMENTLAB_PRECISE float t_6 = t_5 + t_5;
+    MOMENTLAB_PRECISE float t_8 = t_6 * 5e-1;
+    MOMENTLAB_PRECISE float t_10 = t_8 + 6.001796282184557e-12;
+    MOMENTLAB_PRECISE float t_11 = t_6 * t_10;
+    MOMENTLAB_PRECISE float t_12 = t_11 - 5e-1;
+    MOMENTLAB_PRECISE float t_14 = t_12 + 6.001948937850443e-12;
+    MOMENTLAB_PRECISE float t_15 = t_5 * t_14;
+    MOMENTLAB_PRECISE float t_16 = t_15 - t_10;
+    MOMENTLAB_PRECISE float t_18 = t_16 + 5e-1;
+    MOMENTLAB_PRECISE float t_19 = clamp(t_18, 0e0, 1e0); // stored channel 0
+    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_23 = t_21 + 4.782349606102798e-6;
+    MOMENTLAB_PRECISE float t_24 = t_6 * t_23;
+    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_27 = t_25 + (-5.773502588272095e-1);
+    MOMENTLAB_PRECISE float t_28 = t_5 * t_27;
+    MOMENTLAB_PRECISE float t_29 = t_28 - t_23;
+    MOMENTLAB_PRECISE float t_31 = t_29 + 4.99997615814209e-1;
+    MOMENTLAB_PRECISE float t_32 = clamp(t_31, 0e0, 1e0); // stored channel 1
+    MOMENTLAB_PRECISE float t_34 = t_6 * (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_36 = t_34 + (-5e-1);
+    MOMENTLAB_PRECISE float t_37 = t_6 * t_36;
+    MOMENTLAB_PRECISE float t_38 = t_37 - (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_40 = t_38 + 5.644911311719625e-7;
+    MOMENTLAB_PRECISE float t_41 = t_5 * t_40;
+    MOMENTLAB_PRECISE float t_42 = t_41 - t_36;
+    MOMENTLAB_PRECISE float t_44 = t_42 + 5e-1;
+    MOMENTLAB_PRECISE float t_45 = clamp(t_44, 0e0, 1e0); // stored channel 2
+    return float3(t_19, t_32, t_45);
+}
+
+float3 DecodeMoments3Vec(float3 s012)
+{
+    MOMENTLAB_PRECISE float t_4 = s012.x - 5.00000874037454e-10;
+    MOMENTLAB_PRECISE float t_6 = s012.y - 9.811325669288635e-1;
+    MOMENTLAB_PRECISE float t_8 = s012.z - 4.999999858590343e-10;
+    MOMENTLAB_PRECISE float t_10 = 1.6665811836719513e-1 * t_4;
+    MOMENTLAB_PRECISE float t_12 = (-8.660253882408142e-1) * t_6;
+    MOMENTLAB_PRECISE float t_13 = t_10 + t_12;
+    MOMENTLAB_PRECISE float t_15 = (-8.283270290121436e-6) * t_8;
+    MOMENTLAB_PRECISE float t_16 = t_13 + t_15;
+    MOMENTLAB_PRECISE float t_18 = 1.6665789484977722e-1 * t_4;
+    MOMENTLAB_PRECISE float t_20 = (-8.660256266593933e-1) * t_6;
+    MOMENTLAB_PRECISE float t_21 = t_18 + t_20;
+    MOMENTLAB_PRECISE float t_23 = (-2.500082850456238e-1) * t_8;
+    MOMENTLAB_PRECISE float t_24 = t_21 + t_23;
+    MOMENTLAB_PRECISE float t_26 = 2.1874164044857025e-1 * t_4;
+    MOMENTLAB_PRECISE float t_28 = (-8.118991851806641e-1) * t_6;
+    MOMENTLAB_PRECISE float t_29 = t_26 + t_28;
+    MOMENTLAB_PRECISE float t_31 = (-3.750077784061432e-1) * t_8;
+    MOMENTLAB_PRECISE float t_32 = t_29 + t_31;
+    return float3(t_16, t_24, t_32);
 }

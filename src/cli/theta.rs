@@ -2,9 +2,10 @@
 //! 2015 paper). theta{m}.json and HLSL/GLSL snippets into --out DIR
 //! (default a run directory under results/; never overwrites without --force).
 
-use crate::basis::Catalog;
+use crate::artefact;
 use crate::progress::Bar;
 use crate::quantize::{self, codegen, curve, optimize, theta, volume, Curve};
+use crate::shader;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
 use std::path::PathBuf;
@@ -55,6 +56,83 @@ pub struct Args {
     /// Also print the JSON on stdout.
     #[arg(long)]
     pub json: bool,
+    /// Channel order of the emitted θ₂/θ₄ snippets: `paper` (the 2015 paper's rows and signs, as
+    /// MJP's Shadows sample and Unity HDRP ship them) or `search` (as the search found them).
+    /// Other transforms always use the search's order.
+    #[arg(long, value_enum, default_value_t = Order::Paper)]
+    pub channel_order: Order,
+    /// Instead of searching: re-emit theta*.hlsl / theta*.glsl for every theta*.json in DIR (the
+    /// JSON files are only read).
+    #[arg(long, conflicts_with_all = ["moments", "basis", "summary"])]
+    pub snippets: Option<PathBuf>,
+}
+
+/// Channel order of emitted θ₂/θ₄ snippets.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Order {
+    Paper,
+    Search,
+}
+
+impl From<Order> for codegen::ChannelOrder {
+    fn from(o: Order) -> Self {
+        match o {
+            Order::Paper => codegen::ChannelOrder::Paper,
+            Order::Search => codegen::ChannelOrder::Search,
+        }
+    }
+}
+
+/// Write `theta{tag}.glsl` and `theta{tag}.hlsl` for θ into `dir` (atomically, via
+/// crate::artefact); returns the channel order used.
+fn write_snippets(
+    dir: &std::path::Path,
+    th: &theta::Theta,
+    curve: &dyn Curve,
+    tag: &str,
+    order: Order,
+) -> Result<&'static str> {
+    let sn = codegen::snippet(th, curve, tag, order.into())?;
+    artefact::write_text(
+        &dir.join(format!("theta{tag}.glsl")),
+        &shader::glsl(&sn.glsl)?,
+    )?;
+    artefact::write_text(
+        &dir.join(format!("theta{tag}.hlsl")),
+        &shader::hlsl(&sn.hlsl)?,
+    )?;
+    Ok(sn.order)
+}
+
+/// `--snippets DIR`: re-emit the snippets of every theta*.json in DIR.
+fn snippets(dir: &std::path::Path, order: Order) -> Result<()> {
+    let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
+        .with_context(|| format!("--snippets: reading {}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            p.extension().is_some_and(|e| e == "json")
+                && p.file_stem()
+                    .and_then(|s| s.to_str())
+                    .is_some_and(|s| s.starts_with("theta"))
+        })
+        .collect();
+    paths.sort();
+    if paths.is_empty() {
+        bail!("--snippets: no theta*.json in {}", dir.display());
+    }
+    for p in &paths {
+        let Some((th, _)) = read_theta(p)? else {
+            continue;
+        };
+        let curve = curve::from_names(&th.basis).with_context(|| p.display().to_string())?;
+        let tag = snippet_tag(curve.as_ref());
+        let used = write_snippets(dir, &th, curve.as_ref(), &tag, order)?;
+        eprintln!(
+            "{}: wrote theta{tag}.glsl, theta{tag}.hlsl ({used} channel order)",
+            p.display()
+        );
+    }
+    Ok(())
 }
 
 /// The curve for --moments / --basis: exact monomials when every name is "z" or "z^k",
@@ -68,26 +146,7 @@ pub fn build_curve(moments: Option<usize>, basis: Option<&str>) -> Result<Box<dy
                 .map(|s| s.trim().to_string())
                 .filter(|s| !s.is_empty())
                 .collect();
-            if names.is_empty() {
-                bail!("--basis: empty list");
-            }
-            if let Some(e) = curve::parse_monomials(&names) {
-                return Ok(Box::new(curve::MonomialCurve::new(e).context("--basis")?));
-            }
-            let cat = Catalog::embedded();
-            let funcs = names
-                .iter()
-                .map(|n| {
-                    cat.resolve(n)
-                        .with_context(|| format!("--basis entry '{n}'"))
-                })
-                .collect::<Result<Vec<_>>>()?;
-            let b = crate::basis::Basis::new(funcs);
-            Ok(Box::new(curve::SampledCurve::new(
-                b.names(),
-                1 << 14,
-                Box::new(move |z, out: &mut [f64]| b.eval(z, out)),
-            )?))
+            curve::from_names(&names).context("--basis")
         }
         _ => bail!("give exactly one of --moments m or --basis f1,f2,..."),
     }
@@ -174,6 +233,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
         return summary(dir);
     }
+    if let Some(dir) = &args.snippets {
+        return snippets(dir, args.channel_order);
+    }
     let command = crate::report::provenance::command_line();
     let opts = options(&args)?;
     let curve = build_curve(args.moments, args.basis.as_deref())?;
@@ -258,17 +320,10 @@ pub fn run(args: Args) -> Result<()> {
             j["published_gain_bits"] = json!(p.gain_bits());
         }
     }
+    let order = write_snippets(&dir, th, curve.as_ref(), &tag, args.channel_order)?;
+    j["snippet_channel_order"] = json!(order);
     let text = serde_json::to_string_pretty(&j)? + "\n";
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::write(&files[0], &text).with_context(|| format!("writing {}", files[0].display()))?;
-    let exps = curve.monomial_exponents();
-    for (lang, f) in [
-        (codegen::Lang::Hlsl, &files[1]),
-        (codegen::Lang::Glsl, &files[2]),
-    ] {
-        std::fs::write(f, codegen::snippet(th, exps.as_deref(), &tag, gain, lang))
-            .with_context(|| format!("writing {}", f.display()))?;
-    }
+    artefact::write_text(&files[0], &text)?;
     if args.json {
         print!("{text}");
     }
@@ -399,7 +454,7 @@ fn summary(dir: &std::path::Path) -> Result<()> {
         let vols = quantize::fig5::volumes(&t3, 2000)?;
         let svg = quantize::fig5::svg(&t3, &vols, 48)?;
         let p = dir.join("fig5.svg");
-        std::fs::write(&p, svg).with_context(|| format!("writing {}", p.display()))?;
+        artefact::write_text(&p, &svg)?;
         md.push_str(&format!(
             "\nFig. 5 analogue (fig5.svg): hull of b([0,1]) {:.6} (exact 1/180 = {:.6}), hull of θ₃∘b([0,1]) {:.4}, ratio {:.1} (paper: 0.41 and 73.9×).\n",
             vols.volume_b, vols.volume_b_exact, vols.volume_theta, vols.ratio
@@ -407,13 +462,9 @@ fn summary(dir: &std::path::Path) -> Result<()> {
         fig = serde_json::to_value(&vols)?;
     }
     let p = dir.join("comparison.md");
-    std::fs::write(&p, &md).with_context(|| format!("writing {}", p.display()))?;
+    artefact::write_text(&p, &md)?;
     let p = dir.join("summary.json");
-    std::fs::write(
-        &p,
-        serde_json::to_string_pretty(&json!({"rows": rows, "fig5": fig}))? + "\n",
-    )
-    .with_context(|| format!("writing {}", p.display()))?;
+    artefact::write_json(&p, &json!({"rows": rows, "fig5": fig}))?;
     print!("{md}");
     Ok(())
 }

@@ -29,6 +29,8 @@ fn args(m: usize, restarts: usize, dir: &Path) -> theta::Args {
         out: Some(dir.to_path_buf()),
         force: true,
         json: false,
+        channel_order: theta::Order::Paper,
+        snippets: None,
     }
 }
 

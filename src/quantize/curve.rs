@@ -232,6 +232,29 @@ impl Curve for SampledCurve {
     }
 }
 
+/// The curve of a basis given by names: exact monomials when every name is "z" or "z^k",
+/// otherwise catalog functions or formulas (crate::basis) verified by dense sampling.
+pub fn from_names(names: &[String]) -> anyhow::Result<Box<dyn Curve>> {
+    use anyhow::Context;
+    if names.is_empty() {
+        anyhow::bail!("basis: empty list");
+    }
+    if let Some(e) = parse_monomials(names) {
+        return Ok(Box::new(MonomialCurve::new(e).context("basis")?));
+    }
+    let cat = crate::basis::Catalog::embedded();
+    let funcs = names
+        .iter()
+        .map(|n| cat.resolve(n).with_context(|| format!("basis entry '{n}'")))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let b = crate::basis::Basis::new(funcs);
+    Ok(Box::new(SampledCurve::new(
+        b.names(),
+        1 << 14,
+        Box::new(move |z, out: &mut [f64]| b.eval(z, out)),
+    )?))
+}
+
 /// Parse "z" / "z^k" names into exponents (None if any name is not a plain monomial).
 pub fn parse_monomials(names: &[String]) -> Option<Vec<u32>> {
     names

@@ -232,3 +232,58 @@ pub fn published(m: usize) -> Option<Theta> {
         _ => None,
     }
 }
+
+/// θ₂ / θ₄ in the channel order of the 2015 paper (Section 4.3; the order MJP's Shadows sample
+/// and Unity HDRP ship): each published row is matched to the row of `theta` (or its
+/// reflection s ↦ 1 − s, i.e. row −a and offset 1 − t) nearest to it, relative to the published
+/// row's largest entry. Returns the reordered θ and the largest relative difference to the
+/// published matrix; None if m ∉ {2, 4}, the basis is not (z, …, z^m) or no one-to-one matching
+/// lies within 1 % (a different optimum).
+pub fn paper_order(theta: &Theta) -> Option<(Theta, f64)> {
+    let m = theta.m();
+    if !matches!(m, 2 | 4) || theta.basis != power_names(m) {
+        return None;
+    }
+    let p = published(m)?;
+    let mut used = vec![false; m];
+    let (mut rows, mut offs, mut worst) = (Vec::new(), Vec::new(), 0.0f64);
+    for (prow, &pt) in p.matrix.iter().zip(&p.offset) {
+        let scale = prow.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut best: Option<(f64, usize, f64)> = None;
+        for (j, row) in theta.matrix.iter().enumerate() {
+            if used[j] {
+                continue;
+            }
+            for sign in [1.0, -1.0] {
+                let d = row
+                    .iter()
+                    .zip(prow)
+                    .fold(0.0f64, |a, (r, q)| a.max((sign * r - q).abs()))
+                    / scale;
+                let t = if sign > 0.0 {
+                    theta.offset[j]
+                } else {
+                    1.0 - theta.offset[j]
+                };
+                let d = d.max((t - pt).abs());
+                if best.is_none_or(|b| d < b.0) {
+                    best = Some((d, j, sign));
+                }
+            }
+        }
+        let (d, j, sign) = best?;
+        if d > 1e-2 {
+            return None;
+        }
+        used[j] = true;
+        worst = worst.max(d);
+        rows.push(theta.matrix[j].iter().map(|v| sign * v).collect());
+        offs.push(if sign > 0.0 {
+            theta.offset[j]
+        } else {
+            1.0 - theta.offset[j]
+        });
+    }
+    let th = Theta::new(theta.basis.clone(), rows, offs).ok()?;
+    Some((th, worst))
+}
