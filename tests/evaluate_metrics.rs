@@ -3,7 +3,7 @@
 
 mod kernel_common;
 use kernel_common::*;
-use momentlab::metrics::{self, Bias, EvalOptions, Subject, Subsample};
+use momentlab::metrics::{self, Bias, EvalOptions, Receiver, Subject, Subsample};
 use momentlab::technique::{Evaluator, Technique};
 use momentlab::Grid;
 use rand::Rng;
@@ -229,6 +229,11 @@ fn fragments_match_brute_force_on_random_stacks() {
                 slope_scale: r.gen_range(0.0..3.0),
                 technique_epsilon: r.gen_range(0.0..0.01),
                 technique_slope_scale: r.gen_range(0.0..5.0),
+                receiver: if r.gen_bool(0.5) {
+                    Receiver::Lower
+                } else {
+                    Receiver::Fragment
+                },
             }
         };
         let frags = metrics::fragments(&s, case, &bias);
@@ -335,6 +340,7 @@ fn evaluate_equals_brute_force_for_a_closed_form_technique() {
                 slope_scale: 0.5,
                 technique_epsilon: 0.002,
                 technique_slope_scale: 1.0,
+                ..Bias::default()
             }
         };
         for skip in [None, Some(true)] {
@@ -645,6 +651,7 @@ fn cdf_subject_is_the_bias_floor() {
         slope_scale: 0.0,
         technique_epsilon: 0.0,
         technique_slope_scale: 0.0,
+        ..Bias::default()
     };
     let opts = EvalOptions {
         bias: zero,

@@ -45,7 +45,42 @@ pub struct Bias {
     pub technique_epsilon: f64,
     /// Slope part of ε′: ε′ += technique_slope_scale · (|dz/du| + |dz/dv|) (texels).
     pub technique_slope_scale: f64,
+    /// Which receiver plane the PCF test extends to each tap (see [`Receiver`]).
+    #[serde(default)]
+    pub receiver: Receiver,
 }
+
+/// The receiver plane of the PCF test at tap l (offset o_l = (dx_l, dy_l) texels).
+///
+/// * `Fragment`: Δ_l = ∇z_f·o_l, the fragment's own tangent plane.
+/// * `Lower` (default): Δ_l = min(∇z_f·o_l, min_j ∇z0(p_j)·o_l) over the front texels p_j the
+///   straight path to the tap passes (at each step of the longer axis the floor and ceiling
+///   texel of the path point, the tap included): the lowest tangent plane met on the way. The surface's own rise along the path is
+///   z(t+l) − z_f = ∫₀¹ ∇z(t + τ·o_l)·o_l dτ ≥ min_τ ∇z·o_l, so a surface whose facets the path
+///   samples never shadows itself (convex, concave or saddle); on a plane every slope agrees
+///   and the test is the `Fragment` test (docs/evaluation.md).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Receiver {
+    Fragment,
+    #[default]
+    Lower,
+}
+
+impl Receiver {
+    /// Parses "fragment" or "lower".
+    pub fn parse(s: &str) -> Result<Receiver> {
+        match s {
+            "fragment" => Ok(Receiver::Fragment),
+            "lower" => Ok(Receiver::Lower),
+            _ => bail!("receiver plane '{s}': expected 'fragment' or 'lower'"),
+        }
+    }
+}
+
+/// Factors of the PCF constant ε at which every error is also reported (reference
+/// sensitivity): ε/3 and 3ε.
+pub const EPSILON_FACTORS: [f64; 2] = [1.0 / 3.0, 3.0];
 
 impl Default for Bias {
     fn default() -> Self {
@@ -54,6 +89,7 @@ impl Default for Bias {
             slope_scale: 1.0,
             technique_epsilon: 1e-4,
             technique_slope_scale: 2.0,
+            receiver: Receiver::Lower,
         }
     }
 }
@@ -93,6 +129,9 @@ pub struct Fragment {
     pub zf: f64,
     /// The PCF reference shadow intensity ∈ [0,1].
     pub pcf: f64,
+    /// PCF with the constant ε scaled by [`EPSILON_FACTORS`] (reference sensitivity).
+    #[serde(default)]
+    pub pcf_scaled: [f64; 2],
     /// F_Z(zf) = 0 (no kernel depth below zf): G = 0 for every sharp lower bound.
     pub trivial: bool,
 }
@@ -107,14 +146,45 @@ fn slope(v: f32) -> f64 {
     }
 }
 
+/// The front layer of a stack as the PCF test reads it: depth z0 (background = 1) and the
+/// receiver-plane slopes of the front surface (0 where there is none).
+#[derive(Clone, Debug, PartialEq)]
+pub struct FrontMap {
+    pub width: usize,
+    pub height: usize,
+    pub depth: Vec<f64>,
+    pub dzdu: Vec<f64>,
+    pub dzdv: Vec<f64>,
+}
+
+impl FrontMap {
+    /// The front layer of `stack`.
+    pub fn of(stack: &DepthStack) -> FrontMap {
+        let n = stack.texel_count();
+        let slopes = |s: &[Vec<f32>]| -> Vec<f64> {
+            match (stack.depth.first(), s.first()) {
+                (Some(d), Some(l)) => (0..n)
+                    .map(|t| if d[t].is_finite() { slope(l[t]) } else { 0.0 })
+                    .collect(),
+                _ => vec![0.0; n],
+            }
+        };
+        FrontMap {
+            width: stack.meta.width,
+            height: stack.meta.height,
+            depth: kernel::front_map(stack),
+            dzdu: slopes(&stack.dzdu),
+            dzdv: slopes(&stack.dzdv),
+        }
+    }
+}
+
 /// PCF of a fragment at texel (x, y) with depth `zf` and receiver-plane slopes (dzdu, dzdv):
-/// Σ_l w_l [z0(t+l) < zf + s·Δ_l − ε], Δ_l = dzdu·dx + dzdv·dy where (dx, dy) is the offset to
-/// the (edge-clamped) neighbour texel actually read.
+/// Σ_l w_l [z0(t+l) < zf + s·Δ_l − ε], Δ_l per [`Receiver`] with (dx, dy) the offset to the
+/// (edge-clamped) neighbour texel actually read.
 #[allow(clippy::too_many_arguments)]
 pub fn pcf(
-    front: &[f64],
-    width: usize,
-    height: usize,
+    front: &FrontMap,
     kernel: &Gaussian,
     x: usize,
     y: usize,
@@ -123,35 +193,88 @@ pub fn pcf(
     dzdv: f64,
     bias: &Bias,
 ) -> f64 {
+    pcf_at(
+        front,
+        kernel,
+        x,
+        y,
+        zf,
+        dzdu,
+        dzdv,
+        bias,
+        [bias.pcf_epsilon],
+    )[0]
+}
+
+/// [`pcf`] for N constants ε at once (one pass over the taps).
+#[allow(clippy::too_many_arguments)]
+pub fn pcf_at<const N: usize>(
+    front: &FrontMap,
+    kernel: &Gaussian,
+    x: usize,
+    y: usize,
+    zf: f64,
+    dzdu: f64,
+    dzdv: f64,
+    bias: &Bias,
+    eps: [f64; N],
+) -> [f64; N] {
+    let (width, height) = (front.width, front.height);
     let r = kernel.radius() as i64;
     let g = kernel.weights_1d();
-    let mut total = 0.0;
+    let lower = bias.receiver == Receiver::Lower;
+    let mut total = [0.0; N];
     for (iy, &wy) in g.iter().enumerate() {
         let yy = kernel::clamp_coord(y, iy as i64 - r, height);
         let dy = yy as f64 - y as f64;
-        let row = &front[yy * width..(yy + 1) * width];
-        let mut s = 0.0;
+        let row = yy * width;
+        let mut s = [0.0; N];
         for (ix, &wx) in g.iter().enumerate() {
             let xx = kernel::clamp_coord(x, ix as i64 - r, width);
             let dx = xx as f64 - x as f64;
-            let delta = dzdu * dx + dzdv * dy;
-            if row[xx] < zf + bias.slope_scale * delta - bias.pcf_epsilon {
-                s += wx;
+            let mut delta = dzdu * dx + dzdv * dy;
+            if lower {
+                // the lowest tangent plane met on the straight path to the tap: at each step
+                // of the longer axis the (one or two) texels the path passes between
+                let n = (xx as i64 - x as i64)
+                    .abs()
+                    .max((yy as i64 - y as i64).abs());
+                for j in 1..=n {
+                    let f = j as f64 / n as f64;
+                    let (px, py) = (x as f64 + dx * f, y as f64 + dy * f);
+                    for (qx, qy) in [(px.floor(), py.floor()), (px.ceil(), py.ceil())] {
+                        let k = qy as usize * width + qx as usize;
+                        delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
+                    }
+                }
+            }
+            let plane = zf + bias.slope_scale * delta;
+            let z0 = front.depth[row + xx];
+            for k in 0..N {
+                if z0 < plane - eps[k] {
+                    s[k] += wx;
+                }
             }
         }
-        total += wy * s;
+        for k in 0..N {
+            total[k] += wy * s[k];
+        }
     }
     total
 }
 
 /// PCF of fragment (texel, layer) of a stack with the paper's kernel (see [`pcf`]).
-pub fn pcf_of(stack: &DepthStack, front: &[f64], texel: usize, layer: usize, bias: &Bias) -> f64 {
+pub fn pcf_of(
+    stack: &DepthStack,
+    front: &FrontMap,
+    texel: usize,
+    layer: usize,
+    bias: &Bias,
+) -> f64 {
     let w = stack.meta.width;
     let zf = stack.depth[layer][texel] as f64;
     pcf(
         front,
-        w,
-        stack.meta.height,
         &Gaussian::paper(),
         texel % w,
         texel / w,
@@ -280,9 +403,11 @@ fn build_fragments(
 ) -> Vec<Fragment> {
     let w = stack.meta.width;
     let h = stack.meta.height;
-    let front = kernel::front_map(stack);
+    let front = FrontMap::of(stack);
     let kern = Gaussian::paper();
-    let min_map = kernel::min_filter(&front, w, h, kern.radius());
+    let min_map = kernel::min_filter(&front.depth, w, h, kern.radius());
+    let e = bias.pcf_epsilon;
+    let eps = [e, e * EPSILON_FACTORS[0], e * EPSILON_FACTORS[1]];
     picked
         .par_iter()
         .with_min_len(1024)
@@ -292,14 +417,15 @@ fn build_fragments(
                 slope(stack.dzdu[layer][texel]),
                 slope(stack.dzdv[layer][texel]),
             );
-            let p = pcf(&front, w, h, &kern, texel % w, texel / w, z, du, dv, bias);
+            let p = pcf_at(&front, &kern, texel % w, texel / w, z, du, dv, bias, eps);
             let zf = z - bias.technique_offset(du, dv);
             Fragment {
                 view,
                 texel,
                 layer,
                 zf,
-                pcf: p,
+                pcf: p[0],
+                pcf_scaled: [p[1], p[2]],
                 trivial: min_map[texel] >= zf,
             }
         })
@@ -430,6 +556,14 @@ pub struct ViewReport {
     pub sum_abs_error: f64,
     /// Mean |G − PCF| over the finite fragments (0 when there are none).
     pub error: f64,
+    /// Σ |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`].
+    pub sum_abs_error_scaled: [f64; 2],
+    /// Mean |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`] (reference sensitivity).
+    pub error_scaled: [f64; 2],
+    /// Σ max(0, PCF − G): light leaked (G below the reference).
+    pub sum_leak: f64,
+    /// Mean max(0, PCF − G) over the finite fragments: the light-leaking part of `error`.
+    pub leak: f64,
     /// Wall time of the view (fragments, moment maps, shading), seconds.
     pub seconds: f64,
     /// Wall time of the shading loop alone, seconds.
@@ -454,6 +588,12 @@ pub struct EvalReport {
     pub out_of_range: usize,
     /// Mean |G − PCF| over all finite evaluated fragments of all views.
     pub error: f64,
+    /// `error` with PCF's constant ε scaled by [`EPSILON_FACTORS`] (ε/3, 3ε): how much of the
+    /// error depends on the reference's constant.
+    pub error_scaled: [f64; 2],
+    /// Mean max(0, PCF − G): the light-leaking part of `error` (the rest, mean
+    /// max(0, G − PCF), is over-darkening).
+    pub leak: f64,
     pub seconds: f64,
     /// Technique calls per second of shading time (throughput over real, non-trivial fragments
     /// when trivial ones are skipped).
@@ -476,7 +616,7 @@ pub fn evaluate(
 struct ViewShader<'a> {
     subject: Subject<'a>,
     stack: &'a DepthStack,
-    front: Vec<f64>,
+    front: FrontMap,
     /// Moment maps (of the snapped front map for grid techniques).
     maps: Vec<Vec<f64>>,
     /// 9×9 min of the (snapped) front map.
@@ -490,14 +630,14 @@ impl<'a> ViewShader<'a> {
     fn new(subject: Subject<'a>, stack: &'a DepthStack, opts: &EvalOptions) -> ViewShader<'a> {
         let (w, h) = (stack.meta.width, stack.meta.height);
         let kern = Gaussian::paper();
-        let front = kernel::front_map(stack);
+        let front = FrontMap::of(stack);
         let (grid, maps, min_map, skip) = match subject {
             Subject::Pcf | Subject::Cdf => (None, Vec::new(), Vec::new(), false),
             Subject::Technique(t) => {
                 let grid = t.depth_grid();
                 let snapped: Vec<f64> = match grid {
-                    Some(g) => front.iter().map(|&z| snap(g, z)).collect(),
-                    None => front.clone(),
+                    Some(g) => front.depth.iter().map(|&z| snap(g, z)).collect(),
+                    None => front.depth.clone(),
                 };
                 let maps =
                     kernel::moment_maps_of(&snapped, w, h, t.moment_count(), &kern, |z, o| {
@@ -539,7 +679,7 @@ impl<'a> ViewShader<'a> {
             Subject::Cdf => {
                 let (w, h) = (self.stack.meta.width, self.stack.meta.height);
                 let g = kernel::depth_distribution(
-                    &self.front,
+                    &self.front.depth,
                     w,
                     h,
                     f.texel % w,
@@ -574,6 +714,8 @@ impl<'a> ViewShader<'a> {
 #[derive(Default)]
 struct Partial {
     sum: f64,
+    sum_scaled: [f64; 2],
+    leak: f64,
     trivial: usize,
     solved: usize,
     non_finite: usize,
@@ -644,6 +786,9 @@ pub fn evaluate_subject(
                         p.solved += solved as usize;
                         if g.is_finite() {
                             p.sum += (g - f.pcf).abs();
+                            p.sum_scaled[0] += (g - f.pcf_scaled[0]).abs();
+                            p.sum_scaled[1] += (g - f.pcf_scaled[1]).abs();
+                            p.leak += (f.pcf - g).max(0.0);
                             if !(-1e-9..=1.0 + 1e-9).contains(&g) {
                                 p.out_of_range += 1;
                             }
@@ -674,6 +819,9 @@ pub fn evaluate_subject(
         let mut values = Vec::new();
         for p in partials {
             total.sum += p.sum;
+            total.sum_scaled[0] += p.sum_scaled[0];
+            total.sum_scaled[1] += p.sum_scaled[1];
+            total.leak += p.leak;
             total.trivial += p.trivial;
             total.solved += p.solved;
             total.non_finite += p.non_finite;
@@ -682,7 +830,12 @@ pub fn evaluate_subject(
             values.extend(p.values);
         }
         let finite = frags.len() - total.non_finite;
+        let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
         views.push(ViewReport {
+            sum_abs_error_scaled: total.sum_scaled,
+            error_scaled: total.sum_scaled.map(mean),
+            sum_leak: total.leak,
+            leak: mean(total.leak),
             scene: stack.meta.scene.clone(),
             view: stack.meta.view.clone(),
             width: stack.meta.width,
@@ -712,6 +865,11 @@ pub fn evaluate_subject(
     let non_finite = sum(|v| v.non_finite);
     let solved = sum(|v| v.solved);
     let sum_abs: f64 = views.iter().map(|v| v.sum_abs_error).sum();
+    let sum_scaled: [f64; 2] =
+        std::array::from_fn(|k| views.iter().map(|v| v.sum_abs_error_scaled[k]).sum());
+    let sum_leak: f64 = views.iter().map(|v| v.sum_leak).sum();
+    let finite = fragments - non_finite;
+    let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
     let shade: f64 = views.iter().map(|v| v.shade_seconds).sum();
     Ok(EvalReport {
         technique: subject.name(),
@@ -724,11 +882,9 @@ pub fn evaluate_subject(
         non_finite,
         unsettled: sum(|v| v.unsettled),
         out_of_range: sum(|v| v.out_of_range),
-        error: if fragments > non_finite {
-            sum_abs / (fragments - non_finite) as f64
-        } else {
-            0.0
-        },
+        error: mean(sum_abs),
+        error_scaled: sum_scaled.map(mean),
+        leak: mean(sum_leak),
         seconds,
         solves_per_second: if shade > 0.0 {
             solved as f64 / shade

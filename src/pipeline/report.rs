@@ -202,11 +202,15 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     let lp_grid = r.chosen_grid.iter().map(|x| x.1).max().unwrap_or(0);
     d.paragraph(format!(
         "Error = mean |G − PCF| over all fragments of all layers (9×9 Gaussian PCF, σ = 2.4 \
-         texels). Closed forms see every fragment; LP candidates (Algorithm 1 on n = {lp_grid} \
+         texels, receiver plane following the surface along each tap's path, constant ε = {}); \
+         'at PCF ε/3, 3ε' is the same error against PCF with that constant divided and \
+         multiplied by 3 (how much of the number depends on the reference); leak = mean \
+         max(0, PCF − G), the light-leaking part of the error. Closed forms see every fragment; LP candidates (Algorithm 1 on n = {lp_grid} \
          uniform grid points, the largest n the grid convergence test below chose: {}) every \
          {}-th fragment. Speed: mean nanoseconds per evaluation on one core over the filter \
          windows of fragments sampled from the same depth stacks, for closed forms and LP \
          candidates alike (momentlab's timing loop, `momentlab bench shadow --corpus stacks`).",
+        crate::metrics::Bias::default().pcf_epsilon,
         r.chosen_grid
             .iter()
             .map(|(s, n)| format!("{s} {n}"))
@@ -221,6 +225,8 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             "technique",
             "precision",
             "error",
+            "at PCF ε/3, 3ε",
+            "leak",
             "ns / fragment",
             "bits / texel",
             "fragments",
@@ -235,6 +241,9 @@ pub fn build(r: ReportInputs) -> Result<Document> {
                     m.name.clone(),
                     m.precision.clone(),
                     pct(m.error),
+                    m.error_scaled
+                        .map_or("n/a".into(), |e| format!("{}, {}", pct(e[0]), pct(e[1]))),
+                    m.leak.map_or("n/a".into(), pct),
                     ns(m.ns_per_fragment),
                     m.bits_per_texel.to_string(),
                     m.fragments.to_string(),

@@ -192,6 +192,8 @@ pub fn measured(
         seconds: r.seconds,
         scenes: per_scene(&r),
         histogram,
+        error_scaled: Some(r.error_scaled),
+        leak: Some(r.leak),
     })
 }
 

@@ -438,6 +438,14 @@ enum Shape {
         #[serde(default = "default_segments")]
         segments: usize,
     },
+    /// Torus about the y axis centred at the origin: ring radius `radius`, tube radius `tube`,
+    /// `segments` around the ring and `segments / 2` (at least 3) around the tube.
+    Torus {
+        radius: f64,
+        tube: f64,
+        #[serde(default = "default_segments")]
+        segments: usize,
+    },
     /// UV sphere centred at the origin.
     Sphere {
         radius: f64,
@@ -561,6 +569,18 @@ impl Shape {
                     bail!("cylinder segments must be ≥ 3");
                 }
                 cylinder(&mut out, radius, height, segments);
+            }
+            Shape::Torus {
+                radius,
+                tube,
+                segments,
+            } => {
+                pos("torus radius", radius)?;
+                pos("torus tube", tube)?;
+                if segments < 3 {
+                    bail!("torus segments must be ≥ 3");
+                }
+                torus(&mut out, radius, tube, segments, (segments / 2).max(3));
             }
             Shape::Sphere { radius, segments } => {
                 pos("sphere radius", radius)?;
@@ -911,7 +931,24 @@ fn cylinder(out: &mut Vec<Tri>, r: f64, h: f64, n: usize) {
     }
 }
 
-fn sphere(out: &mut Vec<Tri>, r: f64, n: usize) {
+/// Torus about the y axis: ring radius `big`, tube radius `small`, `n` ring and `m` tube
+/// segments (quads split into two triangles).
+pub fn torus(out: &mut Vec<Tri>, big: f64, small: f64, n: usize, m: usize) {
+    let pt = |i: usize, j: usize| {
+        let ph = std::f64::consts::TAU * (i % n) as f64 / n as f64;
+        let th = std::f64::consts::TAU * (j % m) as f64 / m as f64;
+        let r = big + small * th.cos();
+        [r * ph.cos(), small * th.sin(), r * ph.sin()]
+    };
+    for i in 0..n {
+        for j in 0..m {
+            quad(out, pt(i, j), pt(i + 1, j), pt(i + 1, j + 1), pt(i, j + 1));
+        }
+    }
+}
+
+/// UV sphere of radius `r` with `n` segments around and ⌈n/2⌉ rings (pole caps as fans).
+pub fn sphere(out: &mut Vec<Tri>, r: f64, n: usize) {
     let rings = n.div_ceil(2).max(2);
     let pt = |i: usize, j: usize| {
         let th = std::f64::consts::PI * j as f64 / rings as f64;

@@ -26,6 +26,13 @@ pub struct Measured {
     /// Fragments per bin of |G − PCF| ([`HIST_EDGES`]); empty in artefacts of older runs.
     #[serde(default)]
     pub histogram: Vec<u64>,
+    /// The error with PCF's constant ε at ε/3 and 3ε (`metrics::EPSILON_FACTORS`): how much of
+    /// `error` depends on the reference; absent in artefacts of older runs.
+    #[serde(default)]
+    pub error_scaled: Option<[f64; 2]>,
+    /// Mean max(0, PCF − G), the light-leaking part of `error`; absent in older artefacts.
+    #[serde(default)]
+    pub leak: Option<f64>,
 }
 
 /// Bin edges of the error histogram: [0, 1e-4) then four bins per decade up to 1 (the last bin

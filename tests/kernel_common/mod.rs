@@ -180,7 +180,29 @@ pub fn brute_fragments(s: &DepthStack, bias: &momentlab::metrics::Bias) -> Vec<B
                 let (a, b) = (s.dzdu[l][t] as f64, s.dzdv[l][t] as f64);
                 let mut p = 0.0;
                 for (zz, wt, dx, dy) in brute_distribution(s, x, y) {
-                    if zz < z + bias.slope_scale * (a * dx + b * dy) - bias.pcf_epsilon {
+                    let own = a * dx + b * dy;
+                    let delta = match bias.receiver {
+                        momentlab::metrics::Receiver::Fragment => own,
+                        momentlab::metrics::Receiver::Lower => {
+                            // lowest front tangent plane on the path (texels at steps 1..=n)
+                            let n = dx.abs().max(dy.abs()) as i64;
+                            let mut d = own;
+                            for j in 1..=n {
+                                let px = x as f64 + dx * j as f64 / n as f64;
+                                let py = y as f64 + dy * j as f64 / n as f64;
+                                for (qx, qy) in [(px.floor(), py.floor()), (px.ceil(), py.ceil())] {
+                                    let k = qy as usize * w + qx as usize;
+                                    d = d.min(if s.depth[0][k].is_finite() {
+                                        s.dzdu[0][k] as f64 * dx + s.dzdv[0][k] as f64 * dy
+                                    } else {
+                                        0.0
+                                    });
+                                }
+                            }
+                            d
+                        }
+                    };
+                    if zz < z + bias.slope_scale * delta - bias.pcf_epsilon {
                         p += wt;
                     }
                 }
