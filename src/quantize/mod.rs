@@ -6,7 +6,8 @@
 //! * [`theta::verify`]: containment θ(b([0,1])) ⊆ [0,1]^m (exact for polynomial bases).
 //! * [`optimize::optimize`]: row-wise LP ascent with cutting planes and random restarts.
 //! * [`volume`]: ∏ ((j−1)!)²/(2j−1)! and convex hulls of curves in 3D (Fig. 5).
-//! * [`codegen`]: HLSL / GLSL encode/decode snippets.
+//! * [`codegen`]: θ encoders (Chebyshev series, Clenshaw) and decoders as shader functions
+//!   ([`crate::shader`]): GLSL, HLSL and their f32 interpreter.
 
 // NaN-aware comparisons are intentional; index loops mirror the matrix formulas.
 #![allow(clippy::neg_cmp_op_on_partial_ord, clippy::needless_range_loop)]
