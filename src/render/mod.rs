@@ -294,4 +294,5 @@ pub fn default_dataset(resolution: usize) -> Result<Vec<DepthStack>> {
         .collect())
 }
 
+pub mod eye;
 pub mod rectified;

@@ -186,6 +186,70 @@ pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
     Ok(())
 }
 
+/// Width of the colour bar right of the eye-view heat map, pixels.
+pub const BAR_PX: usize = 16;
+/// Values of |G − PCF| marked on the colour bar (white ticks): 0, 0.01, 0.04, 0.25, 1.
+pub const BAR_TICKS: [f64; 5] = [0.0, 0.01, 0.04, 0.25, 1.0];
+
+/// The eye-view comparison of one view: PCF-shaded image | technique-shaded image | |G − PCF|
+/// heat map (inferno on a square-root scale, as panel 5 of [`view_picture`]) with its colour
+/// bar (bottom = 0, top = 1, ticks at [`BAR_TICKS`]). Grey = 0.15 + 0.85·(n·l)⁺·(1 − shadow);
+/// pixels without a surface are [`BACKGROUND`], non-finite G is [`INVALID`].
+pub fn eye_picture(
+    view: &crate::render::eye::EyeView,
+    light_dir: [f64; 3],
+    pcf: &[f64],
+    g: &[f64],
+) -> Result<RgbImage> {
+    let n = view.resolution;
+    if pcf.len() != n * n || g.len() != n * n {
+        bail!(
+            "eye picture: {} / {} shadow values, expected {}",
+            pcf.len(),
+            g.len(),
+            n * n
+        );
+    }
+    let mut img = RgbImage::new(3 * n + 3 * GAP_PX + BAR_PX, n, GAP);
+    for y in 0..n {
+        for x in 0..n {
+            let i = y * n + x;
+            let cols = match &view.points[i] {
+                None => [BACKGROUND; 3],
+                Some(p) => {
+                    let a = grey(crate::render::eye::shade(p, light_dir, pcf[i]));
+                    if g[i].is_finite() {
+                        [
+                            a,
+                            grey(crate::render::eye::shade(p, light_dir, g[i])),
+                            inferno((g[i] - pcf[i]).abs().sqrt()),
+                        ]
+                    } else {
+                        [a, INVALID, INVALID]
+                    }
+                }
+            };
+            for (k, c) in cols.iter().enumerate() {
+                img.set(k * (n + GAP_PX) + x, y, *c);
+            }
+        }
+    }
+    let x0 = 3 * (n + GAP_PX);
+    for y in 0..n {
+        let v = 1.0 - y as f64 / (n.max(2) - 1) as f64;
+        for x in 0..BAR_PX {
+            img.set(x0 + x, y, inferno(v.sqrt()));
+        }
+    }
+    for t in BAR_TICKS {
+        let y = ((1.0 - t.sqrt()) * (n.max(2) - 1) as f64).round() as usize;
+        for x in 0..BAR_PX / 2 {
+            img.set(x0 + x, y.min(n - 1), [255, 255, 255]);
+        }
+    }
+    Ok(img)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
