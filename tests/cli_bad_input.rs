@@ -201,7 +201,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             2,
             "not in 2..=65536",
         ),
-        (args(&["stability", "--samples", "0"]), None, 2, "--samples"),
+        (args(&["stability", "--inputs", "0"]), None, 2, "--inputs"),
         (args(&["search", "--grid", "1e11"]), None, 2, "--grid"),
         (
             args(&["search", "--grid", "100000000000"]),
@@ -221,7 +221,12 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             2,
             "not in 1..=10000000",
         ),
-        (args(&["bench", "shadow", "--reps", "0"]), None, 2, "--reps"),
+        (
+            args(&["bench", "shadow", "--repeats", "0"]),
+            None,
+            2,
+            "--repeats",
+        ),
         (
             args(&["import", &f.p("huge/v.exr")]),
             None,
@@ -249,13 +254,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             "0 fragments",
         ),
         (
-            args(&[
-                "recommend",
-                "--stacks",
-                &f.p("empty"),
-                "--speed-inputs",
-                "10",
-            ]),
+            args(&["recommend", "--stacks", &f.p("empty"), "--inputs", "10"]),
             None,
             1,
             "0 fragments",
@@ -267,7 +266,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
                 &f.p("empty"),
                 "--theta-dir",
                 &theta_dir,
-                "--techniques",
+                "--technique",
                 "vsm",
                 "--out",
                 &out_q,
@@ -322,13 +321,13 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
         ),
         (args(&["bench", "lp", "--n", "1"]), None, 2, "--n"),
         (
-            args(&["recommend", "--techniques", "lp:z,z^2"]),
+            args(&["recommend", "--technique", "lp:z,z^2"]),
             None,
             1,
             "'lp:z,z^2': recommend compares closed-form",
         ),
         (
-            args(&["recommend", "--techniques", "nope", "--stacks", &f.p("a")]),
+            args(&["recommend", "--technique", "nope", "--stacks", &f.p("a")]),
             None,
             1,
             "'nope'",
@@ -503,10 +502,10 @@ fn broken_pipe_ends_quietly() {
     }
 }
 
-/// `-` is stdin for FILE arguments, and `--json` is accepted by the JSON commands.
+/// `-` is stdin for FILE arguments.
 #[test]
 fn dash_is_stdin() {
-    for a in [vec!["lp", "-"], vec!["lp", "-", "--json"], vec!["lp"]] {
+    for a in [vec!["lp", "-"], vec!["lp"]] {
         let (code, out, err) = run(&a, Some(LP_OK));
         assert_eq!(code, 0, "{a:?}: {err}");
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();

@@ -167,7 +167,7 @@ fn report_loads_in_headless_chromium() {
     let _ = std::fs::remove_dir_all(&root);
     let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
         .args(["reproduce", "--tiny", "--run", "b"])
-        .arg("--reports")
+        .arg("--out")
         .arg(root.join("reports"))
         .arg("--results")
         .arg(root.join("results"))

@@ -44,7 +44,7 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     let results = root.join("results");
     let out = Command::new(bin())
         .args(["reproduce", "--tiny", "--run", "t"])
-        .arg("--reports")
+        .arg("--out")
         .arg(&reports)
         .arg("--results")
         .arg(&results)

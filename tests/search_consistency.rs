@@ -203,8 +203,8 @@ fn sweep_equals_evaluate_on_a_small_grid() {
     );
 }
 
-/// The capped sample: about `cap` fragments, strata in proportion, deterministic per seed,
-/// and trivial fragments counted exactly.
+/// The capped sample: exactly `cap` fragments (at most the cap), strata in proportion,
+/// deterministic per seed, and trivial fragments counted exactly.
 #[test]
 fn capped_sample_is_stratified_and_seeded() {
     let stacks = vec![stack(5, 40, 30, 3), stack(6, 30, 40, 4)];
@@ -232,7 +232,7 @@ fn capped_sample_is_stratified_and_seeded() {
     assert_eq!(s.trivial_error(), full.trivial_error());
     assert_eq!(s.total_count(), full.total_count());
     let kept = s.fragments().len();
-    // ⌊p N_h + u_h⌋ per stratum: within one fragment per stratum of the cap.
+    // Systematic allocation: exactly the cap, ⌊p N_h⌋ or ⌈p N_h⌉ per stratum.
     let strata = |d: &Dataset| {
         let mut m = std::collections::BTreeMap::new();
         for f in d.fragments() {
@@ -241,10 +241,16 @@ fn capped_sample_is_stratified_and_seeded() {
         m
     };
     let (sf, ss) = (strata(&full), strata(&s));
-    assert!(
-        (kept as f64 - cap as f64).abs() <= sf.len() as f64,
-        "{kept} vs {cap}"
-    );
+    assert_eq!(kept, cap);
+    // Every cap keeps exactly that many (the smallest, odd ones, one below the population).
+    for c in [1, 7, cap + 1, pop - 1, pop] {
+        let plan = SamplePlan {
+            max_fragments: Some(c),
+            seed: 3,
+        };
+        let d = Dataset::from_stacks(&stacks, &grid, &bias, &plan).unwrap();
+        assert_eq!(d.fragments().len(), c, "cap {c}");
+    }
     let p = cap as f64 / pop as f64;
     for (k, &n) in &sf {
         let got = *ss.get(k).unwrap_or(&0) as f64;

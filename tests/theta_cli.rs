@@ -10,15 +10,7 @@ fn bin() -> Command {
 fn theta2_json_and_snippets() {
     let dir = std::env::temp_dir().join(format!("momentlab_theta_cli_{}", std::process::id()));
     let out = bin()
-        .args([
-            "theta",
-            "--moments",
-            "2",
-            "--restarts",
-            "2",
-            "--json",
-            "--out",
-        ])
+        .args(["theta", "--m", "2", "--restarts", "2", "--json", "--out"])
         .arg(&dir)
         .output()
         .unwrap();
@@ -82,7 +74,7 @@ fn theta2_json_and_snippets() {
     assert_eq!(v["basin"]["starts"].as_array().unwrap().len(), 2);
     // a second run into the same directory refuses to overwrite, before searching
     let again = bin()
-        .args(["theta", "--moments", "2", "--out"])
+        .args(["theta", "--m", "2", "--out"])
         .arg(&dir)
         .output()
         .unwrap();
@@ -111,7 +103,7 @@ fn default_output_is_a_run_directory_under_results() {
     std::fs::create_dir_all(&cwd).unwrap();
     let out = bin()
         .current_dir(&cwd)
-        .args(["theta", "--moments", "2", "--restarts", "1"])
+        .args(["theta", "--m", "2", "--restarts", "1"])
         .output()
         .unwrap();
     assert!(
@@ -130,23 +122,15 @@ fn default_output_is_a_run_directory_under_results() {
 #[test]
 fn bad_input_gives_one_line_errors() {
     for args in [
-        vec!["theta", "--moments", "0"],
+        vec!["theta", "--m", "0"],
         vec!["theta", "--basis", "z,z"],
         vec!["theta", "--basis", "z,2*z"],
         vec!["theta", "--basis", "z,no_such_function(z"],
-        vec!["theta", "--moments", "2", "--restarts", "0"],
-        vec![
-            "theta",
-            "--moments",
-            "2",
-            "--restarts",
-            "4",
-            "--starts",
-            "4",
-        ],
-        vec!["theta", "--moments", "2", "--starts", "x"],
-        vec!["theta", "--moments", "2", "--hop-sigma", "0"],
-        vec!["theta", "--moments", "2", "--max-sweeps", "0"],
+        vec!["theta", "--m", "2", "--restarts", "0"],
+        vec!["theta", "--m", "2", "--restarts", "4", "--starts", "4"],
+        vec!["theta", "--m", "2", "--starts", "x"],
+        vec!["theta", "--m", "2", "--hop-sigma", "0"],
+        vec!["theta", "--m", "2", "--max-sweeps", "0"],
         vec!["theta"],
         vec!["theta", "--snippets", "/nonexistent/momentlab"],
         vec!["theta", "--snippets", "/", "--moments", "2"],

@@ -1,5 +1,5 @@
 //! θ₆ and θ₈ at the best basin found by the recorded seeded searches (reports/theta/theta6.json,
-//! theta8.json, written by `momentlab theta --moments m --restarts N --seed S`). A full search
+//! theta8.json, written by `momentlab theta --m m --restarts N --seed S`). A full search
 //! takes minutes, so each test re-runs only the first start of the recorded search that reached
 //! the best basin (same seed and restart count, `only_starts`): the start's RNG stream depends
 //! only on (seed, start index), so it must reproduce its recorded gain, and that gain must clear

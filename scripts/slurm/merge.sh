@@ -29,15 +29,15 @@ for ((i = 0; i < n; i++)); do dirs+=("$run/shard-$i"); done
 for a in "$@"; do
     if [ "$a" = --no-report ]; then exit 0; fi
 done
-# --report-only rebuilds the dataset from the same arguments; --shard/--results are replaced.
+# --report-only rebuilds the dataset from the same arguments; --shard/--results/--out are replaced.
 args=()
 skip=0
 for a in "$@"; do
     if [ "$skip" = 1 ]; then skip=0; continue; fi
     case "$a" in
-    --shard | --results | --report) skip=1 ;;
-    --shard=* | --results=* | --report=*) ;;
+    --shard | --results | --out | --report) skip=1 ;;
+    --shard=* | --results=* | --out=* | --report=*) ;;
     *) args+=("$a") ;;
     esac
 done
-"$bin" search "${args[@]}" --results "$run/merged" --report "$run/report" --report-only
+"$bin" search "${args[@]}" --results "$run/merged" --out "$run/report" --report-only

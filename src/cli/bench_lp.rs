@@ -2,7 +2,7 @@
 //! moment vectors (9×9 Gaussian kernels over depth maps with 1–3 clusters), their ratio measured
 //! in the same run. The timing loop lives in [`crate::lp::bench`].
 
-use super::common::usize_in;
+use super::common::{resolution, usize_in};
 use crate::lp::bench::{run_one, BenchConfig, BenchRow};
 use crate::lp::bench_corpus::{self, CorpusRow};
 use crate::lp::corpus::{self, Group};
@@ -26,14 +26,15 @@ pub enum CorpusKind {
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Where the problems come from.
-    #[arg(long, value_enum, default_value_t = CorpusKind::Kernels)]
+    /// Where the problems come from (default: windows of the rendered default dataset, the
+    /// workload of evaluate and search).
+    #[arg(long, value_enum, default_value_t = CorpusKind::Stacks)]
     pub corpus: CorpusKind,
     /// `--corpus stacks`: a folder of .exr depth stacks (default: render the embedded dataset).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
     /// `--corpus stacks` without `--stacks`: resolution of the rendered dataset (16..=4096).
-    #[arg(long, default_value_t = 256, value_parser = usize_in(16, 4096))]
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
     /// `--corpus adversarial`: also the n = 4096 and 8192 tables.
     #[arg(long)]
@@ -46,13 +47,13 @@ pub struct Args {
     #[arg(long, value_delimiter = ',', default_values_t = vec![256usize, 1024, 4096], value_parser = usize_in(2, 100_000))]
     pub n: Vec<usize>,
     /// LPs per grid size for the fast solver (1..=1000000).
-    #[arg(long, default_value_t = 2000, value_parser = usize_in(1, 1_000_000))]
-    pub problems: usize,
+    #[arg(long, alias = "problems", default_value_t = 2000, value_parser = usize_in(1, 1_000_000))]
+    pub inputs: usize,
     /// LPs per grid size for the reference solver (a prefix of the same problems; it takes
     /// milliseconds per LP; with `--corpus stacks|adversarial` timed 64 problems at a time
     /// between the fast solver's passes, so that both see the same machine; 1..=100000).
-    #[arg(long, default_value_t = 30, value_parser = usize_in(1, 100_000))]
-    pub reference_problems: usize,
+    #[arg(long, alias = "reference-problems", default_value_t = 30, value_parser = usize_in(1, 100_000))]
+    pub reference_inputs: usize,
     /// Number of basis functions: the power basis z, …, z^m (4 = MSM; 1..=8).
     #[arg(long, default_value_t = 4, value_parser = usize_in(1, 8))]
     pub m: usize,
@@ -84,8 +85,8 @@ pub fn run(args: Args) -> Result<()> {
     }
     let cfg = BenchConfig {
         ns: args.n.clone(),
-        problems: args.problems,
-        reference_problems: args.reference_problems,
+        problems: args.inputs,
+        reference_problems: args.reference_inputs,
         m: args.m,
         seed: args.seed,
         repeats: args.repeats,
@@ -176,7 +177,7 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         Some(d) => crate::stack::load_dir(d)?,
         None => crate::render::default_dataset(args.resolution)?,
     };
-    let windows = crate::metrics::windows::stacks_corpus(&stacks, args.problems, args.seed)?;
+    let windows = crate::metrics::windows::stacks_corpus(&stacks, args.inputs, args.seed)?;
     let basis: Vec<String> = match &args.basis {
         Some(list) => crate::basis::split_list(list),
         None => (1..=args.m).map(|k| format!("z^{k}")).collect(),
@@ -249,7 +250,7 @@ fn run_corpus(args: &Args) -> Result<()> {
                 bench_corpus::run(
                     &name,
                     std::slice::from_ref(g),
-                    args.reference_problems,
+                    args.reference_inputs,
                     args.repeats,
                     |k| bar.inc(k),
                 )
@@ -257,7 +258,7 @@ fn run_corpus(args: &Args) -> Result<()> {
             .collect::<Result<_>>()?
     } else {
         // Two reference solves per table keep the reference part to seconds.
-        let per = args.reference_problems.div_ceil(groups.len()).max(2);
+        let per = args.reference_inputs.div_ceil(groups.len()).max(2);
         vec![bench_corpus::run(
             "adversarial",
             &groups,

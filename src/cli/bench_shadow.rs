@@ -7,9 +7,9 @@
 //! with their biased depth and the filtered moments of their 9×9 kernel window. Every result is
 //! accumulated and passed through `black_box`.
 
-use super::common::{usize_in, MAX_INPUTS};
+use super::common::{resolution, technique_list, usize_in, MAX_INPUTS};
 use crate::metrics::windows::stacks_corpus;
-use crate::technique::registry::{build, Params, Precision};
+use crate::technique::registry::{build, canonical_name, Params, Precision};
 use crate::technique::timing::{self, Corpus, Speed};
 use anyhow::{bail, Result};
 use std::io::Write;
@@ -33,15 +33,16 @@ pub struct Args {
     #[arg(long, default_value_t = 200_000, value_parser = usize_in(1, MAX_INPUTS))]
     pub inputs: usize,
     /// Timed passes over the inputs (1..=1000).
-    #[arg(long, default_value_t = 3, value_parser = usize_in(1, 1000))]
-    pub reps: usize,
+    #[arg(long, alias = "reps", default_value_t = 3, value_parser = usize_in(1, 1000))]
+    pub repeats: usize,
     /// `--corpus stacks`: a folder of .exr depth stacks (default: render the embedded dataset).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
-    /// `--corpus stacks` without `--stacks`: resolution of the rendered dataset.
-    #[arg(long, default_value_t = 256)]
+    /// `--corpus stacks` without `--stacks`: resolution of the rendered dataset (16..=4096).
+    #[arg(long, default_value_t = 256, value_parser = resolution())]
     pub resolution: usize,
-    /// Only these techniques (as listed in the table, e.g. tmsm, "hamburger(m=8)"); repeatable.
+    /// Only these techniques, as listed in the table (e.g. tmsm, hamburger8,
+    /// hamburger4-general: Algorithm 2 at m = 4); repeatable, comma lists.
     #[arg(long)]
     pub technique: Vec<String>,
     /// Print JSON instead of a table.
@@ -49,19 +50,19 @@ pub struct Args {
     pub json: bool,
 }
 
-/// Techniques timed: registry name and, for "hamburger", the moment count.
-const TECHNIQUES: &[(&str, Option<usize>)] = &[
-    ("vsm", None),
-    ("esm", None),
-    ("evsm", None),
-    ("csm", None),
-    ("hamburger4", None),
-    ("hausdorff4", None),
-    ("hamburger6", None),
-    ("hamburger", Some(4)),
-    ("hamburger", Some(6)),
-    ("hamburger", Some(8)),
-    ("tmsm", None),
+/// Techniques timed, by registry name (`-general`: Algorithm 2 at that m).
+const TECHNIQUES: &[&str] = &[
+    "vsm",
+    "esm",
+    "evsm",
+    "csm",
+    "hamburger4",
+    "hausdorff4",
+    "hamburger6",
+    "hamburger4-general",
+    "hamburger6-general",
+    "hamburger8",
+    "tmsm",
 ];
 
 #[derive(serde::Serialize)]
@@ -93,35 +94,28 @@ fn corpus(args: &Args) -> Result<Corpus> {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    if args.inputs == 0 || args.reps == 0 {
-        bail!("--inputs and --reps must be positive");
-    }
-    if args.corpus == CorpusKind::Stacks && args.stacks.is_none() && args.resolution == 0 {
-        bail!("--resolution must be positive");
-    }
     let mut todo = Vec::new();
-    for &(name, m) in TECHNIQUES {
+    for &name in TECHNIQUES {
         for precision in [Precision::F32, Precision::F64] {
-            let params = Params {
-                moment_count: m,
-                ..Params::with(precision, None)
-            };
-            todo.push((build(name, &params)?, precision));
+            todo.push((build(name, &Params::with(precision, None))?, precision));
         }
     }
-    let known: Vec<String> = todo.iter().map(|t| t.0.name()).collect();
-    if let Some(bad) = args.technique.iter().find(|n| !known.contains(n)) {
+    let wanted: Vec<String> = technique_list(&args.technique)
+        .iter()
+        .map(|n| canonical_name(n))
+        .collect();
+    if let Some(bad) = wanted.iter().find(|n| !TECHNIQUES.contains(&n.as_str())) {
         bail!(
             "--technique {bad}: not timed here (valid: {})",
-            known.join(", ")
+            TECHNIQUES.join(", ")
         );
     }
-    todo.retain(|t| args.technique.is_empty() || args.technique.contains(&t.0.name()));
+    todo.retain(|t| wanted.is_empty() || wanted.contains(&t.0.name()));
     let corpus = corpus(&args)?;
     let mut rows = Vec::new();
     for (t, precision) in &todo {
         let (moments, zfs) = timing::moments_of(t.as_ref(), &corpus);
-        let s: Speed = timing::speed(t.as_ref(), &moments, &zfs, args.reps);
+        let s: Speed = timing::speed(t.as_ref(), &moments, &zfs, args.repeats);
         rows.push(Row {
             technique: t.name(),
             precision: precision.name(),
@@ -142,13 +136,13 @@ pub fn run(args: Args) -> Result<()> {
     }
     writeln!(
         out,
-        "{:<15} {:>4} {:>3} {:>9} {:>9} {:>9} {:>9} {:>8}",
+        "{:<18} {:>4} {:>3} {:>9} {:>9} {:>9} {:>9} {:>8}",
         "technique", "prec", "m", "mean ns", "median", "p99", "max", "mean G"
     )?;
     for r in &rows {
         writeln!(
             out,
-            "{:<15} {:>4} {:>3} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>8.4}",
+            "{:<18} {:>4} {:>3} {:>9.1} {:>9.1} {:>9.1} {:>9.1} {:>8.4}",
             r.technique,
             r.precision,
             r.moments,
@@ -164,7 +158,7 @@ pub fn run(args: Args) -> Result<()> {
         "({} {:?} inputs per row, {} passes, batches of {}; one core)",
         rows.first().map_or(0, |r| r.inputs),
         args.corpus,
-        args.reps,
+        args.repeats,
         timing::BATCH
     )?;
     for prec in ["f32", "f64"] {

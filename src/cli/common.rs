@@ -8,8 +8,10 @@ use anyhow::{bail, Context, Result};
 use std::io::Read;
 use std::path::Path;
 
-/// Largest shadow-map resolution accepted when rendering (12 views × layers × res² fragments).
+/// Largest shadow-map resolution accepted by any command (12 views × layers × res² fragments).
 pub const MAX_RESOLUTION: u64 = 4096;
+/// Smallest shadow-map resolution accepted by any command (a view wider than the 9×9 filter).
+pub const MIN_RESOLUTION: u64 = 16;
 /// Largest LP grid size n accepted by any command (the tables hold n·m values per solver).
 pub const MAX_GRID: u64 = super::lp::MAX_GRID_POINTS as u64;
 /// Largest number of random inputs of a speed measurement or stress test.
@@ -87,7 +89,7 @@ pub fn require_fragments(stacks: &[DepthStack], dir: Option<&Path>) -> Result<()
 /// `vsm`). Commas inside parentheses never split. Empty items are dropped.
 pub fn split_techniques(list: &str) -> Vec<String> {
     let known = |s: &str| {
-        crate::technique::registry::CLOSED_FORM_NAMES.contains(&s)
+        crate::technique::registry::is_closed_form_name(s)
             || matches!(s, "pcf" | "cdf")
             || s.starts_with("lp:")
     };
@@ -105,6 +107,25 @@ pub fn split_techniques(list: &str) -> Vec<String> {
         }
     }
     out
+}
+
+/// Every technique named by repeated `--technique` values, each a comma list
+/// ([`split_techniques`]), in order, without duplicates.
+pub fn technique_list(values: &[String]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for v in values {
+        for t in split_techniques(v) {
+            if !out.contains(&t) {
+                out.push(t);
+            }
+        }
+    }
+    out
+}
+
+/// The `--resolution` of every command: MIN_RESOLUTION..=MAX_RESOLUTION.
+pub fn resolution() -> clap::builder::RangedU64ValueParser<usize> {
+    usize_in(MIN_RESOLUTION, MAX_RESOLUTION)
 }
 
 /// An integer flag in lo..=hi (value parser; clap names the range in its error).
@@ -173,6 +194,10 @@ mod tests {
         );
         assert_eq!(split_techniques("vsm,,esm,"), vec!["vsm", "esm"]);
         assert!(split_techniques("").is_empty());
+        assert_eq!(
+            technique_list(&["vsm,lp:z,z^2".into(), "esm".into(), "vsm".into()]),
+            vec!["vsm", "lp:z,z^2", "esm"]
+        );
     }
 
     #[test]

@@ -2,7 +2,8 @@
 //! stacks (mean |G − PCF|, Peters & Klein 2015, Section 3.2), a table per view, JSON, pictures.
 
 use super::common::{
-    fraction, non_negative, require_fragments, stacks_or_default, usize_in, MAX_RESOLUTION,
+    fraction, non_negative, require_fragments, resolution, stacks_or_default, technique_list,
+    usize_in,
 };
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::progress::Bar;
@@ -19,19 +20,22 @@ pub struct Args {
     /// F_Z(z_f − ε′) of the filter window at the technique's biased depth: what a technique
     /// that knew the window exactly would return. It is not a lower bound of any technique's
     /// error; its leak part, mean max(0, PCF − F_Z), is the light every technique leaks
-    /// through ε′, printed as "leak").
-    #[arg(long)]
-    pub technique: String,
+    /// through ε′, printed as "leak"). Repeatable and comma lists (`lp:` specs keep their
+    /// commas): each technique is evaluated on the same stacks, one table each; --json then
+    /// prints an array of reports.
+    #[arg(long, required = true)]
+    pub technique: Vec<String>,
     /// Directory of depth-stack files; default: render the embedded default dataset (said so
     /// on stderr).
     #[arg(long)]
     pub stacks: Option<PathBuf>,
     /// Shadow-map resolution when rendering the default dataset (16..=4096).
-    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
-    /// Write one five-panel PNG per view into this directory (see docs/evaluation.md).
-    #[arg(long)]
-    pub pictures: Option<PathBuf>,
+    /// Output folder: write one five-panel PNG per view and technique into it (see
+    /// docs/evaluation.md); without it nothing is written.
+    #[arg(long, alias = "pictures")]
+    pub out: Option<PathBuf>,
     /// Print the full report as JSON on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -79,15 +83,20 @@ fn sanitize(s: &str) -> String {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let technique = match args.technique.as_str() {
-        "pcf" | "cdf" => None,
-        spec => Some(crate::technique::by_name(spec)?),
-    };
-    let subject = match &technique {
-        Some(t) => Subject::Technique(t.as_ref()),
-        None if args.technique == "pcf" => Subject::Pcf,
-        None => Subject::Cdf,
-    };
+    let names = technique_list(&args.technique);
+    if names.is_empty() {
+        bail!("--technique: no technique named");
+    }
+    // Every name before any work.
+    let techniques: Vec<Option<Box<dyn crate::technique::Technique>>> = names
+        .iter()
+        .map(|spec| match spec.as_str() {
+            "pcf" | "cdf" => Ok(None),
+            spec => crate::technique::by_name(spec)
+                .map(Some)
+                .with_context(|| format!("--technique {spec}")),
+        })
+        .collect::<Result<_>>()?;
     let bias = Bias {
         pcf_epsilon: args.pcf_epsilon,
         slope_scale: args.slope_scale,
@@ -113,30 +122,46 @@ pub fn run(args: Args) -> Result<()> {
         require_fragments(&stacks, args.stacks.as_deref())?;
     }
 
-    let bar = Arc::new(Bar::new("evaluate fragments", 0));
-    let pb = bar.clone();
-    let opts = EvalOptions {
-        bias,
-        subsample,
-        progress: Some(Arc::new(move |done, total| {
-            pb.set_total(total as u64);
-            pb.set_done(done as u64);
-        })),
-        ..Default::default()
-    };
-    let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
-    bar.finish();
-    if report.fragments == 0 {
-        bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
-    }
-
-    if let Some(dir) = &args.pictures {
-        write_pictures(dir, &stacks, subject, &bias)?;
+    let mut reports = Vec::new();
+    for (name, technique) in names.iter().zip(&techniques) {
+        let subject = match technique {
+            Some(t) => Subject::Technique(t.as_ref()),
+            None if name == "pcf" => Subject::Pcf,
+            None => Subject::Cdf,
+        };
+        let bar = Arc::new(Bar::new(&format!("evaluate {name}"), 0));
+        let pb = bar.clone();
+        let opts = EvalOptions {
+            bias,
+            subsample,
+            progress: Some(Arc::new(move |done, total| {
+                pb.set_total(total as u64);
+                pb.set_done(done as u64);
+            })),
+            ..Default::default()
+        };
+        let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
+        bar.finish();
+        if report.fragments == 0 {
+            bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
+        }
+        if let Some(dir) = &args.out {
+            write_pictures(dir, &stacks, subject, &bias)?;
+        }
+        if !args.json {
+            if !reports.is_empty() {
+                println!();
+            }
+            print_table(&report);
+        }
+        reports.push(report);
     }
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&report)?);
-    } else {
-        print_table(&report);
+        let text = match reports.as_slice() {
+            [one] => serde_json::to_string_pretty(one)?,
+            all => serde_json::to_string_pretty(all)?,
+        };
+        println!("{text}");
     }
     Ok(())
 }

@@ -17,8 +17,8 @@ pub struct Args {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Replace files that already exist in --out (otherwise refused).
-    #[arg(long, requires = "out")]
-    pub overwrite: bool,
+    #[arg(long, requires = "out", alias = "overwrite")]
+    pub force: bool,
     /// Print the validated stacks as JSON instead of lines.
     #[arg(long)]
     pub json: bool,
@@ -29,8 +29,8 @@ pub struct Args {
 }
 
 /// Refuse, before reading anything, two inputs that would land on the same file in `out`, and
-/// (without `overwrite`) files that exist there already (unless it is the input itself).
-fn check_destinations(files: &[PathBuf], out: &Path, overwrite: bool) -> Result<()> {
+/// (without `force`) files that exist there already (unless it is the input itself).
+fn check_destinations(files: &[PathBuf], out: &Path, force: bool) -> Result<()> {
     let mut seen: HashMap<&std::ffi::OsStr, &Path> = HashMap::new();
     for f in files {
         let name = f
@@ -47,11 +47,8 @@ fn check_destinations(files: &[PathBuf], out: &Path, overwrite: bool) -> Result<
         let dest = out.join(name);
         let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
         for d in [dest.clone(), stack::sidecar_path(&dest)] {
-            if d.exists() && !overwrite && !same(&d, &stack::sidecar_path(f)) && !same(&d, f) {
-                bail!(
-                    "{} exists already; pass --overwrite to replace it",
-                    d.display()
-                );
+            if d.exists() && !force && !same(&d, &stack::sidecar_path(f)) && !same(&d, f) {
+                bail!("{} exists already; pass --force to replace it", d.display());
             }
         }
     }
@@ -83,7 +80,7 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(out) = &args.out {
-        check_destinations(&files, out, args.overwrite)?;
+        check_destinations(&files, out, args.force)?;
         std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
     }
     // read (= validate) everything before writing anything

@@ -16,9 +16,32 @@ use rayon::prelude::*;
 use serde::Deserialize;
 use std::path::PathBuf;
 
+/// The input and output format, shown by `momentlab lp --help`.
+pub const SCHEMA_HELP: &str = r#"Input (JSON object; stdin when FILE is omitted or `-`):
+  basis     array of strings, required: catalog names or formulas, e.g. ["z", "z^2"],
+            ["sin(2πz)", "cos(2πz)"], ["exp(40z)"] (m = its length)
+  problems  array, required: {"moments": [b1, …, bm], "zf": z_f}, z_f in [0,1]
+  grid      optional: {"points": n} (uniform on [0,1], 2..=1048576) or
+            {"values": [z1, …]} (in [0,1]); default {"points": 1024}
+  solver    optional: "fast" (default) or "reference"
+
+Output (one line of JSON on stdout, --pretty to indent): {"results": [...]}, one per
+problem in order:
+  {"status": "optimal", "g": G, "support": [[z, w], …]}  G: the sharp lower bound of
+      P(Z < z_f) over distributions on the grid (Algorithm 1); support: a minimising one
+  {"status": "infeasible"}                 no distribution on the grid has these moments
+  {"status": "failed", "reason": "…"}      the solver could not certify either verdict
+Everything is validated before any LP is solved; a bad batch is one error line (exit 1).
+
+Example:
+  echo '{"basis":["z","z^2"],"grid":{"points":5},
+         "problems":[{"moments":[0.5,0.3125],"zf":0.6}]}' | momentlab lp
+  {"results":[{"status":"optimal","g":0.5,"support":[[0.25,0.5],[0.75,0.5]]}]}"#;
+
 #[derive(clap::Args, Debug)]
+#[command(after_long_help = SCHEMA_HELP)]
 pub struct Args {
-    /// JSON batch file (stdin when omitted or `-`).
+    /// JSON batch file (stdin when omitted or `-`); the format is under --help.
     pub file: Option<PathBuf>,
     /// Catalog used to resolve basis names (default: the embedded catalog).
     #[arg(long)]
@@ -26,9 +49,6 @@ pub struct Args {
     /// Pretty-print the output JSON.
     #[arg(long)]
     pub pretty: bool,
-    /// Print JSON (the only output format of this command; accepted for uniformity).
-    #[arg(long)]
-    pub json: bool,
 }
 
 #[derive(Deserialize)]

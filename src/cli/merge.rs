@@ -8,7 +8,7 @@ pub struct Args {
     /// Results directories of the shards (each written by `search --shard i/N`).
     #[arg(required = true)]
     pub dirs: Vec<PathBuf>,
-    /// Output directory (config.json + results.jsonl sorted by candidate index).
+    /// Output folder (config.json + results.jsonl sorted by candidate index).
     #[arg(long)]
     pub out: PathBuf,
     /// Merge even if shards are missing or unfinished.

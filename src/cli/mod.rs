@@ -24,9 +24,24 @@ pub mod threads;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+/// The flags every command spells the same way (shown by `momentlab --help`).
+pub const VOCABULARY_HELP: &str = "\
+One vocabulary across the commands (older spellings are still accepted):
+  --out DIR         the output folder; by default under results/ (nothing tracked). reproduce
+                    and search keep bulky data (stacks, sweep rows) apart in --results DIR
+  --force           overwrite existing outputs (reproduce: recompute every step)
+  --technique T     repeatable, comma lists: vsm, esm, evsm, csm, hamburger4, hausdorff4,
+                    hamburger6, hamburgerM (even M, Algorithm 2, e.g. hamburger8), tmsm,
+                    lp:f1,f2,… (an LP candidate; its commas stay inside it)
+  --m M             number of moments (basis functions)
+  --inputs N        number of inputs of a measurement; --repeats N its timed passes
+  --resolution R    shadow-map resolution of rendered stacks, 16..=4096
+  --stacks DIR      depth stacks to read (default: render the embedded scenes)
+  --json            machine-readable output on stdout";
+
 /// momentlab: moment shadow mapping research pipeline.
 #[derive(Parser, Debug)]
-#[command(name = "momentlab", version, about, long_about = None)]
+#[command(name = "momentlab", version, about, long_about = None, after_long_help = VOCABULARY_HELP)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -190,6 +205,230 @@ mod tests {
         walk(&Cli::command(), "momentlab", &mut missing);
         assert!(missing.is_empty(), "no help text: {missing:?}");
         Cli::command().debug_assert();
+    }
+
+    /// Every argument of every (sub)command, with the command path.
+    fn all_args(
+        cmd: &clap::Command,
+        path: &str,
+        out: &mut Vec<(String, clap::Arg, clap::Command)>,
+    ) {
+        for a in cmd.get_arguments() {
+            out.push((path.to_string(), a.clone(), cmd.clone()));
+        }
+        for sc in cmd.get_subcommands() {
+            all_args(sc, &format!("{path} {}", sc.get_name()), out);
+        }
+    }
+
+    /// One command-line vocabulary: older or competing spellings exist only as hidden aliases,
+    /// every output folder is --out (the only second folder is --results, next to an --out),
+    /// --technique is repeatable wherever it exists, every --resolution has the same range, and
+    /// every default output folder is under results/.
+    #[test]
+    fn one_vocabulary_across_commands() {
+        const RETIRED: &[&str] = &[
+            "reports",
+            "report",
+            "output",
+            "output-dir",
+            "pictures",
+            "overwrite",
+            "fresh",
+            "reps",
+            "techniques",
+            "problems",
+            "reference-problems",
+            "speed-inputs",
+            "samples",
+            "moments",
+        ];
+        let mut args = Vec::new();
+        all_args(&Cli::command(), "momentlab", &mut args);
+        let mut bad = Vec::new();
+        let mut resolutions = 0;
+        for (path, a, cmd) in &args {
+            let Some(long) = a.get_long() else { continue };
+            let visible: Vec<&str> = a.get_visible_aliases().unwrap_or_default();
+            for name in std::iter::once(long).chain(visible.iter().copied()) {
+                if RETIRED.contains(&name) {
+                    bad.push(format!("{path}: visible --{name}"));
+                }
+            }
+            match long {
+                "technique" if !matches!(a.get_action(), clap::ArgAction::Append) => {
+                    bad.push(format!("{path}: --technique is not repeatable"));
+                }
+                "results" if cmd.get_arguments().all(|b| b.get_long() != Some("out")) => {
+                    bad.push(format!("{path}: --results without --out"));
+                }
+                "resolution" => {
+                    resolutions += 1;
+                    let c = cmd.clone().mut_args(|x| x.required(false));
+                    let ok = |v: &str| {
+                        c.clone()
+                            .try_get_matches_from(["x", "--resolution", v])
+                            .is_ok()
+                    };
+                    if ok("15") || !ok("16") || !ok("4096") || ok("4097") {
+                        bad.push(format!("{path}: --resolution range is not 16..=4096"));
+                    }
+                }
+                _ => {}
+            }
+            if matches!(long, "out" | "results") {
+                for d in a.get_default_values() {
+                    if !d.to_string_lossy().starts_with("results") {
+                        bad.push(format!(
+                            "{path}: --{long} defaults to {d:?}, not under results/"
+                        ));
+                    }
+                }
+            }
+        }
+        assert!(resolutions >= 7, "{resolutions} --resolution flags found");
+        // Every command that writes files names its folder --out.
+        for path in [
+            "render",
+            "import",
+            "evaluate",
+            "stability",
+            "theta",
+            "quantize",
+            "merge",
+            "search",
+            "reproduce",
+        ] {
+            let has_out = args
+                .iter()
+                .any(|(p, a, _)| p == &format!("momentlab {path}") && a.get_long() == Some("out"));
+            if !has_out {
+                bad.push(format!("momentlab {path}: no --out"));
+            }
+        }
+        assert!(bad.is_empty(), "{bad:#?}");
+    }
+
+    /// The retired spellings still parse, as the flags that replaced them.
+    #[test]
+    fn old_spellings_still_work() {
+        let parse = |v: &[&str]| Cli::try_parse_from(v).unwrap_or_else(|e| panic!("{v:?}: {e}"));
+        match parse(&["momentlab", "reproduce", "--reports", "r", "--fresh"]).command {
+            Command::Reproduce(a) => assert!(a.out == std::path::Path::new("r") && a.force),
+            _ => unreachable!(),
+        }
+        match parse(&["momentlab", "search", "--report", "r"]).command {
+            Command::Search(a) => {
+                assert_eq!(a.opts.out.as_deref(), Some(std::path::Path::new("r")))
+            }
+            _ => unreachable!(),
+        }
+        match parse(&[
+            "momentlab",
+            "recommend",
+            "--techniques",
+            "vsm,esm",
+            "--speed-inputs",
+            "7",
+        ])
+        .command
+        {
+            Command::Recommend(a) => assert!(a.technique == ["vsm,esm"] && a.inputs == 7),
+            _ => unreachable!(),
+        }
+        match parse(&["momentlab", "theta", "--moments", "4"]).command {
+            Command::Theta(a) => assert_eq!(a.m, Some(4)),
+            _ => unreachable!(),
+        }
+        match parse(&[
+            "momentlab",
+            "bench",
+            "shadow",
+            "--reps",
+            "2",
+            "--technique",
+            "vsm,tmsm",
+        ])
+        .command
+        {
+            Command::Bench(bench::Args {
+                what: bench::What::Shadow(a),
+            }) => assert!(a.repeats == 2 && a.technique == ["vsm,tmsm"]),
+            _ => unreachable!(),
+        }
+        match parse(&["momentlab", "bench", "lp", "--problems", "5"]).command {
+            Command::Bench(bench::Args {
+                what: bench::What::Lp(a),
+            }) => assert_eq!(a.inputs, 5),
+            _ => unreachable!(),
+        }
+        match parse(&["momentlab", "import", "x.exr", "--out", "o", "--overwrite"]).command {
+            Command::Import(a) => assert!(a.force),
+            _ => unreachable!(),
+        }
+        match parse(&[
+            "momentlab",
+            "evaluate",
+            "--technique",
+            "vsm",
+            "--pictures",
+            "p",
+        ])
+        .command
+        {
+            Command::Evaluate(a) => assert_eq!(a.out.as_deref(), Some(std::path::Path::new("p"))),
+            _ => unreachable!(),
+        }
+        match parse(&[
+            "momentlab",
+            "stability",
+            "--samples",
+            "9",
+            "--techniques",
+            "vsm",
+        ])
+        .command
+        {
+            Command::Stability(a) => assert!(a.inputs == 9 && a.technique == ["vsm"]),
+            _ => unreachable!(),
+        }
+        match parse(&["momentlab", "quantize", "--techniques", "4msm"]).command {
+            Command::Quantize(a) => assert_eq!(a.technique, ["4msm"]),
+            _ => unreachable!(),
+        }
+    }
+
+    /// The example of a schema help text: (input JSON, output line).
+    fn help_example(help: &str) -> (String, String) {
+        let ex = &help[help.find("Example:").expect("an example")..];
+        let input = &ex[ex.find("echo '").expect("echo") + 6..ex.find("' | momentlab").unwrap()];
+        let output = ex.lines().last().unwrap().trim();
+        (input.to_string(), output.to_string())
+    }
+
+    /// `lp --help` and `shadow --help` show the JSON schema, and their examples print what the
+    /// help text says they print.
+    #[test]
+    fn schema_help_examples_are_true() {
+        for name in ["lp", "shadow"] {
+            let mut cmd = Cli::command();
+            let help = cmd
+                .find_subcommand_mut(name)
+                .unwrap()
+                .render_long_help()
+                .to_string();
+            assert!(
+                help.contains("Input (JSON object") && help.contains("Output"),
+                "{name}"
+            );
+            assert!(help.contains("Example:"), "{name}");
+        }
+        let (input, output) = help_example(lp::SCHEMA_HELP);
+        let got = lp::solve_batch(&input, &crate::basis::Catalog::embedded(), false).unwrap();
+        assert_eq!(got, output);
+        let (input, output) = help_example(shadow::SCHEMA_HELP);
+        let got = shadow::evaluate_batch(&input, "example").unwrap();
+        assert_eq!(serde_json::to_string(&got).unwrap(), output);
     }
 
     #[test]

@@ -3,6 +3,7 @@
 //! for VSM (θ₂), Hamburger 4MSM (θ₄), 6MSM (θ₆) and 8 moments (θ₈): ours from --theta-dir,
 //! the published θ₂/θ₄/θ₆ beside them.
 
+use super::common::resolution;
 use crate::metrics::{Bias, Subsample};
 use crate::quantize::curve::MonomialCurve;
 use crate::quantize::study::{identity_theta, sweep, Config, Storage, Sweep, Tech};
@@ -17,17 +18,22 @@ pub struct Args {
     /// Directory of depth stacks (.exr + .json); default: render the embedded default dataset.
     #[arg(long)]
     pub stacks: Option<PathBuf>,
-    /// Shadow-map resolution when rendering the default dataset, 1..=8192.
-    #[arg(long, default_value_t = 512)]
+    /// Shadow-map resolution when rendering the default dataset (16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
-    /// Directory with our θ (theta{m}.json from `momentlab theta`) for every technique run;
-    /// a missing file is an error.
+    /// Folder with θ (theta{m}.json from `momentlab theta`) for every technique run; a missing
+    /// file is an error. Default: the study's θ committed in reports/theta (read only).
     #[arg(long, default_value = "reports/theta")]
     pub theta_dir: PathBuf,
-    /// Comma-separated techniques: vsm (θ₂), 4msm (θ₄), 6msm (θ₆), 8msm (θ₈).
-    #[arg(long, default_value = "vsm,4msm,6msm,8msm")]
-    pub techniques: String,
-    /// Output directory (quantize.json, quantize.md, quantize_alpha.svg).
+    /// Techniques (repeatable; comma lists): vsm (θ₂), hamburger4 (θ₄), hamburger6 (θ₆),
+    /// hamburger8 (θ₈; the older 4msm, 6msm, 8msm are accepted).
+    #[arg(
+        long,
+        alias = "techniques",
+        default_value = "vsm,hamburger4,hamburger6,hamburger8"
+    )]
+    pub technique: Vec<String>,
+    /// Output folder (quantize.json, quantize.md, quantize_alpha.svg).
     #[arg(long, default_value = "results/quantize")]
     pub out: PathBuf,
     /// Overwrite existing output files (otherwise a name clash is an error).
@@ -55,7 +61,7 @@ fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
     let p = dir.join(format!("theta{m}.json"));
     if !p.is_file() {
         bail!(
-            "--theta-dir: {} not found (create it with `momentlab theta --moments {m} --out {}`)",
+            "--theta-dir: {} not found (create it with `momentlab theta --m {m} --out {}`)",
             p.display(),
             dir.display()
         );
@@ -193,17 +199,17 @@ pub fn run(args: Args) -> Result<()> {
     if !(1..=1_000_000).contains(&args.stride) {
         bail!("--stride must be in 1..=1000000, got {}", args.stride);
     }
-    if args.stacks.is_none() && !(1..=8192).contains(&args.resolution) {
-        bail!("--resolution must be in 1..=8192, got {}", args.resolution);
-    }
-    let techs: Vec<Tech> = args
-        .techniques
-        .split(',')
+    let techs: Vec<Tech> = super::common::technique_list(&args.technique)
+        .iter()
         .map(|t| {
-            Tech::parse(t)
-                .with_context(|| format!("--techniques: '{t}' is not one of vsm, 4msm, 6msm, 8msm"))
+            Tech::parse(t).with_context(|| {
+                format!("--technique: '{t}' is not one of vsm, hamburger4, hamburger6, hamburger8")
+            })
         })
         .collect::<Result<_>>()?;
+    if techs.is_empty() {
+        bail!("--technique: empty list");
+    }
     let files = ["quantize.json", "quantize.md", "quantize_alpha.svg"].map(|f| args.out.join(f));
     if !args.force {
         if let Some(f) = files.iter().find(|f| f.exists()) {

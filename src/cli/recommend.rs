@@ -3,7 +3,7 @@
 //! best one on that scene.
 
 use super::common::{
-    non_negative, split_techniques, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION,
+    non_negative, resolution, stacks_or_default, technique_list, usize_in, MAX_INPUTS,
 };
 use crate::report::recommend::{recommendations, Measured};
 use crate::technique::linalg::Precision;
@@ -21,39 +21,42 @@ pub struct Args {
     #[arg(long)]
     pub stacks: Option<PathBuf>,
     /// Resolution when rendering the embedded scenes (16..=4096).
-    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
-    /// Comma-separated closed-form techniques to consider (each at f32 and f64 storage).
+    /// Closed-form techniques to consider, each at f32 and f64 storage (repeatable; comma
+    /// lists).
     #[arg(
         long,
+        alias = "techniques",
         default_value = "vsm,esm,evsm,csm,hamburger4,hausdorff4,hamburger6,tmsm"
     )]
-    pub techniques: String,
-    /// Random inputs for the speed measurement (1..=10000000).
-    #[arg(long, default_value_t = 200_000, value_parser = usize_in(1, MAX_INPUTS))]
-    pub speed_inputs: usize,
+    pub technique: Vec<String>,
+    /// Inputs of the speed measurement: filter windows of real fragments sampled from the same
+    /// depth stacks (moments and z_f as the error sees them; 1..=10000000).
+    #[arg(long, alias = "speed-inputs", default_value_t = 200_000, value_parser = usize_in(1, MAX_INPUTS))]
+    pub inputs: usize,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let names = split_techniques(&args.techniques);
+    let names = technique_list(&args.technique);
     if names.is_empty() {
-        bail!("--techniques: empty list");
+        bail!("--technique: empty list");
     }
     // Build every technique before any work, so that a bad name fails at once.
     let mut jobs = Vec::new();
     for name in &names {
         if name.starts_with("lp:") {
             bail!(
-                "--techniques: '{name}': recommend compares closed-form techniques only; \
+                "--technique: '{name}': recommend compares closed-form techniques only; \
                  evaluate an LP candidate with `momentlab evaluate --technique '{name}'`"
             );
         }
         for prec in [Precision::F32, Precision::F64] {
             let t = build(name, &Params::with(prec, None))
-                .with_context(|| format!("--techniques: '{name}'"))?;
+                .with_context(|| format!("--technique: '{name}'"))?;
             jobs.push((name.clone(), prec.name(), t));
         }
     }
@@ -66,7 +69,7 @@ pub fn run(args: Args) -> Result<()> {
             name,
             prec,
             1,
-            args.speed_inputs,
+            args.inputs,
         )?);
     }
     let recs = recommendations(&all, args.tolerance);

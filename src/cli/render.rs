@@ -1,7 +1,7 @@
 //! `momentlab render`: ray-cast depth stacks of the scenes (embedded default dataset unless
 //! `--scenes FOLDER|FILE`) and write one `<scene>_<view>.exr` + `.json` per view.
 
-use super::common::{usize_in, MAX_RESOLUTION};
+use super::common::resolution;
 use crate::progress::Bar;
 use crate::render::scene::{LightDesc, UpAxis};
 use crate::render::{self, Scene};
@@ -23,11 +23,11 @@ pub struct Args {
     /// Up axis of a mesh file given to --scenes (y or z; z-up meshes are turned −90° about X).
     #[arg(long)]
     pub up_axis: Option<UpAxis>,
-    /// Output directory for the depth stacks.
-    #[arg(long, default_value = "stacks/default")]
+    /// Output folder for the depth stacks.
+    #[arg(long, default_value = "results/stacks/default")]
     pub out: PathBuf,
-    /// Shadow-map resolution (square; 1..=4096).
-    #[arg(long, default_value_t = 512, value_parser = usize_in(1, MAX_RESOLUTION))]
+    /// Shadow-map resolution (square; 16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
     /// Render only the scene with this name.
     #[arg(long)]

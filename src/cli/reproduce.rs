@@ -2,14 +2,14 @@
 //! a thin caller of [`crate::pipeline::run`] (steps, artefacts and resuming are described
 //! there).
 
-use super::common::{non_negative, usize_in, MAX_RESOLUTION};
+use super::common::{non_negative, resolution};
 use crate::pipeline::{self, Config, Preset};
 use anyhow::Result;
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Name of the run: the report goes to <reports>/<run>/, bulky data to <results>/<run>/.
+    /// Name of the run: the report goes to <out>/<run>/, bulky data to <results>/<run>/.
     #[arg(long, default_value = "default")]
     pub run: String,
     /// The larger configuration (every fragment for the LP candidates, θ₆, larger stability,
@@ -20,25 +20,26 @@ pub struct Args {
     #[arg(long, conflicts_with = "full")]
     pub tiny: bool,
     /// Shadow-map resolution of the rendered views (default 512, --tiny 64; 16..=4096).
-    #[arg(long, value_parser = usize_in(16, MAX_RESOLUTION))]
+    #[arg(long, value_parser = resolution())]
     pub resolution: Option<usize>,
     /// Recommendation tolerance: absolute error above the best technique that is acceptable
     /// (finite, ≥ 0).
     #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
     pub tolerance: f64,
-    /// Folder of reports (the committed report is `--reports reports`; by default nothing
-    /// tracked is written).
-    #[arg(long, default_value = "results/reports")]
-    pub reports: PathBuf,
-    /// Folder of bulky results (stacks, sweep rows).
+    /// Output folder of the report (the committed report is `--out reports`; by default
+    /// nothing tracked is written).
+    #[arg(long, alias = "reports", default_value = "results/reports")]
+    pub out: PathBuf,
+    /// Folder of bulky results (stacks, sweep rows), kept apart from the report.
     #[arg(long, default_value = "results")]
     pub results: PathBuf,
     /// Skip the candidate sweep (the slowest step).
     #[arg(long)]
     pub skip_search: bool,
-    /// Start over: delete the run's previous artefacts.
-    #[arg(long)]
-    pub fresh: bool,
+    /// Start over: delete the run's previous artefacts and compute every step again (without
+    /// it, steps whose artefacts exist are read back).
+    #[arg(long, alias = "fresh")]
+    pub force: bool,
     /// Print {"report", "seconds", "recommendations"} as JSON on stdout at the end.
     #[arg(long)]
     pub json: bool,
@@ -58,10 +59,10 @@ impl Args {
             },
             resolution: self.resolution,
             tolerance: self.tolerance,
-            reports: self.reports.clone(),
+            reports: self.out.clone(),
             results: self.results.clone(),
             skip_search: self.skip_search,
-            fresh: self.fresh,
+            fresh: self.force,
         }
     }
 }

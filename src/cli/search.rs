@@ -1,6 +1,6 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
-use super::common::{fraction, stacks_or_default, usize_in, MAX_GRID, MAX_RESOLUTION};
+use super::common::{fraction, resolution, stacks_or_default, usize_in, MAX_GRID};
 use crate::basis::candidates::MAX_M;
 use crate::metrics::Bias;
 use crate::search::run::{load_table, ranking_lines, report_for, sweep_line};
@@ -36,7 +36,7 @@ pub struct Opts {
     #[arg(long)]
     pub stacks: Option<PathBuf>,
     /// Shadow-map resolution when rendering the default dataset (16..=4096).
-    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
+    #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
     /// Keep at most this many non-trivial fragments (stratified by view and layer; 0 = all).
     #[arg(long, default_value_t = crate::search::DEFAULT_MAX_FRAGMENTS)]
@@ -48,7 +48,8 @@ pub struct Opts {
     /// Seed of the stratified fragment sample (and of the synthetic data).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Results directory (default results/search-m<m>).
+    /// Folder of the sweep's rows (config.json, results.jsonl; default results/search-m<m>),
+    /// kept apart from the report (--out).
     #[arg(long)]
     pub results: Option<PathBuf>,
     /// Candidates scored on every fragment at the end of racing (≥ 1).
@@ -111,10 +112,10 @@ pub struct Opts {
     /// Candidates per flushed batch (≥ 1).
     #[arg(long, default_value_t = 64, value_parser = usize_in(1, u32::MAX as u64))]
     pub batch: usize,
-    /// Report directory (default: <results>/report, never the tracked reports/ folder unless
-    /// given).
-    #[arg(long)]
-    pub report: Option<PathBuf>,
+    /// Output folder of the report (default: <results>/report; the tracked reports/ folder
+    /// only when given).
+    #[arg(long, alias = "report")]
+    pub out: Option<PathBuf>,
     /// Do not write the report.
     #[arg(long)]
     pub no_report: bool,
@@ -245,10 +246,7 @@ pub fn run(args: Args) -> Result<()> {
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
-    let report_dir = args
-        .report
-        .clone()
-        .unwrap_or_else(|| results.join("report"));
+    let report_dir = args.out.clone().unwrap_or_else(|| results.join("report"));
     let shard = match &args.shard {
         Some(s) => parse_shard(s)?,
         None => [0, 1],

@@ -2,7 +2,7 @@
 //! [`crate::report::stability`], documented in docs/stability.md); writes a Markdown table,
 //! JSON and SVG heat maps to the output directory.
 
-use super::common::{split_techniques, usize_in};
+use super::common::{technique_list, usize_in};
 use crate::progress::Bar;
 use crate::report::stability::{self, Options};
 use anyhow::Result;
@@ -12,22 +12,22 @@ use crate::report::stability::DEFAULT_TECHNIQUES;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Output directory (the tracked reports/stability only when given explicitly).
+    /// Output folder (the tracked reports/stability only when given explicitly).
     #[arg(long, default_value = "results/stability")]
     pub out: PathBuf,
     /// Number of inputs, cycled over the scenarios (1..=1000000).
-    #[arg(long, default_value_t = 3000, value_parser = usize_in(1, 1_000_000))]
-    pub samples: usize,
+    #[arg(long, alias = "samples", default_value_t = 3000, value_parser = usize_in(1, 1_000_000))]
+    pub inputs: usize,
     /// Random seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Uniform grid points of the oracle (Algorithm 1) on [0,1] (2..=65536).
     #[arg(long, default_value_t = 256, value_parser = usize_in(2, 65_536))]
     pub grid: usize,
-    /// Comma-separated technique names (`lp:` specs keep their commas); names not available
-    /// in this build are skipped.
-    #[arg(long, default_value = DEFAULT_TECHNIQUES)]
-    pub techniques: String,
+    /// Techniques (repeatable; comma lists, `lp:` specs keep their commas); names not
+    /// available in this build are skipped.
+    #[arg(long, alias = "techniques", default_value = DEFAULT_TECHNIQUES)]
+    pub technique: Vec<String>,
     /// Print the summary (inputs, techniques, skipped, seconds, output folder) as JSON.
     #[arg(long)]
     pub json: bool,
@@ -36,10 +36,10 @@ pub struct Args {
 pub fn run(args: Args) -> Result<()> {
     let opts = Options {
         out: args.out,
-        samples: args.samples,
+        samples: args.inputs,
         seed: args.seed,
         grid: args.grid,
-        techniques: split_techniques(&args.techniques),
+        techniques: technique_list(&args.technique),
     };
     let pb = Bar::new("stability inputs", 0);
     let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;

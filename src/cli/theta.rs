@@ -13,14 +13,14 @@ use std::time::Instant;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// Instead of searching: read DIR/theta{2,…,8}.json (those present), re-verify them and the published
-    /// θ₂/θ₄/θ₆, write DIR/comparison.md, DIR/summary.json and the Fig. 5 analogue
-    /// (DIR/fig5.svg).
-    #[arg(long, conflicts_with_all = ["moments", "basis"])]
+    /// Instead of searching: read DIR/theta{2,…,8}.json (those present), re-verify them and the
+    /// published θ₂/θ₄/θ₆, write comparison.md, summary.json and the Fig. 5 analogue (fig5.svg)
+    /// into --out (default: DIR itself).
+    #[arg(long, conflicts_with_all = ["m", "basis"])]
     pub summary: Option<PathBuf>,
-    /// Power basis (z, z², …, z^m), m in 1..=12.
-    #[arg(long, conflicts_with = "basis")]
-    pub moments: Option<usize>,
+    /// Power basis (z, z², …, z^m) with m moments, m in 1..=12.
+    #[arg(long, alias = "moments", conflicts_with = "basis")]
+    pub m: Option<usize>,
     /// Comma-separated catalog names or formulas ("z,z^2,exp(2z)").
     #[arg(long)]
     pub basis: Option<String>,
@@ -46,8 +46,9 @@ pub struct Args {
     /// Starts within this many bits of the best count as reaching the best basin.
     #[arg(long, default_value_t = 1e-3)]
     pub basin_tol: f64,
-    /// Output directory for theta{m}.json and the HLSL/GLSL snippets theta{m}.hlsl|glsl
-    /// (default results/theta-m{m}-seed{seed}; for --basis a hash of the names replaces m).
+    /// Output folder for theta{m}.json and the HLSL/GLSL snippets theta{m}.hlsl|glsl
+    /// (default results/theta{m}-seed{seed}; for --basis a hash of the names replaces m); with
+    /// --summary, for the comparison files.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Overwrite existing output files (otherwise a name clash is an error).
@@ -135,7 +136,7 @@ fn snippets(dir: &std::path::Path, order: Order) -> Result<()> {
     Ok(())
 }
 
-/// The curve for --moments / --basis: exact monomials when every name is "z" or "z^k",
+/// The curve for --m / --basis: exact monomials when every name is "z" or "z^k",
 /// otherwise catalog functions verified by dense sampling.
 pub fn build_curve(moments: Option<usize>, basis: Option<&str>) -> Result<Box<dyn Curve>> {
     match (moments, basis) {
@@ -148,7 +149,7 @@ pub fn build_curve(moments: Option<usize>, basis: Option<&str>) -> Result<Box<dy
                 .collect();
             curve::from_names(&names).context("--basis")
         }
-        _ => bail!("give exactly one of --moments m or --basis f1,f2,..."),
+        _ => bail!("give exactly one of --m M or --basis f1,f2,..."),
     }
 }
 
@@ -231,14 +232,14 @@ pub fn process_cpu_seconds() -> Option<f64> {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
-        return summary(dir);
+        return summary(dir, args.out.as_deref().unwrap_or(dir));
     }
     if let Some(dir) = &args.snippets {
         return snippets(dir, args.channel_order);
     }
     let command = crate::report::provenance::command_line();
     let opts = options(&args)?;
-    let curve = build_curve(args.moments, args.basis.as_deref())?;
+    let curve = build_curve(args.m, args.basis.as_deref())?;
     let m = curve.dim();
     let tag = snippet_tag(curve.as_ref());
     let dir = args
@@ -365,7 +366,7 @@ fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json
     Ok(Some((th, v)))
 }
 
-fn summary(dir: &std::path::Path) -> Result<()> {
+fn summary(dir: &std::path::Path, out: &std::path::Path) -> Result<()> {
     // quoted gains: 2015 paper Section 4.3 (θ2 2, θ3 6.2, θ4 12.2783), 2016 supplementary
     // Section 3 (θ6 30.511 / "30.5")
     let quoted = [
@@ -453,7 +454,7 @@ fn summary(dir: &std::path::Path) -> Result<()> {
     if let Some((t3, _)) = read_theta(&dir.join("theta3.json"))? {
         let vols = quantize::fig5::volumes(&t3, 2000)?;
         let svg = quantize::fig5::svg(&t3, &vols, 48)?;
-        let p = dir.join("fig5.svg");
+        let p = out.join("fig5.svg");
         artefact::write_text(&p, &svg)?;
         md.push_str(&format!(
             "\nFig. 5 analogue (fig5.svg): hull of b([0,1]) {:.6} (exact 1/180 = {:.6}), hull of θ₃∘b([0,1]) {:.4}, ratio {:.1} (paper: 0.41 and 73.9×).\n",
@@ -461,9 +462,9 @@ fn summary(dir: &std::path::Path) -> Result<()> {
         ));
         fig = serde_json::to_value(&vols)?;
     }
-    let p = dir.join("comparison.md");
+    let p = out.join("comparison.md");
     artefact::write_text(&p, &md)?;
-    let p = dir.join("summary.json");
+    let p = out.join("summary.json");
     artefact::write_json(&p, &json!({"rows": rows, "fig5": fig}))?;
     print!("{md}");
     Ok(())

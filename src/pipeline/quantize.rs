@@ -14,8 +14,9 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
         return Ok(());
     }
     // every technique whose θ the run computed
-    let techniques: Vec<&str> = [(2, "vsm"), (4, "4msm"), (6, "6msm"), (8, "8msm")]
+    let techniques: Vec<String> = crate::quantize::study::Tech::ALL
         .into_iter()
+        .map(|t| (t.m(), t.name().to_string()))
         .filter(|(m, _)| theta_dir.join(format!("theta{m}.json")).is_file())
         .map(|(_, t)| t)
         .collect();
@@ -26,7 +27,7 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
         stacks: Some(stacks.to_path_buf()),
         resolution: plan.resolution,
         theta_dir: theta_dir.to_path_buf(),
-        techniques: techniques.join(","),
+        technique: techniques,
         out: out.to_path_buf(),
         force: true,
         stride: plan.quantize_stride,

@@ -17,7 +17,7 @@ pub type ThetaRow = (usize, f64, f64, f64);
 fn args(m: usize, restarts: usize, dir: &Path) -> theta::Args {
     theta::Args {
         summary: None,
-        moments: Some(m),
+        m: Some(m),
         basis: None,
         seed: 1,
         restarts,
@@ -68,7 +68,7 @@ pub fn run(plan: &Plan, dir: &Path) -> Result<Vec<ThetaRow>> {
     }
     let mut s = args(2, 1, dir);
     s.summary = Some(dir.to_path_buf());
-    s.moments = None;
+    s.m = None;
     theta::run(s)?;
     Ok(rows)
 }

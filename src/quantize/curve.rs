@@ -62,7 +62,7 @@ impl MonomialCurve {
     /// The power basis (z, z², …, z^m) of m moments.
     pub fn power(m: usize) -> anyhow::Result<MonomialCurve> {
         if !(1..=12).contains(&m) {
-            anyhow::bail!("--moments must be in 1..=12, got {m}");
+            anyhow::bail!("--m must be in 1..=12, got {m}");
         }
         MonomialCurve::new((1..=m as u32).collect())
     }

@@ -59,9 +59,11 @@ pub enum Tech {
 impl Tech {
     pub const ALL: [Tech; 4] = [Tech::Vsm, Tech::Msm4, Tech::Msm6, Tech::Msm8];
 
-    /// Parse "vsm", "4msm", "6msm", "8msm".
+    /// Parse a technique name ("vsm", "hamburger4", "hamburger6", "hamburger8"; the older
+    /// "4msm", "6msm", "8msm" too).
     pub fn parse(name: &str) -> Option<Tech> {
-        Tech::ALL.into_iter().find(|t| t.name() == name.trim())
+        let name = crate::technique::registry::canonical_name(name);
+        Tech::ALL.into_iter().find(|t| t.name() == name)
     }
 
     pub fn m(self) -> usize {
@@ -75,9 +77,9 @@ impl Tech {
     pub fn name(self) -> &'static str {
         match self {
             Tech::Vsm => "vsm",
-            Tech::Msm4 => "4msm",
-            Tech::Msm6 => "6msm",
-            Tech::Msm8 => "8msm",
+            Tech::Msm4 => "hamburger4",
+            Tech::Msm6 => "hamburger6",
+            Tech::Msm8 => "hamburger8",
         }
     }
     /// G(b, z_f) with bias α towards b* = (½, …, ½), double precision arithmetic.

@@ -336,9 +336,10 @@ impl Dataset {
     /// * trivial ⇔ F_Z(z_f) = 0 on the grid ⇔ the 9×9 min of the snapped front map ≥ snapped
     ///   z_f (the rule of `metrics`); all trivial fragments are counted exactly (G = 0).
     ///
-    /// Non-trivial fragments are sampled, stratified by (view, layer): with p = cap / N_nt,
-    /// stratum h keeps ⌊p·N_h + u_h⌋ fragments (u_h ~ U[0,1) seeded, so the expected share is p
-    /// in every stratum: self-weighting), chosen by a seeded shuffle. Errors are then estimated
+    /// Non-trivial fragments are sampled, stratified by (view, layer): with p = cap / N_nt and
+    /// C_h = p·(N_1 + … + N_h), stratum h keeps ⌊C_h + u⌋ − ⌊C_{h−1} + u⌋ fragments (one seeded
+    /// u ~ U[0,1), systematic allocation: ⌊p·N_h⌋ or ⌈p·N_h⌉, expected share p in every stratum,
+    /// self-weighting, and exactly `cap` in all), chosen by a seeded shuffle. Errors are then estimated
     /// as (Σ_trivial PCF + N_nt · mean over the sample) / N_all ([`Dataset::error_estimate`]).
     ///
     /// [`Technique::depth_grid`]: crate::technique::Technique::depth_grid
@@ -388,20 +389,19 @@ impl Dataset {
             fronts.push(snapped);
         }
         let population: usize = strata.values().map(|v| v.len()).sum();
-        let p = match plan.max_fragments {
-            Some(cap) if cap < population => cap as f64 / population as f64,
-            _ => 1.0,
-        };
+        let cap = plan.max_fragments.unwrap_or(population).min(population);
         let mut rng = ChaCha8Rng::seed_from_u64(plan.seed);
+        // Systematic allocation in exact integers: C_h·N_nt = cap·(N_1 + … + N_h), u·N_nt = U.
+        let pop = population.max(1) as u128;
+        let offset: u128 = rng.gen_range(0..pop as u64) as u128;
+        let mut before = 0u128;
         // (view, texel, layer, zf index, pcf) of the kept fragments.
         let mut kept: Vec<(u32, u32, u32, u32, f64)> = Vec::new();
         for (&(view, layer), members) in strata.iter_mut() {
-            let u: f64 = rng.gen();
-            let k = if p >= 1.0 {
-                members.len()
-            } else {
-                ((p * members.len() as f64 + u).floor() as usize).min(members.len())
-            };
+            let upto = before + members.len() as u128;
+            let quota = |n: u128| (cap as u128 * n + offset) / pop;
+            let k = ((quota(upto) - quota(before)) as usize).min(members.len());
+            before = upto;
             // Partial Fisher–Yates: the first k of a seeded shuffle.
             for i in 0..k {
                 let j = rng.gen_range(i..members.len());

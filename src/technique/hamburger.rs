@@ -115,7 +115,12 @@ impl ClosedForm for Hamburger {
 
 impl Technique for Hamburger {
     fn name(&self) -> String {
-        format!("hamburger(m={})", self.b_star.len())
+        // The registry name that builds this solver (`hamburger4`/`hamburger6` are the
+        // dedicated closed forms).
+        match self.b_star.len() {
+            m @ (4 | 6) => format!("hamburger{m}-general"),
+            m => format!("hamburger{m}"),
+        }
     }
     fn moment_count(&self) -> usize {
         self.b_star.len()

@@ -32,6 +32,51 @@ pub const CLOSED_FORM_NAMES: &[&str] = &[
     "tmsm",
 ];
 
+/// The one spelling of a technique name. Older spellings map to it: `4msm`, `6msm`, `8msm` →
+/// `hamburger4`, `hamburger6`, `hamburger8`; `hamburger(m=K)` → `hamburgerK` (the general
+/// Algorithm 2; `hamburgerK-general` for K = 4, 6, whose `hamburgerK` is the dedicated closed
+/// form). Other names are returned trimmed.
+pub fn canonical_name(name: &str) -> String {
+    let n = name.trim();
+    if let Some(k) = n
+        .strip_suffix("msm")
+        .filter(|k| matches!(*k, "4" | "6" | "8"))
+    {
+        return format!("hamburger{k}");
+    }
+    if let Some(k) = n
+        .strip_prefix("hamburger(m=")
+        .and_then(|r| r.strip_suffix(')'))
+    {
+        return match k {
+            "4" | "6" => format!("hamburger{k}-general"),
+            _ => format!("hamburger{k}"),
+        };
+    }
+    n.to_string()
+}
+
+/// The moment count m of a general Hamburger MSM name (Algorithm 2): `hamburgerM` for M other
+/// than 4 and 6, or `hamburgerM-general` for any M. None for every other name.
+pub fn general_hamburger_moments(name: &str) -> Option<usize> {
+    let rest = name.strip_prefix("hamburger")?;
+    let (digits, general) = match rest.strip_suffix("-general") {
+        Some(d) => (d, true),
+        None => (rest, false),
+    };
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) || digits.len() > 3 {
+        return None;
+    }
+    let m: usize = digits.parse().ok()?;
+    (general || !matches!(m, 4 | 6)).then_some(m)
+}
+
+/// Whether `name` (in any accepted spelling) names a closed-form technique.
+pub fn is_closed_form_name(name: &str) -> bool {
+    let n = canonical_name(name);
+    CLOSED_FORM_NAMES.contains(&n.as_str()) || general_hamburger_moments(&n).is_some()
+}
+
 /// Which constant moment vector b* the bias b' = (1 − α) b + α b* pulls towards.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -197,6 +242,18 @@ fn arr<const N: usize>(v: Vec<f64>) -> [f64; N] {
 /// The closed-form technique `name` with parameters `p`.
 pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
     p.check()?;
+    let canonical = canonical_name(name);
+    let name = canonical.as_str();
+    if let Some(m) = general_hamburger_moments(name) {
+        if p.moment_count.is_some_and(|k| k != m) {
+            bail!("{name}: moment_count must be {m} (or omitted)");
+        }
+        let q = Params {
+            moment_count: Some(m),
+            ..p.clone()
+        };
+        return build("hamburger", &q);
+    }
     let prec = p.precision;
     let t: Box<dyn Technique> = match name {
         "vsm" => {
@@ -291,7 +348,7 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
             Box::new(t)
         }
         other => bail!(
-            "unknown technique '{other}' (valid: {}, lp:f1,f2,…)",
+            "unknown technique '{other}' (valid: {}, hamburgerM (even M: Algorithm 2), lp:f1,f2,…)",
             CLOSED_FORM_NAMES.join(", ")
         ),
     };
@@ -304,4 +361,35 @@ pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
         return Ok(Box::new(super::lp_candidate::LpCandidate::from_spec(list)?));
     }
     build(spec, &Params::default())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_name_per_technique_and_old_spellings_map_to_it() {
+        for (old, new) in [
+            ("4msm", "hamburger4"),
+            ("6msm", "hamburger6"),
+            ("8msm", "hamburger8"),
+            ("hamburger(m=8)", "hamburger8"),
+            ("hamburger(m=4)", "hamburger4-general"),
+            ("hamburger(m=6)", "hamburger6-general"),
+            (" vsm ", "vsm"),
+        ] {
+            assert_eq!(canonical_name(old), new);
+            // The built technique is named by the canonical name.
+            assert_eq!(by_name(old).unwrap().name(), new, "{old}");
+        }
+        assert_eq!(by_name("hamburger8").unwrap().moment_count(), 8);
+        assert_eq!(by_name("hamburger4").unwrap().name(), "hamburger4");
+        assert_eq!(general_hamburger_moments("hamburger4"), None);
+        assert_eq!(general_hamburger_moments("hamburger4-general"), Some(4));
+        assert_eq!(general_hamburger_moments("hamburger10"), Some(10));
+        assert_eq!(general_hamburger_moments("hamburgerx"), None);
+        assert!(by_name("hamburger7").is_err());
+        assert!(by_name("9msm").is_err());
+        assert!(is_closed_form_name("8msm") && !is_closed_form_name("z^2"));
+    }
 }
