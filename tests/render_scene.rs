@@ -367,7 +367,7 @@ fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
         "--scenes",
         dir.to_str().unwrap(),
         "--resolution",
-        "8",
+        "16",
         "--out",
         o,
     ]);
