@@ -133,7 +133,7 @@ fn bad_input_gives_one_line_errors() {
         vec!["theta", "--m", "2", "--max-sweeps", "0"],
         vec!["theta"],
         vec!["theta", "--snippets", "/nonexistent/momentlab"],
-        vec!["theta", "--snippets", "/", "--moments", "2"],
+        vec!["theta", "--snippets", "/", "--m", "2"],
     ] {
         let out = bin().args(&args).output().unwrap();
         assert!(!out.status.success(), "{args:?} succeeded");

@@ -64,7 +64,7 @@ pub struct Args {
     pub channel_order: Order,
     /// Instead of searching: re-emit theta*.hlsl / theta*.glsl for every theta*.json in DIR (the
     /// JSON files are only read).
-    #[arg(long, conflicts_with_all = ["moments", "basis", "summary"])]
+    #[arg(long, conflicts_with_all = ["m", "basis", "summary"])]
     pub snippets: Option<PathBuf>,
 }
 
