@@ -307,7 +307,12 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             1,
             "more than the supported",
         ),
-        (args(&["lp", &f.p("missing.json")]), None, 1, "cannot read"),
+        (
+            args(&["lp", &f.p("missing.json")]),
+            None,
+            1,
+            "missing.json: no such file",
+        ),
         (
             args(&["import", &f.p("lossy/v.exr")]),
             None,

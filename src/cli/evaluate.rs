@@ -4,12 +4,13 @@
 use super::common::{
     fraction, non_negative, require_fragments, stacks_or_default, usize_in, MAX_RESOLUTION,
 };
+use crate::artefact::OutDir;
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::progress::Bar;
 use crate::report::pictures;
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
@@ -29,6 +30,10 @@ pub struct Args {
     /// Write one five-panel PNG per view into this directory (see docs/evaluation.md).
     #[arg(long)]
     pub pictures: Option<PathBuf>,
+    /// Replace pictures that already exist in --pictures (otherwise refused before the
+    /// evaluation).
+    #[arg(long, requires = "pictures")]
+    pub force: bool,
     /// Print the full report as JSON on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -103,6 +108,16 @@ pub fn run(args: Args) -> Result<()> {
         }
         require_fragments(&stacks, args.stacks.as_deref())?;
     }
+    // The picture files before the evaluation: no name twice, none replaced without --force.
+    let pictures_out = match &args.pictures {
+        Some(dir) => {
+            let od = OutDir::new(dir, args.force).context("--pictures")?;
+            od.reserve(stacks.iter().map(|s| picture_name(s, subject)))
+                .context("--pictures")?;
+            Some(od)
+        }
+        None => None,
+    };
 
     let bar = Arc::new(Bar::new("evaluate fragments", 0));
     let pb = bar.clone();
@@ -121,8 +136,8 @@ pub fn run(args: Args) -> Result<()> {
         bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
     }
 
-    if let Some(dir) = &args.pictures {
-        write_pictures(dir, &stacks, subject, &bias)?;
+    if let Some(od) = &pictures_out {
+        write_pictures(od, &stacks, subject, &bias)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -132,20 +147,23 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn write_pictures(dir: &Path, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create picture directory {}", dir.display()))?;
+/// The picture file of view `s`: `<scene>_<view>_<technique>.png`.
+fn picture_name(s: &DepthStack, subject: Subject) -> String {
+    format!(
+        "{}_{}_{}.png",
+        sanitize(&s.meta.scene),
+        sanitize(&s.meta.view),
+        sanitize(&subject.name())
+    )
+}
+
+fn write_pictures(od: &OutDir, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
+    let dir = od.root();
     let bar = Bar::new("pictures (views)", stacks.len() as u64);
     for s in stacks {
         let shadows = metrics::front_shadows(s, subject, bias)?;
         let img = pictures::view_picture(s, &shadows)?;
-        let name = format!(
-            "{}_{}_{}.png",
-            sanitize(&s.meta.scene),
-            sanitize(&s.meta.view),
-            sanitize(&subject.name())
-        );
-        pictures::write_png(&dir.join(name), &img)?;
+        pictures::write_png_to(od, &picture_name(s, subject), &img)?;
         bar.inc(1);
     }
     bar.finish();

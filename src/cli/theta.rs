@@ -2,6 +2,7 @@
 //! 2015 paper). theta{m}.json and HLSL/GLSL snippets into --out DIR
 //! (default a run directory under results/; never overwrites without --force).
 
+use crate::artefact::OutDir;
 use crate::basis::Catalog;
 use crate::progress::Bar;
 use crate::quantize::{self, codegen, curve, optimize, theta, volume, Curve};
@@ -49,7 +50,8 @@ pub struct Args {
     /// (default results/theta-m{m}-seed{seed}; for --basis a hash of the names replaces m).
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Overwrite existing output files (otherwise a name clash is an error).
+    /// Replace existing output files (otherwise a name clash is an error, found before the
+    /// search); also for --summary's comparison.md, summary.json and fig5.svg.
     #[arg(long)]
     pub force: bool,
     /// Also print the JSON on stdout.
@@ -172,7 +174,7 @@ pub fn process_cpu_seconds() -> Option<f64> {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
-        return summary(dir);
+        return summary(dir, args.force);
     }
     let command = crate::report::provenance::command_line();
     let opts = options(&args)?;
@@ -183,18 +185,13 @@ pub fn run(args: Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/theta{tag}-seed{}", args.seed)));
-    let files: Vec<PathBuf> = ["json", "hlsl", "glsl"]
+    let names: Vec<String> = ["json", "hlsl", "glsl"]
         .iter()
-        .map(|e| dir.join(format!("theta{tag}.{e}")))
+        .map(|e| format!("theta{tag}.{e}"))
         .collect();
-    if !args.force {
-        if let Some(f) = files.iter().find(|f| f.exists()) {
-            bail!(
-                "{} exists; choose another --out or pass --force to overwrite",
-                f.display()
-            );
-        }
-    }
+    // Before the search: --out is a folder, and nothing there is replaced without --force.
+    let od = OutDir::new(&dir, args.force).context("--out")?;
+    od.reserve(&names).context("--out")?;
     let n_starts = opts.only_starts.as_ref().map_or(opts.restarts, |v| v.len());
     let pb = Bar::new(&format!("theta m={m} starts"), n_starts as u64);
     let t0 = Instant::now();
@@ -259,15 +256,13 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     let text = serde_json::to_string_pretty(&j)? + "\n";
-    std::fs::create_dir_all(&dir).with_context(|| format!("creating {}", dir.display()))?;
-    std::fs::write(&files[0], &text).with_context(|| format!("writing {}", files[0].display()))?;
+    od.write_text(&names[0], &text)?;
     let exps = curve.monomial_exponents();
     for (lang, f) in [
-        (codegen::Lang::Hlsl, &files[1]),
-        (codegen::Lang::Glsl, &files[2]),
+        (codegen::Lang::Hlsl, &names[1]),
+        (codegen::Lang::Glsl, &names[2]),
     ] {
-        std::fs::write(f, codegen::snippet(th, exps.as_deref(), &tag, gain, lang))
-            .with_context(|| format!("writing {}", f.display()))?;
+        od.write_text(f, &codegen::snippet(th, exps.as_deref(), &tag, gain, lang))?;
     }
     if args.json {
         print!("{text}");
@@ -286,11 +281,10 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json::Value)>> {
-    if !path.exists() {
+    if std::fs::symlink_metadata(path).is_err() {
         return Ok(None);
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::artefact::read_text(path, crate::artefact::Limit::ARTEFACT)?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let get = |k: &str| {
@@ -310,7 +304,11 @@ fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json
     Ok(Some((th, v)))
 }
 
-fn summary(dir: &std::path::Path) -> Result<()> {
+fn summary(dir: &std::path::Path, force: bool) -> Result<()> {
+    // Before any verification: the three outputs can be written (refused unless --force).
+    let od = OutDir::new(dir, force).context("--summary")?;
+    od.reserve(["comparison.md", "summary.json", "fig5.svg"])
+        .context("--summary")?;
     // quoted gains: 2015 paper Section 4.3 (θ2 2, θ3 6.2, θ4 12.2783), 2016 supplementary
     // Section 3 (θ6 30.511 / "30.5")
     let quoted = [
@@ -398,22 +396,15 @@ fn summary(dir: &std::path::Path) -> Result<()> {
     if let Some((t3, _)) = read_theta(&dir.join("theta3.json"))? {
         let vols = quantize::fig5::volumes(&t3, 2000)?;
         let svg = quantize::fig5::svg(&t3, &vols, 48)?;
-        let p = dir.join("fig5.svg");
-        std::fs::write(&p, svg).with_context(|| format!("writing {}", p.display()))?;
+        od.write_text("fig5.svg", &svg)?;
         md.push_str(&format!(
             "\nFig. 5 analogue (fig5.svg): hull of b([0,1]) {:.6} (exact 1/180 = {:.6}), hull of θ₃∘b([0,1]) {:.4}, ratio {:.1} (paper: 0.41 and 73.9×).\n",
             vols.volume_b, vols.volume_b_exact, vols.volume_theta, vols.ratio
         ));
         fig = serde_json::to_value(&vols)?;
     }
-    let p = dir.join("comparison.md");
-    std::fs::write(&p, &md).with_context(|| format!("writing {}", p.display()))?;
-    let p = dir.join("summary.json");
-    std::fs::write(
-        &p,
-        serde_json::to_string_pretty(&json!({"rows": rows, "fig5": fig}))? + "\n",
-    )
-    .with_context(|| format!("writing {}", p.display()))?;
+    od.write_text("comparison.md", &md)?;
+    od.write_json("summary.json", &json!({"rows": rows, "fig5": fig}))?;
     print!("{md}");
     Ok(())
 }
