@@ -18,7 +18,8 @@ use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// JSON batch file (stdin when omitted or `-`).
+    /// JSON batch file (stdin when omitted or `-`; a regular file of at most 1 GiB). Limits
+    /// checked before any allocation: at most 31 basis functions, at most 1048576 grid points.
     pub file: Option<PathBuf>,
     /// Catalog used to resolve basis names (default: the embedded catalog).
     #[arg(long)]

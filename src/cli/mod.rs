@@ -26,7 +26,17 @@ use clap::{Parser, Subcommand};
 
 /// momentlab: moment shadow mapping research pipeline.
 #[derive(Parser, Debug)]
-#[command(name = "momentlab", version, about, long_about = None)]
+#[command(
+    name = "momentlab",
+    version,
+    about,
+    long_about = None,
+    after_help = "Threads: RAYON_NUM_THREADS, else SLURM_CPUS_PER_TASK, else all CPUs; a request \
+                  above the CPUs available is clamped to them (noted on stderr after success).\n\
+                  Outputs: commands never replace an existing file without --force; a results \
+                  folder takes one writer at a time. Inputs: regular files only, each kind with \
+                  a size limit (docs/files.md)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,

@@ -262,11 +262,10 @@ pub fn run(args: Args) -> Result<()> {
                 results.display()
             );
         }
-    } else if !args.plan && std::fs::symlink_metadata(&results).is_ok() {
-        // Refuse a folder another run is writing before building the dataset (the sweep
-        // takes the lock again for its whole run).
+    } else if !args.plan {
+        // Refuse a folder another run is writing before building the dataset; held until
+        // the sweep (which takes it again, re-entrantly) is done.
         results_dir.lock().context("--results")?;
-        drop(results_dir);
     }
     let t_data = std::time::Instant::now();
     let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;

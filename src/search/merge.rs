@@ -103,6 +103,11 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
     let od = OutDir::new(out, force).context("merge --out")?;
     od.reserve([CONFIG_FILE, RESULTS_FILE, COMPLETE_FILE])
         .context("merge --out")?;
+    // A folder that exists may be in use by another writer: refuse that first. A new one is
+    // created (and locked) only after every shard passed.
+    if std::fs::symlink_metadata(out).is_ok() {
+        od.lock().context("merge --out")?;
+    }
     let mut base: Option<SweepConfig> = None;
     let mut shards = BTreeSet::new();
     let mut count = None;
