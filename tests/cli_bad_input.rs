@@ -132,7 +132,9 @@ struct Fixtures {
 
 impl Fixtures {
     fn new() -> Fixtures {
-        let root = std::env::temp_dir().join(format!("momentlab-bad-{}", std::process::id()));
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let k = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        let root = std::env::temp_dir().join(format!("momentlab-bad-{}-{k}", std::process::id()));
         let _ = std::fs::remove_dir_all(&root);
         for d in ["empty", "a", "b", "huge", "lossy", "wide"] {
             std::fs::create_dir_all(root.join(d)).unwrap();
@@ -306,7 +308,12 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             1,
             "more than the supported",
         ),
-        (args(&["lp", &f.p("missing.json")]), None, 1, "cannot read"),
+        (
+            args(&["lp", &f.p("missing.json")]),
+            None,
+            1,
+            "missing.json: no such file",
+        ),
         (
             args(&["import", &f.p("lossy/v.exr")]),
             None,
@@ -511,4 +518,781 @@ fn dash_is_stdin() {
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
         assert_eq!(v["results"][0]["status"], "optimal", "{a:?}");
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Writes confined and refused, merges verified, sizes bounded, meaning validated.
+
+/// A scratch folder (removed on drop) holding an `in/` and an `out/` area.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(tag: &str) -> Scratch {
+        let d = std::env::temp_dir().join(format!("momentlab-w-{tag}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        Scratch(d)
+    }
+    fn path(&self, rel: &str) -> PathBuf {
+        self.0.join(rel)
+    }
+    fn p(&self, rel: &str) -> String {
+        self.path(rel).display().to_string()
+    }
+    fn write(&self, rel: &str, text: &str) -> String {
+        let p = self.path(rel);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(&p, text).unwrap();
+        p.display().to_string()
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Every file under `d` (relative path → bytes), for "nothing changed" checks.
+fn snapshot(d: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    let mut out = std::collections::BTreeMap::new();
+    let mut todo = vec![d.to_path_buf()];
+    while let Some(x) = todo.pop() {
+        let Ok(rd) = std::fs::read_dir(&x) else {
+            continue;
+        };
+        for e in rd {
+            let p = e.unwrap().path();
+            let m = std::fs::symlink_metadata(&p).unwrap();
+            let rel = p.strip_prefix(d).unwrap().display().to_string();
+            if m.is_dir() {
+                todo.push(p);
+            } else if m.file_type().is_symlink() {
+                let t = std::fs::read_link(&p).unwrap();
+                out.insert(rel, format!("-> {}", t.display()).into_bytes());
+            } else {
+                out.insert(rel, std::fs::read(&p).unwrap());
+            }
+        }
+    }
+    out
+}
+
+/// Run with extra environment variables and an optional stdout file.
+fn run_env(args: &[&str], env: &[(&str, &str)], stdout: Option<std::fs::File>) -> (i32, String) {
+    let mut c = Command::new(bin());
+    c.args(args)
+        .env("CI", "1")
+        .env("MOMENTLAB_PROGRESS", "off")
+        .stdin(Stdio::null());
+    for (k, v) in env {
+        c.env(k, v);
+    }
+    match stdout {
+        Some(f) => c.stdout(Stdio::from(f)),
+        None => c.stdout(Stdio::null()),
+    };
+    let out = c.stderr(Stdio::piped()).output().unwrap();
+    let code = out
+        .status
+        .code()
+        .unwrap_or_else(|| panic!("{args:?}: killed by a signal"));
+    (code, String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
+/// Assert exit `code` and exactly one stderr line containing every `want`.
+fn expect(args: &[&str], code: i32, want: &[&str]) -> String {
+    let (got, _, err) = run(args, None);
+    assert!(got != 101 && got != 134, "{args:?}: panic/abort: {err}");
+    assert_eq!(got, code, "{args:?}: {err}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: not one line: {err:?}");
+    for w in want {
+        assert!(err.contains(w), "{args:?}: {err:?} lacks {w:?}");
+    }
+    err
+}
+
+fn scene(name: &str, lights: &str, object: &str) -> String {
+    format!(r#"{{"name": "{name}", "lights": [{lights}], "objects": [{object}]}}"#)
+}
+
+const PLANE: &str = r#"{"type": "plane", "size": [1, 1]}"#;
+const LIGHT: &str = r#"{"dir": [0, -1, 0.2]}"#;
+
+#[test]
+fn scenes_names_and_transforms_are_validated_before_rendering() {
+    let s = Scratch::new("scenes");
+    let out = s.p("deep/a/out");
+    let cases: Vec<(String, &[&str])> = vec![
+        (
+            scene("../../evil", LIGHT, PLANE),
+            &["scene name '../../evil' is not a plain name"],
+        ),
+        (
+            scene("a\\nb", LIGHT, PLANE),
+            &["scene name 'a\\nb' is not a plain name"],
+        ),
+        (
+            scene(
+                "s",
+                r#"{"name": "l", "dir": [0,-1,0]}, {"name": "l", "dir": [1,-1,0]}"#,
+                PLANE,
+            ),
+            &["two lights named 'l'"],
+        ),
+        (
+            scene("s", r#"{"name": "../x", "dir": [0,-1,0]}"#, PLANE),
+            &["light name '../x'"],
+        ),
+        (
+            scene(
+                "s",
+                LIGHT,
+                r#"{"type": "box", "size": [1,1,1], "transform": {"scale": 0}}"#,
+            ),
+            &["object 0: transform", "determinant"],
+        ),
+        (
+            scene(
+                "s",
+                LIGHT,
+                r#"{"type": "box", "size": [1,1,1], "transform": {"scale": 1e300}}"#,
+            ),
+            &["object 0: transform"],
+        ),
+        (
+            scene(
+                "s",
+                LIGHT,
+                r#"{"type": "box", "size": [1,1,1], "transform": {"translate": [1e308, 0, 0]}}"#,
+            ),
+            &["object 0: transform puts a vertex at coordinate 1e308"],
+        ),
+        (
+            scene(
+                "s",
+                LIGHT,
+                r#"{"type": "box", "size": [1,1,1], "transform": {"scale": [1, 1e-40, 1]}}"#,
+            ),
+            &["object 0: transform", "degenerate"],
+        ),
+    ];
+    for (i, (json, want)) in cases.iter().enumerate() {
+        let dir = s.path(&format!("case{i}"));
+        s.write(&format!("case{i}/s.json"), json);
+        expect(
+            &[
+                "render",
+                "--scenes",
+                dir.to_str().unwrap(),
+                "--resolution",
+                "8",
+                "--out",
+                &out,
+            ],
+            1,
+            want,
+        );
+    }
+    // Two scene files with one name: refused before rendering (not "rendered 2 views").
+    s.write("dup/a.json", &scene("same", LIGHT, PLANE));
+    s.write("dup/b.json", &scene("same", LIGHT, PLANE));
+    expect(
+        &[
+            "render",
+            "--scenes",
+            &s.p("dup"),
+            "--resolution",
+            "8",
+            "--out",
+            &out,
+        ],
+        1,
+        &["two outputs named 'same_light0.exr'"],
+    );
+    // Nothing was written anywhere: not in --out, not above it.
+    assert!(!s.path("deep/a/out").exists());
+    assert!(!s.path("evil").exists() && !s.path("deep/evil").exists());
+    assert!(!s.path("evil_light0.exr").exists());
+}
+
+#[test]
+fn inputs_are_bounded_regular_files_and_names_are_plain() {
+    let s = Scratch::new("inputs");
+    // lp: 100 functions is a one-line error, not a panic in the dense kernels.
+    let basis: Vec<String> = (1..=100).map(|k| format!("\"z^{k}\"")).collect();
+    let moments: Vec<String> = (1..=100)
+        .map(|k| format!("{}", 1.0 / (k + 1) as f64))
+        .collect();
+    let batch = format!(
+        r#"{{"basis": [{}], "problems": [{{"moments": [{}], "zf": 0.5}}]}}"#,
+        basis.join(","),
+        moments.join(",")
+    );
+    let f = s.write("lp100.json", &batch);
+    expect(&["lp", &f], 1, &["100 functions", "limit of 31"]);
+    // ESM with a moment below e^{80·0} = 1: no distribution has it (was G = 1).
+    let f = s.write(
+        "esm.json",
+        r#"{"technique": "esm", "problems": [{"moments": [0.5], "zf": 0.5}]}"#,
+    );
+    expect(
+        &["shadow", &f],
+        1,
+        &["moment 1 = 5e-1 is outside the range"],
+    );
+    // Non-regular files: a FIFO (must not block), a directory, a link to /dev/zero.
+    let fifo = s.path("pipe.json");
+    let c = std::ffi::CString::new(fifo.to_str().unwrap()).unwrap();
+    assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+    expect(
+        &["lp", fifo.to_str().unwrap()],
+        1,
+        &["pipe.json: is a FIFO"],
+    );
+    expect(
+        &["shadow", &s.p("")],
+        1,
+        &["is a directory, not a regular file"],
+    );
+    let zero = s.path("zero.json");
+    std::os::unix::fs::symlink("/dev/zero", &zero).unwrap();
+    expect(
+        &[
+            "candidates",
+            "count",
+            "--m",
+            "2",
+            "--catalog",
+            zero.to_str().unwrap(),
+        ],
+        1,
+        &["zero.json: is a character device"],
+    );
+    expect(
+        &["lp", "--catalog", zero.to_str().unwrap(), &s.p("esm.json")],
+        1,
+        &["is a character device"],
+    );
+    // Catalog names with a comma or a newline.
+    for (tag, name, want) in [
+        ("comma", "a,b", "contains a comma"),
+        ("newline", "a\\nb", "control character"),
+        ("semicolon", "a;b", "contains a semicolon"),
+    ] {
+        let cat = s.write(
+            &format!("cat-{tag}.json"),
+            &format!(r#"{{"functions": [{{"name": "{name}", "formula": "z"}}, {{"name": "y", "formula": "z^2"}}]}}"#),
+        );
+        expect(
+            &["candidates", "count", "--m", "1", "--catalog", &cat],
+            1,
+            &[want],
+        );
+    }
+}
+
+#[test]
+fn stacks_are_checked_for_meaning_and_never_rewritten_in_place() {
+    let f = Fixtures::new();
+    let s = Scratch::new("stacks");
+    // A sidecar with an unknown field: refused (a copy would silently drop it).
+    momentlab::stack::write(&s.path("extra/v.exr"), &stack(false)).unwrap();
+    let mut m = serde_json::to_value(meta(16, 1)).unwrap();
+    m["exposure"] = serde_json::json!(2.0);
+    std::fs::write(s.path("extra/v.json"), m.to_string()).unwrap();
+    expect(
+        &["import", &s.p("extra/v.exr"), "--out", &s.p("o1")],
+        1,
+        &["unknown field `exposure`"],
+    );
+    // Two channels for one layer's Z (layer0.Z and layer000.Z).
+    {
+        use exr::prelude::*;
+        let n = 16 * 16;
+        let ch = |name: &str| {
+            AnyChannel::new(
+                Text::new_or_none(name).unwrap(),
+                FlatSamples::F32(vec![0.5; n]),
+            )
+        };
+        let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::from_vec(vec![
+            ch("layer0.Z"),
+            ch("layer000.Z"),
+            ch("layer000.dzdu"),
+            ch("layer000.dzdv"),
+        ]);
+        let enc = Encoding {
+            compression: Compression::ZIP16,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        };
+        let layer = Layer::new(
+            (16, 16),
+            LayerAttributes::default(),
+            enc,
+            AnyChannels::sort(list),
+        );
+        Image::from_layer(layer)
+            .write()
+            .to_file(s.path("twice.exr"))
+            .unwrap();
+        std::fs::write(
+            s.path("twice.json"),
+            serde_json::to_string(&meta(16, 1)).unwrap(),
+        )
+        .unwrap();
+    }
+    expect(
+        &["import", &s.p("twice.exr")],
+        1,
+        &["'layer0.Z'", "'layer000.Z'", "one channel per layer"],
+    );
+    // `import X --out X` must not rewrite its own input, with or without --force.
+    let before = snapshot(&f.root.join("a"));
+    for force in [false, true] {
+        let mut a = args(&["import", &f.p("a/v.exr"), "--out", &f.p("a")]);
+        if force {
+            a.push("--force".into());
+        }
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        expect(&refs, 1, &["rewritten in place"]);
+    }
+    assert_eq!(snapshot(&f.root.join("a")), before);
+    assert!(!s.path("o1").exists());
+}
+
+/// Every writing subcommand, pointed at a folder that holds a file it would write: refused
+/// (one line, exit 1) before its work, the file untouched, nothing else written there.
+#[test]
+fn writing_commands_refuse_existing_files_without_force() {
+    let f = Fixtures::new();
+    let s = Scratch::new("force");
+    let theta_dir = format!("{}/reports/theta", env!("CARGO_MANIFEST_DIR"));
+    let a = f.p("a");
+    let cases: Vec<(&str, Vec<String>)> = vec![
+        (
+            "render/thin_light0.json",
+            args(&[
+                "render",
+                "--only",
+                "thin",
+                "--resolution",
+                "16",
+                "--out",
+                &s.p("render"),
+            ]),
+        ),
+        (
+            "import/v.exr",
+            args(&["import", &f.p("a/v.exr"), "--out", &s.p("import")]),
+        ),
+        (
+            "pictures/s_v_vsm.png",
+            args(&[
+                "evaluate",
+                "--technique",
+                "vsm",
+                "--stacks",
+                &a,
+                "--pictures",
+                &s.p("pictures"),
+            ]),
+        ),
+        (
+            "merge/results.jsonl",
+            args(&["merge", &a, "--out", &s.p("merge")]),
+        ),
+        (
+            "theta/theta2.hlsl",
+            args(&[
+                "theta",
+                "--moments",
+                "2",
+                "--restarts",
+                "1",
+                "--out",
+                &s.p("theta"),
+            ]),
+        ),
+        (
+            "summary/summary.json",
+            args(&["theta", "--summary", &s.p("summary")]),
+        ),
+        (
+            "quantize/quantize_alpha.svg",
+            args(&[
+                "quantize",
+                "--stacks",
+                &a,
+                "--theta-dir",
+                &theta_dir,
+                "--techniques",
+                "vsm",
+                "--out",
+                &s.p("quantize"),
+            ]),
+        ),
+        (
+            "stability/heatmap_u16.svg",
+            args(&["stability", "--samples", "5", "--out", &s.p("stability")]),
+        ),
+    ];
+    for (file, a) in &cases {
+        s.write(file, "precious\n");
+        let dir = s.path(file).parent().unwrap().to_path_buf();
+        let before = snapshot(&dir);
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        expect(&refs, 1, &["exists already", "--force"]);
+        assert_eq!(snapshot(&dir), before, "{a:?} changed {}", dir.display());
+    }
+    // A dangling link where an output goes: refused, and with --force replaced, never followed.
+    let victim = s.path("outside/victim.exr");
+    std::fs::create_dir_all(s.path("outside")).unwrap();
+    std::fs::create_dir_all(s.path("linked")).unwrap();
+    std::os::unix::fs::symlink(&victim, s.path("linked/thin_light0.exr")).unwrap();
+    let render = ["render", "--only", "thin", "--resolution", "16", "--out"];
+    let mut r: Vec<&str> = render.to_vec();
+    let linked = s.p("linked");
+    r.push(&linked);
+    expect(&r, 1, &["thin_light0.exr exists already"]);
+    r.push("--force");
+    let (code, _, err) = run(&r, None);
+    assert_eq!(code, 0, "{err}");
+    assert!(!victim.exists(), "the link was followed out of --out");
+    assert_eq!(
+        momentlab::stack::load_dir(&s.path("linked")).unwrap().len(),
+        4
+    );
+    // --force replaces a stale file.
+    let (code, _, err) = run(
+        &[
+            "render",
+            "--only",
+            "thin",
+            "--resolution",
+            "16",
+            "--out",
+            &s.p("render"),
+            "--force",
+        ],
+        None,
+    );
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(
+        momentlab::stack::load_dir(&s.path("render")).unwrap().len(),
+        4
+    );
+}
+
+/// stdout on a full device: one line, exit 1 (a closed pipe stays quiet: broken_pipe_ends_quietly).
+#[test]
+fn stdout_write_errors_are_one_line_errors() {
+    let f = Fixtures::new();
+    let s = Scratch::new("full");
+    let full = || {
+        std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap()
+    };
+    let lp = s.write("lp.json", LP_OK);
+    let cmds: Vec<Vec<String>> = vec![
+        args(&["import", &f.p("a/v.exr")]),
+        args(&["evaluate", "--technique", "vsm", "--stacks", &f.p("a")]),
+        args(&[
+            "render",
+            "--only",
+            "thin",
+            "--resolution",
+            "16",
+            "--out",
+            &s.p("r"),
+        ]),
+        args(&["stability", "--samples", "5", "--out", &s.p("st"), "--json"]),
+        args(&["lp", &lp]),
+        args(&["candidates", "count", "--m", "2"]),
+    ];
+    for a in &cmds {
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let (code, err) = run_env(&refs, &[], Some(full()));
+        assert_eq!(code, 1, "{a:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{a:?}: {err:?}");
+        assert!(
+            err.contains("stdout") && err.contains("No space left"),
+            "{a:?}: {err}"
+        );
+    }
+}
+
+/// Thread requests beyond the CPUs are clamped; the note never precedes an error line.
+#[test]
+fn thread_requests_are_clamped_and_quiet_on_errors() {
+    for var in ["SLURM_CPUS_PER_TASK", "RAYON_NUM_THREADS"] {
+        let (code, err) = run_env(&["candidates", "subset", "z,nope"], &[(var, "20000")], None);
+        assert_eq!(code, 1, "{err}");
+        assert_eq!(err.lines().count(), 1, "{var}: {err:?}");
+        let (code, err) = run_env(
+            &["candidates", "count", "--m", "2"],
+            &[(var, "20000")],
+            None,
+        );
+        assert_eq!(code, 0, "{err}");
+        assert!(
+            err.contains(var) && err.contains("20000") && err.contains("used"),
+            "{var}: {err:?}"
+        );
+    }
+}
+
+/// A sharded synthetic sweep (small and fast): `search --shard i/2` into `dir`.
+fn shard(dir: &str, i: usize, seed: &str) -> (i32, String) {
+    let sh = format!("{i}/2");
+    let (code, _, err) = run(
+        &[
+            "search",
+            "--synthetic",
+            "40",
+            "--m",
+            "1",
+            "--exhaustive",
+            "--no-report",
+            "--grid",
+            "64",
+            "--seed",
+            seed,
+            "--shard",
+            &sh,
+            "--results",
+            dir,
+        ],
+        None,
+    );
+    (code, err)
+}
+
+fn rows_of(dir: &Path) -> Vec<String> {
+    std::fs::read_to_string(dir.join("results.jsonl"))
+        .unwrap()
+        .lines()
+        .map(str::to_string)
+        .collect()
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let p = e.unwrap().path();
+        if p.is_file() {
+            std::fs::copy(&p, to.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
+#[test]
+fn merges_and_reports_verify_their_shards() {
+    let s = Scratch::new("merge");
+    for i in 0..2 {
+        let (code, err) = shard(&s.p(&format!("s{i}")), i, "1");
+        assert_eq!(code, 0, "{err}");
+    }
+    let (code, err) = shard(&s.p("foreign1"), 1, "2");
+    assert_eq!(code, 0, "{err}");
+    let (s0, s1) = (s.p("s0"), s.p("s1"));
+    // The good merge, for reference.
+    let (code, _, err) = run(&["merge", &s0, &s1, "--out", &s.p("good")], None);
+    assert_eq!(code, 0, "{err}");
+    let n = rows_of(&s.path("good")).len();
+    assert_eq!(
+        n,
+        rows_of(&s.path("s0")).len() + rows_of(&s.path("s1")).len()
+    );
+    // Broken copies of shard 0.
+    let variant = |tag: &str, edit: &dyn Fn(&Path)| -> String {
+        let d = s.path(tag);
+        copy_dir(&s.path("s0"), &d);
+        edit(&d);
+        d.display().to_string()
+    };
+    let torn = variant("torn", &|d| {
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(d.join("results.jsonl"))
+            .unwrap();
+        f.write_all(br#"{"index": 99, "functions": ["#).unwrap();
+    });
+    let empty = variant("empty", &|d| {
+        std::fs::remove_file(d.join("results.jsonl")).unwrap()
+    });
+    let dup = variant("dup", &|d| {
+        let rows = rows_of(d);
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(d.join("results.jsonl"))
+            .unwrap();
+        writeln!(f, "{}", rows[0]).unwrap();
+    });
+    let lost = variant("lost", &|d| {
+        let rows = rows_of(d);
+        std::fs::write(d.join("results.jsonl"), rows[1..].join("\n") + "\n").unwrap();
+    });
+    let unfinished = variant("unfinished", &|d| {
+        std::fs::remove_file(d.join("complete.json")).unwrap()
+    });
+    let foreign = s.p("foreign1");
+    let cases: Vec<(Vec<&str>, &[&str])> = vec![
+        (vec![&torn, &s1], &["torn row"]),
+        (
+            vec![&empty, &s1],
+            &["marked complete but has no results.jsonl"],
+        ),
+        (vec![&dup, &s1], &["appears twice"]),
+        (vec![&lost, &s1], &["rows, but complete.json says"]),
+        (vec![&unfinished, &s1], &["is not complete"]),
+        (vec![&s0, &foreign], &["different configuration"]),
+        (vec![&s0], &["shard 1/2 is missing"]),
+        (vec![&s0, &s0], &["given twice"]),
+    ];
+    for (i, (dirs, want)) in cases.iter().enumerate() {
+        let out = s.p(&format!("m{i}"));
+        let mut a = vec!["merge"];
+        a.extend(dirs.iter().copied());
+        a.extend(["--out", &out]);
+        expect(&a, 1, want);
+        assert!(!Path::new(&out).exists(), "{a:?} wrote {out}");
+    }
+    // --report-only refuses the same things, and a single shard presented as the whole run.
+    let report = |dir: &str| {
+        vec![
+            "search",
+            "--synthetic",
+            "40",
+            "--m",
+            "1",
+            "--exhaustive",
+            "--grid",
+            "64",
+            "--seed",
+            "1",
+            "--report-only",
+            "--results",
+            dir.to_string().leak(),
+            "--report",
+            s.p("rep").leak(),
+        ]
+    };
+    expect(&report(&s0), 1, &["shard 0/2 of a sharded run", "merge"]);
+    let merged_dup = variant("merged-dup", &|d| {
+        std::fs::remove_dir_all(d).unwrap();
+        copy_dir(&s.path("good"), d);
+        let rows = rows_of(d);
+        let mut f = std::fs::OpenOptions::new()
+            .append(true)
+            .open(d.join("results.jsonl"))
+            .unwrap();
+        writeln!(f, "{}", rows[0]).unwrap();
+    });
+    expect(&report(&merged_dup), 1, &["appears twice"]);
+    expect(&report(&torn), 1, &["torn row"]);
+    assert!(!s.path("rep").exists());
+}
+
+#[test]
+fn a_second_writer_on_one_results_folder_fails_cleanly() {
+    let s = Scratch::new("lock");
+    // Deterministic: the folder is held (the lock the sweep takes), the second writer fails.
+    let d = s.path("held");
+    std::fs::create_dir_all(&d).unwrap();
+    let lock = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(d.join(".momentlab.lock"))
+        .unwrap();
+    lock.try_lock().unwrap();
+    let held = d.display().to_string();
+    let (code, err) = shard(&held, 0, "1");
+    assert_eq!(code, 1, "{err}");
+    assert_eq!(err.lines().count(), 1, "{err:?}");
+    assert!(err.contains("in use by another momentlab run"), "{err}");
+    expect(
+        &["merge", &s.p("nothing"), "--out", &held],
+        1,
+        &["in use", "another momentlab run"],
+    );
+    assert!(!d.join("results.jsonl").exists() && !d.join("config.json").exists());
+    drop(lock);
+    // Two concurrent runs into one folder: each either completes or is refused cleanly, and
+    // the rows are there once each.
+    let dir = s.p("both");
+    let spawn = || {
+        let dir = dir.clone();
+        std::thread::spawn(move || shard(&dir, 0, "1"))
+    };
+    let (a, b) = (spawn(), spawn());
+    let outcomes = [a.join().unwrap(), b.join().unwrap()];
+    for (code, err) in &outcomes {
+        assert!(
+            *code == 0 || (*code == 1 && err.contains("in use by another momentlab run")),
+            "{code}: {err}"
+        );
+        if *code == 1 {
+            assert_eq!(err.lines().count(), 1, "{err:?}");
+        }
+    }
+    assert!(outcomes.iter().any(|(c, _)| *c == 0));
+    let rows = rows_of(&s.path("both"));
+    let mut idx: Vec<u64> = rows
+        .iter()
+        .map(|r| {
+            serde_json::from_str::<serde_json::Value>(r).unwrap()["index"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    let n = idx.len();
+    idx.sort();
+    idx.dedup();
+    assert_eq!(idx.len(), n, "rows written twice");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(s.path("both/complete.json")).unwrap())
+            .unwrap();
+    assert_eq!(summary["candidates"].as_u64().unwrap() as usize, n);
+}
+
+/// Checks that used to run after the expensive work now come first (each case would render
+/// the default dataset or run a θ search before failing; the 10 s limit of `run` catches it).
+#[test]
+fn checks_come_before_the_work() {
+    let s = Scratch::new("early");
+    let file = s.write("file", "x");
+    expect(
+        &["theta", "--moments", "4", "--out", &file],
+        1,
+        &["--out", "not a folder"],
+    );
+    expect(
+        &["search", "--results", &file],
+        1,
+        &["--results", "not a folder"],
+    );
+    expect(
+        &["search", "--names", "z,nope"],
+        1,
+        &["unknown function 'nope'"],
+    );
+    expect(
+        &[
+            "search",
+            "--m",
+            "2",
+            "--names",
+            "z,z^2",
+            "--report-only",
+            "--results",
+            &s.p("none"),
+        ],
+        1,
+        &["--report-only"],
+    );
 }

@@ -361,7 +361,8 @@ fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
     ]);
     let st3 = momentlab::stack::load_dir(&out3).unwrap();
     assert_eq!(st3, st);
-    // the folder skips the sidecar (it is not a scene file)
+    // the folder skips the sidecar (it is not a scene file); --out holds the stacks of the
+    // first run, replaced only with --force
     ok(&[
         "render",
         "--scenes",
@@ -370,6 +371,7 @@ fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
         "16",
         "--out",
         o,
+        "--force",
     ]);
 
     // errors: no lights; an upward light; --light for a folder; an unsupported mesh format

@@ -320,9 +320,9 @@ fn shards_merge_to_the_single_run() {
         }
         let merged = tmp(&format!("merged{exhaustive}"));
         // Missing shard is an error.
-        let e = merge_dirs(&dirs[..2], &merged, false).unwrap_err();
-        assert!(e.to_string().contains("shard 2/3 is missing"), "{e}");
-        assert_eq!(merge_dirs(&dirs, &merged, false).unwrap(), 28);
+        let e = merge_dirs(&dirs[..2], &merged, false, false).unwrap_err();
+        assert!(format!("{e:#}").contains("shard 2/3 is missing"), "{e:#}");
+        assert_eq!(merge_dirs(&dirs, &merged, false, false).unwrap(), 28);
         let (a, b) = (rows(&single), rows(&merged));
         if exhaustive {
             assert_eq!(a, b);
@@ -343,7 +343,7 @@ fn shards_merge_to_the_single_run() {
             );
         }
         // Merging twice into the same place, or mismatched configs, is refused.
-        assert!(merge_dirs(&dirs, &merged, false).is_err());
+        assert!(merge_dirs(&dirs, &merged, false, false).is_err());
         for d in dirs.into_iter().chain([single, merged]) {
             std::fs::remove_dir_all(d).unwrap();
         }

@@ -429,16 +429,39 @@ pub const LOCK_FILE: &str = ".momentlab.lock";
 
 /// An advisory lock on a folder: `flock` on `<dir>/.momentlab.lock` (released by the kernel if
 /// the process dies; the file, holding "pid N on HOST", is removed on drop).
+/// Re-entrant within one process: a folder this process holds already is not locked twice (a
+/// command that locks its results folder early, then runs the sweep that locks it again).
 #[derive(Debug)]
 pub struct DirLock {
     path: PathBuf,
-    _file: File,
+    /// None: nested in a lock this process holds already.
+    file: Option<File>,
+    key: PathBuf,
 }
+
+/// Folders this process holds the lock of (canonical paths).
+static HELD: Mutex<BTreeSet<PathBuf>> = Mutex::new(BTreeSet::new());
 
 impl DirLock {
     /// Take the lock of `dir` or fail with a one-line error naming the holder.
     pub fn acquire(dir: &Path) -> Result<DirLock> {
         let path = dir.join(LOCK_FILE);
+        let key = dir
+            .canonicalize()
+            .with_context(|| format!("locking {}", dir.display()))?;
+        if HELD.lock().unwrap().contains(&key) {
+            return Ok(DirLock {
+                path,
+                file: None,
+                key,
+            });
+        }
+        let lock = Self::acquire_file(dir, path, key.clone())?;
+        HELD.lock().unwrap().insert(key);
+        Ok(lock)
+    }
+
+    fn acquire_file(dir: &Path, path: PathBuf, key: PathBuf) -> Result<DirLock> {
         for _ in 0..100 {
             let mut f = fs::OpenOptions::new()
                 .read(true)
@@ -471,7 +494,11 @@ impl DirLock {
                 Err(std::fs::TryLockError::Error(e))
                     if e.kind() == std::io::ErrorKind::Unsupported =>
                 {
-                    return Ok(DirLock { path, _file: f })
+                    return Ok(DirLock {
+                        path,
+                        file: Some(f),
+                        key,
+                    })
                 }
                 Err(std::fs::TryLockError::Error(e)) => {
                     return Err(e).with_context(|| format!("locking {}", dir.display()))
@@ -486,7 +513,11 @@ impl DirLock {
                     f.seek(std::io::SeekFrom::Start(0))?;
                     writeln!(f, "pid {} on {}", std::process::id(), host())?;
                     let _ = f.flush();
-                    return Ok(DirLock { path, _file: f });
+                    return Ok(DirLock {
+                        path,
+                        file: Some(f),
+                        key,
+                    });
                 }
                 _ => continue,
             }
@@ -497,9 +528,13 @@ impl DirLock {
 
 impl Drop for DirLock {
     fn drop(&mut self) {
-        // Remove while still holding the lock: a waiter that opened the old file sees it
-        // unlinked and retries (see `acquire`).
-        let _ = fs::remove_file(&self.path);
+        if let Some(f) = self.file.take() {
+            // Remove while still holding the lock: a waiter that opened the old file sees it
+            // unlinked and retries (see `acquire`).
+            let _ = fs::remove_file(&self.path);
+            HELD.lock().unwrap().remove(&self.key);
+            drop(f);
+        }
     }
 }
 

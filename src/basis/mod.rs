@@ -130,8 +130,8 @@ impl Catalog {
 
     /// Load a catalog file; errors name the file and the offending entry.
     pub fn load(path: &Path) -> Result<Catalog> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("catalog {}: cannot read", path.display()))?;
+        let text =
+            crate::artefact::read_text(path, crate::artefact::Limit::CATALOG).context("catalog")?;
         Catalog::from_json(&text).with_context(|| format!("catalog {}", path.display()))
     }
 
@@ -143,6 +143,23 @@ impl Catalog {
             let name = e.name.trim();
             if name.is_empty() {
                 bail!("entry {i}: empty name");
+            }
+            // Names are listed one per line and given on command lines as comma- and
+            // semicolon-separated lists.
+            if let Some(c) = name
+                .chars()
+                .find(|&c| c == ',' || c == ';' || c.is_control())
+            {
+                bail!(
+                    "entry {i}: name '{}' contains {}; names cannot hold ',', ';' or control \
+                     characters",
+                    name.escape_debug(),
+                    match c {
+                        ',' => "a comma".to_string(),
+                        ';' => "a semicolon".to_string(),
+                        c => format!("the control character {:?}", c),
+                    }
+                );
             }
             if functions.iter().any(|f| f.name == name) {
                 bail!("entry {i}: duplicate name '{name}'");

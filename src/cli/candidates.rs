@@ -17,7 +17,7 @@ use crate::basis::candidates::{
 };
 use crate::basis::{split_list, Catalog, Function};
 use crate::Grid;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -187,6 +187,6 @@ pub fn run(args: Args) -> Result<()> {
             }
         }
     }
-    out.flush()?;
+    out.flush().context("writing stdout")?;
     Ok(())
 }

@@ -4,8 +4,7 @@
 //! and the limits that bound memory before anything is allocated.
 
 use crate::stack::DepthStack;
-use anyhow::{bail, Context, Result};
-use std::io::Read;
+use anyhow::{Context, Result};
 use std::path::Path;
 
 /// Largest shadow-map resolution accepted by any command (12 views × layers × res² fragments).
@@ -17,38 +16,12 @@ pub const MAX_GRID: u64 = super::lp::MAX_GRID_POINTS as u64;
 /// Largest number of random inputs of a speed measurement or stress test.
 pub const MAX_INPUTS: u64 = 10_000_000;
 /// Largest input file read into memory (JSON batches), bytes.
-pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+pub const MAX_INPUT_BYTES: u64 = crate::artefact::Limit::BATCH.bytes;
 
-/// Text of a FILE argument: `None` or `-` reads stdin. Returns (text, name for errors).
+/// Text of a FILE argument: `None` or `-` reads stdin. Returns (text, name for errors). The
+/// bounded reader of [`crate::artefact::input`] with the batch limit (regular files only).
 pub fn read_input(file: Option<&Path>) -> Result<(String, String)> {
-    let mut text = String::new();
-    match file {
-        None => read_limited(std::io::stdin().lock(), &mut text, "stdin")?,
-        Some(p) if p.as_os_str() == "-" => {
-            read_limited(std::io::stdin().lock(), &mut text, "stdin")?
-        }
-        Some(p) => {
-            let f =
-                std::fs::File::open(p).with_context(|| format!("cannot read {}", p.display()))?;
-            read_limited(f, &mut text, &p.display().to_string())?
-        }
-    }
-    let name = match file {
-        Some(p) if p.as_os_str() != "-" => p.display().to_string(),
-        _ => "stdin".to_string(),
-    };
-    Ok((text, name))
-}
-
-fn read_limited(r: impl Read, text: &mut String, name: &str) -> Result<()> {
-    let n = r
-        .take(MAX_INPUT_BYTES + 1)
-        .read_to_string(text)
-        .with_context(|| format!("cannot read {name}"))?;
-    if n as u64 > MAX_INPUT_BYTES {
-        bail!("{name}: larger than the {MAX_INPUT_BYTES}-byte input limit");
-    }
-    Ok(())
+    crate::artefact::read_input(file, crate::artefact::Limit::BATCH)
 }
 
 /// The depth stacks of `--stacks DIR`, or — when it is missing — the embedded default dataset

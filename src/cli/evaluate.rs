@@ -5,12 +5,13 @@ use super::common::{
     fraction, non_negative, require_fragments, resolution, stacks_or_default, technique_list,
     usize_in,
 };
+use crate::artefact::OutDir;
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::progress::Bar;
 use crate::report::pictures;
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::sync::Arc;
 
 #[derive(clap::Args, Debug)]
@@ -36,6 +37,9 @@ pub struct Args {
     /// docs/evaluation.md); without it nothing is written.
     #[arg(long, alias = "pictures")]
     pub out: Option<PathBuf>,
+    /// Replace pictures that already exist in --out (otherwise refused before the evaluation).
+    #[arg(long, requires = "out")]
+    pub force: bool,
     /// Print the full report as JSON on stdout instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -121,14 +125,31 @@ pub fn run(args: Args) -> Result<()> {
         }
         require_fragments(&stacks, args.stacks.as_deref())?;
     }
-
-    let mut reports = Vec::new();
-    for (name, technique) in names.iter().zip(&techniques) {
-        let subject = match technique {
+    let subjects: Vec<Subject> = names
+        .iter()
+        .zip(&techniques)
+        .map(|(name, technique)| match technique {
             Some(t) => Subject::Technique(t.as_ref()),
             None if name == "pcf" => Subject::Pcf,
             None => Subject::Cdf,
-        };
+        })
+        .collect();
+    // The picture files before the evaluation: no name twice, none replaced without --force.
+    let pictures_out = match &args.out {
+        Some(dir) => {
+            let od = OutDir::new(dir, args.force).context("--out")?;
+            od.reserve(
+                subjects
+                    .iter()
+                    .flat_map(|&subject| stacks.iter().map(move |s| picture_name(s, subject))),
+            )
+            .context("--out")?;
+            Some(od)
+        }
+        None => None,
+    };
+    let mut reports = Vec::new();
+    for (name, &subject) in names.iter().zip(&subjects) {
         let bar = Arc::new(Bar::new(&format!("evaluate {name}"), 0));
         let pb = bar.clone();
         let opts = EvalOptions {
@@ -145,8 +166,8 @@ pub fn run(args: Args) -> Result<()> {
         if report.fragments == 0 {
             bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
         }
-        if let Some(dir) = &args.out {
-            write_pictures(dir, &stacks, subject, &bias)?;
+        if let Some(od) = &pictures_out {
+            write_pictures(od, &stacks, subject, &bias)?;
         }
         if !args.json {
             if !reports.is_empty() {
@@ -166,20 +187,23 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn write_pictures(dir: &Path, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create picture directory {}", dir.display()))?;
+/// The picture file of view `s`: `<scene>_<view>_<technique>.png`.
+fn picture_name(s: &DepthStack, subject: Subject) -> String {
+    format!(
+        "{}_{}_{}.png",
+        sanitize(&s.meta.scene),
+        sanitize(&s.meta.view),
+        sanitize(&subject.name())
+    )
+}
+
+fn write_pictures(od: &OutDir, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
+    let dir = od.root();
     let bar = Bar::new("pictures (views)", stacks.len() as u64);
     for s in stacks {
         let shadows = metrics::front_shadows(s, subject, bias)?;
         let img = pictures::view_picture(s, &shadows)?;
-        let name = format!(
-            "{}_{}_{}.png",
-            sanitize(&s.meta.scene),
-            sanitize(&s.meta.view),
-            sanitize(&subject.name())
-        );
-        pictures::write_png(&dir.join(name), &img)?;
+        pictures::write_png_to(od, &picture_name(s, subject), &img)?;
         bar.inc(1);
     }
     bar.finish();

@@ -2,9 +2,9 @@
 //! docs/stacks.md), or convert deep OpenEXR images (detected by their version bits) to stacks,
 //! and, with `--out`, write them there in canonical form.
 
+use crate::artefact::OutDir;
 use crate::stack;
 use anyhow::{bail, Context, Result};
-use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -16,8 +16,9 @@ pub struct Args {
     /// refused). Without it: validate only.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Replace files that already exist in --out (otherwise refused).
-    #[arg(long, requires = "out", alias = "overwrite")]
+    /// Replace files that already exist in --out (otherwise refused). An input is never its
+    /// own destination.
+    #[arg(long, alias = "overwrite", requires = "out")]
     pub force: bool,
     /// Print the validated stacks as JSON instead of lines.
     #[arg(long)]
@@ -28,31 +29,41 @@ pub struct Args {
     pub sort: bool,
 }
 
-/// Refuse, before reading anything, two inputs that would land on the same file in `out`, and
-/// (without `force`) files that exist there already (unless it is the input itself).
-fn check_destinations(files: &[PathBuf], out: &Path, force: bool) -> Result<()> {
-    let mut seen: HashMap<&std::ffi::OsStr, &Path> = HashMap::new();
+/// Refuse, before reading anything, two inputs that would land on the same file in `out`, an
+/// input that is its own destination, and (without --force) files that exist there already.
+fn check_destinations(files: &[PathBuf], out: &OutDir) -> Result<()> {
+    let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
+    let mut names = Vec::new();
     for f in files {
-        let name = f
-            .file_name()
-            .with_context(|| format!("{}: no file name", f.display()))?;
-        if let Some(other) = seen.insert(name, f) {
-            bail!(
-                "{} and {} would both be written to {}; import them into different --out folders",
-                other.display(),
-                f.display(),
-                out.join(name).display()
-            );
-        }
-        let dest = out.join(name);
-        let same = |a: &Path, b: &Path| matches!((a.canonicalize(), b.canonicalize()), (Ok(x), Ok(y)) if x == y);
-        for d in [dest.clone(), stack::sidecar_path(&dest)] {
-            if d.exists() && !force && !same(&d, &stack::sidecar_path(f)) && !same(&d, f) {
-                bail!("{} exists already; pass --force to replace it", d.display());
+        let stem = f
+            .file_stem()
+            .with_context(|| format!("{}: no file name", f.display()))?
+            .to_string_lossy()
+            .into_owned();
+        for (dest, src) in stack::file_names(&stem)
+            .iter()
+            .zip([f.clone(), stack::sidecar_path(f)])
+        {
+            let d = out.path(dest)?;
+            if same(&d, &src) {
+                bail!(
+                    "{} would be rewritten in place; import into another --out folder",
+                    src.display()
+                );
             }
         }
+        names.extend(stack::file_names(&stem));
     }
-    Ok(())
+    out.reserve(&names).map_err(|e| {
+        if e.to_string().contains("two outputs named") {
+            anyhow::anyhow!(
+                "{e}: two inputs would both be written to {}",
+                out.root().display()
+            )
+        } else {
+            e
+        }
+    })
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -79,10 +90,14 @@ pub fn run(args: Args) -> Result<()> {
             );
         }
     }
-    if let Some(out) = &args.out {
-        check_destinations(&files, out, args.force)?;
-        std::fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    }
+    let out = match &args.out {
+        Some(o) => {
+            let out = OutDir::new(o, args.force)?;
+            check_destinations(&files, &out)?;
+            Some(out)
+        }
+        None => None,
+    };
     // read (= validate) everything before writing anything
     let mut deep_stats = Vec::new();
     let mut stacks = Vec::new();
@@ -104,9 +119,9 @@ pub fn run(args: Args) -> Result<()> {
             "file": f, "scene": m.scene, "view": m.view, "width": m.width, "height": m.height,
             "layers": m.layers, "fragments": st.fragment_count(), "deep": deep,
         }));
-        if let Some(out) = &args.out {
-            let name = f.file_name().context("input has no file name")?;
-            stack::write(&out.join(name), st)?;
+        if let Some(out) = &out {
+            let stem = f.file_stem().context("input has no file name")?;
+            stack::write_to(out, &stem.to_string_lossy(), st)?;
         }
         if args.json {
             continue;

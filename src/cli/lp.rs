@@ -41,7 +41,9 @@ Example:
 #[derive(clap::Args, Debug)]
 #[command(after_long_help = SCHEMA_HELP)]
 pub struct Args {
-    /// JSON batch file (stdin when omitted or `-`); the format is under --help.
+    /// JSON batch file (stdin when omitted or `-`; a regular file of at most 1 GiB); the format is
+    /// under --help. Limits checked before any allocation: at most 31 basis functions, at most
+    /// 1048576 grid points.
     pub file: Option<PathBuf>,
     /// Catalog used to resolve basis names (default: the embedded catalog).
     #[arg(long)]

@@ -1,4 +1,6 @@
-//! `momentlab merge`: combine the results directories of a sharded `momentlab search`.
+//! `momentlab merge`: combine the results directories of a sharded `momentlab search`. Every
+//! shard is verified first (completion marker, row count, no torn or duplicated rows, one
+//! configuration); see [`crate::search::merge::verify_results`].
 
 use anyhow::Result;
 use std::path::PathBuf;
@@ -11,6 +13,9 @@ pub struct Args {
     /// Output folder (config.json + results.jsonl sorted by candidate index).
     #[arg(long)]
     pub out: PathBuf,
+    /// Replace files that already exist in --out (otherwise refused).
+    #[arg(long)]
+    pub force: bool,
     /// Merge even if shards are missing or unfinished.
     #[arg(long)]
     pub allow_partial: bool,
@@ -20,7 +25,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let n = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial)?;
+    let n = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial, args.force)?;
     if args.json {
         println!(
             "{}",

@@ -21,7 +21,7 @@ pub mod stability;
 pub mod theta;
 pub mod threads;
 
-use anyhow::Result;
+use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 /// The flags every command spells the same way (shown by `momentlab --help`).
@@ -41,7 +41,18 @@ One vocabulary across the commands (older spellings are still accepted):
 
 /// momentlab: moment shadow mapping research pipeline.
 #[derive(Parser, Debug)]
-#[command(name = "momentlab", version, about, long_about = None, after_long_help = VOCABULARY_HELP)]
+#[command(
+    name = "momentlab",
+    version,
+    about,
+    long_about = None,
+    after_long_help = VOCABULARY_HELP,
+    after_help = "Threads: RAYON_NUM_THREADS, else SLURM_CPUS_PER_TASK, else all CPUs; a request \
+                  above the CPUs available is clamped to them (noted on stderr after success).\n\
+                  Outputs: commands never replace an existing file without --force; a results \
+                  folder takes one writer at a time. Inputs: regular files only, each kind with \
+                  a size limit (docs/files.md)."
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -88,19 +99,35 @@ pub fn main() -> i32 {
         Ok(c) => c,
         Err(e) => return usage_error(&e),
     };
-    match dispatch(cli) {
-        Ok(()) => 0,
+    let result = threads::init_from_env().and_then(|note| dispatch(cli).map(|()| note));
+    let result = result.and_then(|note| {
+        use std::io::Write;
+        std::io::stdout().flush().context("writing stdout")?;
+        Ok(note)
+    });
+    match result {
+        Ok(note) => {
+            if let Some(n) = note {
+                note_line(&n);
+            }
+            0
+        }
         Err(e) if is_broken_pipe(&e) => 0,
         Err(e) => {
             // One line, naming what went wrong and where (the error chain joined by ": ").
-            eprintln!("error: {}", one_line(&format!("{e:#}")));
+            note_line(&format!("error: {}", one_line(&format!("{e:#}"))));
             1
         }
     }
 }
 
+/// A line on stderr; a stderr that cannot be written (full device) is not a second error.
+fn note_line(s: &str) {
+    use std::io::Write;
+    let _ = writeln!(std::io::stderr().lock(), "{s}");
+}
+
 fn dispatch(cli: Cli) -> Result<()> {
-    threads::init_from_env()?;
     match cli.command {
         Command::Lp(a) => lp::run(a),
         Command::Candidates(a) => candidates::run(a),
@@ -136,7 +163,7 @@ fn usage_error(e: &clap::Error) -> i32 {
                 .take_while(|l| !l.trim().is_empty() && !l.starts_with("Usage:"))
                 .map(str::trim)
                 .collect();
-            eprintln!("{}", one_line(&msg.join(" ")));
+            note_line(&one_line(&msg.join(" ")));
             2
         }
     }
@@ -154,8 +181,10 @@ fn is_broken_pipe(e: &anyhow::Error) -> bool {
     })
 }
 
-/// `println!` panics when stdout is a closed pipe (Rust ignores SIGPIPE): end quietly with
-/// exit 0 instead, like a classic Unix filter; other panics keep the default report.
+/// `println!` panics when stdout cannot be written (Rust ignores SIGPIPE): a closed pipe ends
+/// quietly with exit 0, like a classic Unix filter; any other write error on stdout (a full
+/// device, `> /dev/full`) is an ordinary one-line error with exit 1, and one on stderr ends with
+/// exit 1 (there is nowhere to say it). Other panics keep the default report.
 fn quiet_broken_pipe() {
     let default = std::panic::take_hook();
     std::panic::set_hook(Box::new(move |info| {
@@ -167,6 +196,13 @@ fn quiet_broken_pipe() {
             .unwrap_or("");
         if msg.contains("Broken pipe") || msg.contains("os error 32") {
             std::process::exit(0);
+        }
+        if let Some(why) = msg.strip_prefix("failed printing to stdout: ") {
+            note_line(&format!("error: writing stdout: {}", one_line(why)));
+            std::process::exit(1);
+        }
+        if msg.starts_with("failed printing to stderr") {
+            std::process::exit(1);
         }
         default(info);
     }));

@@ -4,6 +4,7 @@
 //! the published θ₂/θ₄/θ₆ beside them.
 
 use super::common::resolution;
+use crate::artefact::OutDir;
 use crate::metrics::{Bias, Subsample};
 use crate::quantize::curve::MonomialCurve;
 use crate::quantize::study::{identity_theta, sweep, Config, Storage, Sweep, Tech};
@@ -66,7 +67,7 @@ fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
             dir.display()
         );
     }
-    let text = std::fs::read_to_string(&p).with_context(|| format!("reading {}", p.display()))?;
+    let text = crate::artefact::read_text(&p, crate::artefact::Limit::ARTEFACT)?;
     #[derive(serde::Deserialize)]
     struct J {
         basis: Vec<String>,
@@ -138,12 +139,13 @@ fn load_stacks(args: &Args) -> Result<Vec<crate::stack::DepthStack>> {
 }
 
 /// Combine the sweeps of existing quantize.json files (`--merge`).
-fn merge(args: &Args, list: &str, files: &[PathBuf; 3]) -> Result<()> {
+fn merge(list: &str, od: &OutDir, files: &[&str; 3]) -> Result<()> {
     let mut all: Vec<Sweep> = Vec::new();
     let mut head: Option<(serde_json::Value, serde_json::Value, serde_json::Value)> = None;
     let mut seconds = 0.0;
     for f in list.split(',').map(str::trim) {
-        let text = std::fs::read_to_string(f).with_context(|| format!("--merge: reading {f}"))?;
+        let text = crate::artefact::read_text(Path::new(f), crate::artefact::Limit::ARTEFACT)
+            .context("--merge")?;
         let v: serde_json::Value =
             serde_json::from_str(&text).with_context(|| format!("--merge: parsing {f}"))?;
         let h = (v["stacks"].clone(), v["views"].clone(), v["stride"].clone());
@@ -173,13 +175,9 @@ fn merge(args: &Args, list: &str, files: &[PathBuf; 3]) -> Result<()> {
         stride.as_u64().unwrap_or(1) as usize,
         &alphas,
     );
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
-    std::fs::write(&files[0], serde_json::to_string_pretty(&json)? + "\n")
-        .with_context(|| format!("writing {}", files[0].display()))?;
-    std::fs::write(&files[1], &md).with_context(|| format!("writing {}", files[1].display()))?;
-    std::fs::write(&files[2], plot(&all)?)
-        .with_context(|| format!("writing {}", files[2].display()))?;
+    od.write_json(files[0], &json)?;
+    od.write_text(files[1], &md)?;
+    od.write_text(files[2], &plot(&all)?)?;
     print!("{md}");
     Ok(())
 }
@@ -210,17 +208,11 @@ pub fn run(args: Args) -> Result<()> {
     if techs.is_empty() {
         bail!("--technique: empty list");
     }
-    let files = ["quantize.json", "quantize.md", "quantize_alpha.svg"].map(|f| args.out.join(f));
-    if !args.force {
-        if let Some(f) = files.iter().find(|f| f.exists()) {
-            bail!(
-                "{} exists; choose another --out or pass --force to overwrite",
-                f.display()
-            );
-        }
-    }
+    let files = ["quantize.json", "quantize.md", "quantize_alpha.svg"];
+    let od = OutDir::new(&args.out, args.force).context("--out")?;
+    od.reserve(files).context("--out")?;
     if let Some(list) = &args.merge {
-        return merge(&args, list, &files);
+        return merge(list, &od, &files);
     }
     // every θ before any expensive work
     let thetas: Vec<Theta> = techs
@@ -259,8 +251,6 @@ pub fn run(args: Args) -> Result<()> {
         bail!("the depth stacks have no fragments to evaluate (empty or all background)");
     }
     let seconds = t0.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
     let stacks_label = args.stacks.as_ref().map_or_else(
         || format!("default dataset rendered at {0}×{0}", args.resolution),
         |p| p.display().to_string(),
@@ -273,7 +263,7 @@ pub fn run(args: Args) -> Result<()> {
         "seconds": seconds, "sweeps": all, "usable_16bit": usable,
     });
     let text = serde_json::to_string_pretty(&json)? + "\n";
-    std::fs::write(&files[0], &text).with_context(|| format!("writing {}", files[0].display()))?;
+    od.write_text(files[0], &text)?;
     let md = markdown(
         &all,
         &usable,
@@ -282,9 +272,8 @@ pub fn run(args: Args) -> Result<()> {
         args.stride,
         &alphas,
     );
-    std::fs::write(&files[1], &md).with_context(|| format!("writing {}", files[1].display()))?;
-    std::fs::write(&files[2], plot(&all)?)
-        .with_context(|| format!("writing {}", files[2].display()))?;
+    od.write_text(files[1], &md)?;
+    od.write_text(files[2], &plot(&all)?)?;
     if args.json {
         print!("{text}");
     } else {

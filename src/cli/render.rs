@@ -2,6 +2,7 @@
 //! `--scenes FOLDER|FILE`) and write one `<scene>_<view>.exr` + `.json` per view.
 
 use super::common::resolution;
+use crate::artefact::OutDir;
 use crate::progress::Bar;
 use crate::render::scene::{LightDesc, UpAxis};
 use crate::render::{self, Scene};
@@ -23,9 +24,12 @@ pub struct Args {
     /// Up axis of a mesh file given to --scenes (y or z; z-up meshes are turned −90° about X).
     #[arg(long)]
     pub up_axis: Option<UpAxis>,
-    /// Output folder for the depth stacks.
+    /// Output folder for the depth stacks (existing files there are refused unless --force).
     #[arg(long, default_value = "results/stacks/default")]
     pub out: PathBuf,
+    /// Replace files that already exist in --out.
+    #[arg(long)]
+    pub force: bool,
     /// Shadow-map resolution (square; 16..=4096).
     #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
@@ -42,7 +46,7 @@ pub struct Args {
 
 /// Grey-scale preview: front depth (black = near, white = far/background) | layer count
 /// (white = the view's maximum).
-fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Result<()> {
+fn write_preview(out: &OutDir, name: &str, st: &crate::stack::DepthStack) -> Result<()> {
     let (w, h) = (st.meta.width, st.meta.height);
     let maxl = st.meta.layers.max(1) as f32;
     let mut img = vec![0u8; 2 * w * h];
@@ -53,12 +57,15 @@ fn write_preview(path: &std::path::Path, st: &crate::stack::DepthStack) -> Resul
             img[y * 2 * w + w + x] = (st.layer_count_at(t) as f32 / maxl * 255.0) as u8;
         }
     }
-    let file =
-        std::fs::File::create(path).with_context(|| format!("creating {}", path.display()))?;
-    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), (2 * w) as u32, h as u32);
-    enc.set_color(png::ColorType::Grayscale);
-    enc.set_depth(png::BitDepth::Eight);
-    enc.write_header()?.write_image_data(&img)?;
+    out.write_with(name, |file| {
+        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), (2 * w) as u32, h as u32);
+        enc.set_color(png::ColorType::Grayscale);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut wr = enc.write_header()?;
+        wr.write_image_data(&img)?;
+        wr.finish()?;
+        Ok(())
+    })?;
     Ok(())
 }
 
@@ -74,8 +81,20 @@ pub fn run(args: Args) -> Result<()> {
             bail!("--only {only}: no such scene (have: {})", names.join(", "));
         }
     }
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("creating {}", args.out.display()))?;
+    // Every file name before any rendering: two views with one name, or files already in
+    // --out (without --force), are refused here.
+    let out = OutDir::new(&args.out, args.force)?;
+    let mut names = Vec::new();
+    for s in &scenes {
+        for light in &s.lights {
+            let stem = format!("{}_{}", s.name, light.name);
+            names.extend(stack::file_names(&stem));
+            if args.preview {
+                names.push(format!("{stem}.preview.png"));
+            }
+        }
+    }
+    out.reserve(&names).context("render")?;
     let views: usize = scenes.iter().map(|s| s.lights.len()).sum();
     let bar = Bar::new("render rows", (views * args.resolution) as u64);
     let start = Instant::now();
@@ -88,13 +107,9 @@ pub fn run(args: Args) -> Result<()> {
             let t0 = Instant::now();
             let st = render::render_view_with(s, i, args.resolution, &|k| bar.inc(k));
             let dt = t0.elapsed().as_secs_f64();
-            let path = args.out.join(format!("{}.exr", st.file_stem()));
-            stack::write(&path, &st)?;
+            let path = stack::write_to(&out, &st.file_stem(), &st)?;
             if args.preview {
-                write_preview(
-                    &args.out.join(format!("{}.preview.png", st.file_stem())),
-                    &st,
-                )?;
+                write_preview(&out, &format!("{}.preview.png", st.file_stem()), &st)?;
             }
             let frags = st.fragment_count();
             rows.push(serde_json::json!({

@@ -1,6 +1,7 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
 use super::common::{fraction, resolution, stacks_or_default, usize_in, MAX_GRID};
+use crate::artefact::OutDir;
 use crate::basis::candidates::MAX_M;
 use crate::metrics::Bias;
 use crate::search::run::{load_table, ranking_lines, report_for, sweep_line};
@@ -238,14 +239,37 @@ pub fn run(args: Args) -> Result<()> {
     let grid = Grid::uniform(args.grid)?;
     let bias = Bias::default();
     let table = table_of(&args, &grid)?;
-    // Before any rendering or sampling.
+    // Before any rendering or sampling: m, the candidate selection, the results folder (a
+    // folder, not in use by another run) and, for --report-only, results that are whole.
     crate::basis::candidates::check_m(table.len(), args.m)?;
-    let t_data = std::time::Instant::now();
-    let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
+    crate::search::run::resolve_candidates(
+        &table,
+        args.m,
+        args.candidates.as_deref(),
+        args.names.as_deref(),
+    )?;
     let results = args
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
+    let results_dir = OutDir::new(&results, true).context("--results")?;
+    if args.report_only {
+        let v = crate::search::merge::verify_results(&results, false).context("--report-only")?;
+        let [i, n] = v.config.shard;
+        if n > 1 {
+            bail!(
+                "--report-only: {} holds shard {i}/{n} of a sharded run, not the whole sweep; \
+                 merge the shards first (momentlab merge)",
+                results.display()
+            );
+        }
+    } else if !args.plan {
+        // Refuse a folder another run is writing before building the dataset; held until
+        // the sweep (which takes it again, re-entrantly) is done.
+        results_dir.lock().context("--results")?;
+    }
+    let t_data = std::time::Instant::now();
+    let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
     let report_dir = args.out.clone().unwrap_or_else(|| results.join("report"));
     let shard = match &args.shard {
         Some(s) => parse_shard(s)?,
@@ -302,7 +326,7 @@ pub fn run(args: Args) -> Result<()> {
         if args.no_report {
             bail!("--report-only and --no-report contradict each other");
         }
-        let rows = read_rows(&results)?;
+        let rows = crate::search::merge::verify_results(&results, false)?.rows;
         let (summary, _) = report_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
         print_ranking(&summary, args.json)?;
         eprintln!("report: written to {}", report_dir.display());

@@ -115,9 +115,11 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
     Ok(serde_json::json!({ "results": results }))
 }
 
-/// Per basis function, the interval its moments can take: the range of b_j over [0,1]
-/// (sampled on 4097 points) widened by 1 % of its width plus 1e-6 for rounding, biases and
-/// storage. Moments of any depth distribution on [0,1] lie inside.
+/// Per basis function, the interval its moments can take: the range [lo, hi] of b_j over [0,1]
+/// (sampled on 4097 points), each end widened by 1 % of min(width, max(|end|, 1)) plus 1e-6
+/// for rounding, biases and storage. Moments of any depth distribution on [0,1] lie inside;
+/// the slack is relative to the end itself, so a steep basis (ESM's e^{80z}, range
+/// [1, 5.5·10³⁴]) still refuses a moment below 0.99 instead of answering G ≈ 1 for it.
 fn moment_box(t: &dyn crate::technique::Technique) -> Vec<(f64, f64)> {
     let m = t.moment_count();
     let mut lo = vec![f64::INFINITY; m];
@@ -132,8 +134,9 @@ fn moment_box(t: &dyn crate::technique::Technique) -> Vec<(f64, f64)> {
     }
     (0..m)
         .map(|j| {
-            let slack = 0.01 * (hi[j] - lo[j]) + 1e-6;
-            (lo[j] - slack, hi[j] + slack)
+            let w = hi[j] - lo[j];
+            let slack = |end: f64| 0.01 * w.min(end.abs().max(1.0)) + 1e-6;
+            (lo[j] - slack(lo[j]), hi[j] + slack(hi[j]))
         })
         .collect()
 }

@@ -28,6 +28,9 @@ pub struct Args {
     /// available in this build are skipped.
     #[arg(long, alias = "techniques", default_value = DEFAULT_TECHNIQUES)]
     pub technique: Vec<String>,
+    /// Replace files that already exist in --out (otherwise refused before the study runs).
+    #[arg(long)]
+    pub force: bool,
     /// Print the summary (inputs, techniques, skipped, seconds, output folder) as JSON.
     #[arg(long)]
     pub json: bool,
@@ -40,6 +43,7 @@ pub fn run(args: Args) -> Result<()> {
         seed: args.seed,
         grid: args.grid,
         techniques: technique_list(&args.technique),
+        force: args.force,
     };
     let pb = Bar::new("stability inputs", 0);
     let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;

@@ -2,7 +2,7 @@
 //! 2015 paper). theta{m}.json and HLSL/GLSL snippets into --out DIR
 //! (default a run directory under results/; never overwrites without --force).
 
-use crate::artefact;
+use crate::artefact::OutDir;
 use crate::progress::Bar;
 use crate::quantize::{self, codegen, curve, optimize, theta, volume, Curve};
 use crate::shader;
@@ -51,7 +51,8 @@ pub struct Args {
     /// --summary, for the comparison files.
     #[arg(long)]
     pub out: Option<PathBuf>,
-    /// Overwrite existing output files (otherwise a name clash is an error).
+    /// Replace existing output files (otherwise a name clash is an error, found before the
+    /// search); also for --summary's comparison.md, summary.json and fig5.svg.
     #[arg(long)]
     pub force: bool,
     /// Also print the JSON on stdout.
@@ -84,24 +85,18 @@ impl From<Order> for codegen::ChannelOrder {
     }
 }
 
-/// Write `theta{tag}.glsl` and `theta{tag}.hlsl` for θ into `dir` (atomically, via
-/// crate::artefact); returns the channel order used.
+/// Write `theta{tag}.glsl` and `theta{tag}.hlsl` for θ into `od` (the one output writer);
+/// returns the channel order used.
 fn write_snippets(
-    dir: &std::path::Path,
+    od: &OutDir,
     th: &theta::Theta,
     curve: &dyn Curve,
     tag: &str,
     order: Order,
 ) -> Result<&'static str> {
     let sn = codegen::snippet(th, curve, tag, order.into())?;
-    artefact::write_text(
-        &dir.join(format!("theta{tag}.glsl")),
-        &shader::glsl(&sn.glsl)?,
-    )?;
-    artefact::write_text(
-        &dir.join(format!("theta{tag}.hlsl")),
-        &shader::hlsl(&sn.hlsl)?,
-    )?;
+    od.write_text(&format!("theta{tag}.glsl"), &shader::glsl(&sn.glsl)?)?;
+    od.write_text(&format!("theta{tag}.hlsl"), &shader::hlsl(&sn.hlsl)?)?;
     Ok(sn.order)
 }
 
@@ -121,13 +116,15 @@ fn snippets(dir: &std::path::Path, order: Order) -> Result<()> {
     if paths.is_empty() {
         bail!("--snippets: no theta*.json in {}", dir.display());
     }
+    // Re-emitting replaces the snippets beside their JSON by design.
+    let od = OutDir::new(dir, true).context("--snippets")?;
     for p in &paths {
         let Some((th, _)) = read_theta(p)? else {
             continue;
         };
         let curve = curve::from_names(&th.basis).with_context(|| p.display().to_string())?;
         let tag = snippet_tag(curve.as_ref());
-        let used = write_snippets(dir, &th, curve.as_ref(), &tag, order)?;
+        let used = write_snippets(&od, &th, curve.as_ref(), &tag, order)?;
         eprintln!(
             "{}: wrote theta{tag}.glsl, theta{tag}.hlsl ({used} channel order)",
             p.display()
@@ -232,7 +229,7 @@ pub fn process_cpu_seconds() -> Option<f64> {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
-        return summary(dir, args.out.as_deref().unwrap_or(dir));
+        return summary(dir, args.out.as_deref().unwrap_or(dir), args.force);
     }
     if let Some(dir) = &args.snippets {
         return snippets(dir, args.channel_order);
@@ -246,18 +243,13 @@ pub fn run(args: Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/theta{tag}-seed{}", args.seed)));
-    let files: Vec<PathBuf> = ["json", "hlsl", "glsl"]
+    let names: Vec<String> = ["json", "hlsl", "glsl"]
         .iter()
-        .map(|e| dir.join(format!("theta{tag}.{e}")))
+        .map(|e| format!("theta{tag}.{e}"))
         .collect();
-    if !args.force {
-        if let Some(f) = files.iter().find(|f| f.exists()) {
-            bail!(
-                "{} exists; choose another --out or pass --force to overwrite",
-                f.display()
-            );
-        }
-    }
+    // Before the search: --out is a folder, and nothing there is replaced without --force.
+    let od = OutDir::new(&dir, args.force).context("--out")?;
+    od.reserve(&names).context("--out")?;
     let n_starts = opts.only_starts.as_ref().map_or(opts.restarts, |v| v.len());
     let pb = Bar::new(&format!("theta m={m} starts"), n_starts as u64);
     let t0 = Instant::now();
@@ -321,10 +313,10 @@ pub fn run(args: Args) -> Result<()> {
             j["published_gain_bits"] = json!(p.gain_bits());
         }
     }
-    let order = write_snippets(&dir, th, curve.as_ref(), &tag, args.channel_order)?;
+    let order = write_snippets(&od, th, curve.as_ref(), &tag, args.channel_order)?;
     j["snippet_channel_order"] = json!(order);
     let text = serde_json::to_string_pretty(&j)? + "\n";
-    artefact::write_text(&files[0], &text)?;
+    od.write_text(&names[0], &text)?;
     if args.json {
         print!("{text}");
     }
@@ -342,11 +334,10 @@ pub fn run(args: Args) -> Result<()> {
 }
 
 fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json::Value)>> {
-    if !path.exists() {
+    if std::fs::symlink_metadata(path).is_err() {
         return Ok(None);
     }
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let text = crate::artefact::read_text(path, crate::artefact::Limit::ARTEFACT)?;
     let v: serde_json::Value =
         serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))?;
     let get = |k: &str| {
@@ -366,7 +357,11 @@ fn read_theta(path: &std::path::Path) -> Result<Option<(theta::Theta, serde_json
     Ok(Some((th, v)))
 }
 
-fn summary(dir: &std::path::Path, out: &std::path::Path) -> Result<()> {
+fn summary(dir: &std::path::Path, out: &std::path::Path, force: bool) -> Result<()> {
+    // Before any verification: the three outputs can be written (refused unless --force).
+    let od = OutDir::new(out, force).context("--summary")?;
+    od.reserve(["comparison.md", "summary.json", "fig5.svg"])
+        .context("--summary")?;
     // quoted gains: 2015 paper Section 4.3 (θ2 2, θ3 6.2, θ4 12.2783), 2016 supplementary
     // Section 3 (θ6 30.511 / "30.5")
     let quoted = [
@@ -454,18 +449,15 @@ fn summary(dir: &std::path::Path, out: &std::path::Path) -> Result<()> {
     if let Some((t3, _)) = read_theta(&dir.join("theta3.json"))? {
         let vols = quantize::fig5::volumes(&t3, 2000)?;
         let svg = quantize::fig5::svg(&t3, &vols, 48)?;
-        let p = out.join("fig5.svg");
-        artefact::write_text(&p, &svg)?;
+        od.write_text("fig5.svg", &svg)?;
         md.push_str(&format!(
             "\nFig. 5 analogue (fig5.svg): hull of b([0,1]) {:.6} (exact 1/180 = {:.6}), hull of θ₃∘b([0,1]) {:.4}, ratio {:.1} (paper: 0.41 and 73.9×).\n",
             vols.volume_b, vols.volume_b_exact, vols.volume_theta, vols.ratio
         ));
         fig = serde_json::to_value(&vols)?;
     }
-    let p = out.join("comparison.md");
-    artefact::write_text(&p, &md)?;
-    let p = out.join("summary.json");
-    artefact::write_json(&p, &json!({"rows": rows, "fig5": fig}))?;
+    od.write_text("comparison.md", &md)?;
+    od.write_json("summary.json", &json!({"rows": rows, "fig5": fig}))?;
     print!("{md}");
     Ok(())
 }

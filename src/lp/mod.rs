@@ -45,7 +45,17 @@ impl GridTable {
         if m == 0 {
             bail!("basis: need at least one function");
         }
-        let mut values = vec![0.0; grid.len() * m];
+        if m > MAX_FUNCTIONS {
+            bail!("basis: {m} functions is more than the LP's limit of {MAX_FUNCTIONS}");
+        }
+        let n = grid.len();
+        if n.saturating_mul(m) > MAX_TABLE_VALUES {
+            bail!(
+                "grid × basis: {n} points × {m} functions is more than the limit of \
+                 {MAX_TABLE_VALUES} table values"
+            );
+        }
+        let mut values = vec![0.0; n * m];
         for (i, &z) in grid.points().iter().enumerate() {
             let row = &mut values[i * m..(i + 1) * m];
             f(z, row);
@@ -152,6 +162,13 @@ pub trait MomentSolver: Send {
     /// chunks are scheduled). Stateless solvers: nothing to do.
     fn reset(&mut self) {}
 }
+
+/// Largest basis size m: the dense kernels (src/lp/dense.rs) hold the r = m + 1 rows of the
+/// LP's basis matrix in fixed arrays of 32.
+pub const MAX_FUNCTIONS: usize = 31;
+
+/// Largest grid table n·m (f64 values, 512 MiB), checked before it is allocated.
+pub const MAX_TABLE_VALUES: usize = 1 << 26;
 
 /// The solver of the given name on `table`: "reference" or "fast" ("fast-strict", the name
 /// from before the certificates, is the same solver: problems nothing certifies come back

@@ -70,10 +70,30 @@ pub struct Outcome {
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
     let p = Paths::of(cfg);
+    // One run per folder pair: a second `reproduce` of the same run waits for no one, it is
+    // refused (both folders are locked until this run ends).
+    let locks = [
+        crate::artefact::OutDir::new(&p.out, true)?,
+        crate::artefact::OutDir::new(&p.data, true)?,
+    ];
+    for l in &locks {
+        l.lock()?;
+    }
     if cfg.fresh {
+        // Empty the folders but keep them (and their locks).
         for d in [&p.out, &p.data] {
-            if d.exists() {
-                std::fs::remove_dir_all(d).with_context(|| format!("removing {}", d.display()))?;
+            for e in std::fs::read_dir(d).with_context(|| format!("reading {}", d.display()))? {
+                let e = e?;
+                if e.file_name() == crate::artefact::LOCK_FILE {
+                    continue;
+                }
+                let path = e.path();
+                let r = if e.file_type()?.is_dir() {
+                    std::fs::remove_dir_all(&path)
+                } else {
+                    std::fs::remove_file(&path)
+                };
+                r.with_context(|| format!("removing {}", path.display()))?;
             }
         }
     }

@@ -98,7 +98,7 @@ fn include_folder(doc: &mut Document, dir: &Path, out: &Path) -> Result<()> {
         .filter(|f| f.extension().is_some_and(|e| e == "md"))
     {
         let mut text = String::new();
-        for line in std::fs::read_to_string(f)?.lines() {
+        for line in crate::artefact::read_text(f, crate::artefact::Limit::ARTEFACT)?.lines() {
             // `![alt](file)` on its own line: a figure of the sub-report's folder.
             let fig = line
                 .trim()

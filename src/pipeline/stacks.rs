@@ -3,7 +3,7 @@
 //! written there.
 
 use crate::stack::DepthStack;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use std::path::Path;
 use std::time::Instant;
 
@@ -16,10 +16,10 @@ pub fn load_or_render(dir: &Path, resolution: usize) -> Result<Vec<DepthStack>> 
     }
     let t0 = Instant::now();
     let stacks = crate::render::default_dataset(resolution)?;
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    // Stale stacks (another resolution) are replaced.
+    let out = crate::artefact::OutDir::new(dir, true)?;
     for st in &stacks {
-        let p = dir.join(format!("{}_{}.exr", st.meta.scene, st.meta.view));
-        crate::stack::write(&p, st)?;
+        crate::stack::write_to(&out, &st.file_stem(), st)?;
     }
     eprintln!(
         "  rendered {} views in {:.1} s",

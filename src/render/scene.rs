@@ -35,6 +35,14 @@ pub struct Scene {
 impl Scene {
     /// A scene built in code. Light directions are normalized; zero/non-finite ones are errors.
     pub fn new(name: &str, triangles: Vec<Tri>, lights: Vec<(String, V3)>) -> Result<Scene> {
+        check_plain_name("scene", name)?;
+        let mut seen = std::collections::BTreeSet::new();
+        for (l, _) in &lights {
+            check_plain_name("light", l)?;
+            if !seen.insert(l.as_str()) {
+                bail!("scene '{name}': two lights named '{l}' (each view is one file)");
+            }
+        }
         let lights = lights
             .into_iter()
             .map(|(name, d)| {
@@ -55,6 +63,7 @@ impl Scene {
         {
             bail!("scene '{name}': triangle {i} has a non-finite vertex");
         }
+        check_extent(name, &triangles)?;
         Ok(Scene {
             name: name.to_string(),
             lights,
@@ -64,12 +73,12 @@ impl Scene {
 
     /// Loads a scene from a JSON file; mesh paths are relative to the file's directory.
     pub fn load(path: &Path) -> Result<Scene> {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        use crate::artefact::input::{read_bytes, read_text, Limit};
+        let text = read_text(path, Limit::SCENE)?;
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         Scene::from_json(&text, &|rel: &str| {
             let p = dir.join(rel);
-            std::fs::read(&p).with_context(|| format!("reading mesh {}", p.display()))
+            read_bytes(&p, Limit::MESH).context("reading mesh")
         })
         .with_context(|| format!("scene {}", path.display()))
     }
@@ -91,8 +100,7 @@ impl Scene {
     ) -> Result<Scene> {
         let side = mesh_sidecar_path(path);
         let mut sc: MeshSidecar = if side.is_file() {
-            let text = std::fs::read_to_string(&side)
-                .with_context(|| format!("reading {}", side.display()))?;
+            let text = crate::artefact::read_text(&side, crate::artefact::Limit::SCENE)?;
             serde_json::from_str(&text)
                 .with_context(|| format!("malformed light sidecar {}", side.display()))?
         } else {
@@ -138,7 +146,7 @@ impl Scene {
         let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
         Scene::from_desc(desc, &|rel: &str| {
             let p = dir.join(rel);
-            std::fs::read(&p).with_context(|| format!("reading mesh {}", p.display()))
+            crate::artefact::read_bytes(&p, crate::artefact::Limit::MESH).context("reading mesh")
         })
         .with_context(|| format!("{}", path.display()))
     }
@@ -151,9 +159,16 @@ impl Scene {
                 .triangles(mesh)
                 .with_context(|| format!("object {i}"))?;
             let m = obj.transform.matrix();
+            check_affine(&m).with_context(|| format!("object {i}: transform"))?;
             for t in &mut local {
                 for v in t.iter_mut() {
                     *v = m.apply(*v);
+                    if let Some(c) = v.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD) {
+                        bail!(
+                            "object {i}: transform puts a vertex at coordinate {c:e}, beyond \
+                             ±{MAX_COORD:e}"
+                        );
+                    }
                 }
             }
             tris.extend(local);
@@ -279,6 +294,62 @@ impl std::str::FromStr for LightDesc {
             ),
         }
     }
+}
+
+/// Largest |coordinate| of a scene vertex (world units): depths and their differences stay
+/// well inside f64 and the f32 depth maps keep their resolution.
+pub const MAX_COORD: f64 = 1e9;
+
+/// A scene or light name becomes part of a file name (`<scene>_<light>.exr`): it must be a
+/// plain name — not empty, no '/', '\\', control characters or leading '.'.
+pub fn check_plain_name(what: &str, name: &str) -> Result<()> {
+    let bad = name.is_empty()
+        || name.starts_with('.')
+        || name.len() > 100
+        || name
+            .chars()
+            .any(|c| c == '/' || c == '\\' || c.is_control());
+    if bad {
+        bail!(
+            "{what} name '{}' is not a plain name (1 to 100 bytes; no '/', '\\', control \
+             characters or leading '.')",
+            name.escape_debug()
+        );
+    }
+    Ok(())
+}
+
+/// A transform must be invertible with a finite, not vanishing scale: |det A| in
+/// [1e-30, 1e30] and every entry finite (scale 0 or 1e300 are errors, not an empty stack).
+fn check_affine(m: &Affine) -> Result<()> {
+    let a = &m.a;
+    if a.iter().flatten().chain(m.t.iter()).any(|v| !v.is_finite()) {
+        bail!("not finite");
+    }
+    let det = a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+        - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+        + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0]);
+    if !(det.abs() >= 1e-30 && det.abs() <= 1e30) {
+        bail!("degenerate (determinant {det:e}): a scale must be finite and not 0");
+    }
+    Ok(())
+}
+
+/// The scene must have an extent: its bounding box is not a single point.
+fn check_extent(name: &str, tris: &[Tri]) -> Result<()> {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for v in tris.iter().flatten() {
+        for k in 0..3 {
+            lo[k] = lo[k].min(v[k]);
+            hi[k] = hi[k].max(v[k]);
+        }
+    }
+    let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
+    if !(ext.is_finite() && ext > 0.0) {
+        bail!("scene '{name}' has no extent (every vertex at one point)");
+    }
+    Ok(())
 }
 
 #[derive(Deserialize)]

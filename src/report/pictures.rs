@@ -165,24 +165,26 @@ pub fn view_picture(stack: &DepthStack, shadows: &FrontShadows) -> Result<RgbIma
 
 /// Writes an RGB image as an 8-bit PNG.
 pub fn write_png(path: &Path, img: &RgbImage) -> Result<()> {
-    let file = std::fs::File::create(path)
-        .with_context(|| format!("cannot create picture {}", path.display()))?;
-    let mut enc = png::Encoder::new(
-        std::io::BufWriter::new(file),
-        img.width as u32,
-        img.height as u32,
-    );
-    enc.set_color(png::ColorType::Rgb);
-    enc.set_depth(png::BitDepth::Eight);
-    let mut writer = enc
-        .write_header()
-        .with_context(|| format!("cannot write picture {}", path.display()))?;
-    writer
-        .write_image_data(&img.data)
-        .with_context(|| format!("cannot write picture {}", path.display()))?;
-    writer
-        .finish()
-        .with_context(|| format!("cannot write picture {}", path.display()))?;
+    let (dir, name) = crate::artefact::OutDir::for_file(path, true)?;
+    write_png_to(&dir, &name, img)
+}
+
+/// Write `img` as the PNG output `name` of `out` (the output writer).
+pub fn write_png_to(out: &crate::artefact::OutDir, name: &str, img: &RgbImage) -> Result<()> {
+    out.write_with(name, |file| {
+        let mut enc = png::Encoder::new(
+            std::io::BufWriter::new(file),
+            img.width as u32,
+            img.height as u32,
+        );
+        enc.set_color(png::ColorType::Rgb);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header()?;
+        writer.write_image_data(&img.data)?;
+        writer.finish()?;
+        Ok(())
+    })
+    .context("cannot write picture")?;
     Ok(())
 }
 

@@ -26,7 +26,18 @@ pub struct Options {
     pub grid: usize,
     /// Technique names; names not available in this build are skipped (and listed).
     pub techniques: Vec<String>,
+    /// Replace existing files in `out` (otherwise refused before the study runs).
+    pub force: bool,
 }
+
+/// The files the study writes into its folder.
+pub const FILES: [&str; 5] = [
+    "stability.json",
+    "stability.md",
+    "heatmap_f64.svg",
+    "heatmap_f32.svg",
+    "heatmap_u16.svg",
+];
 
 /// What a finished study reports.
 #[derive(Clone, Debug)]
@@ -51,6 +62,8 @@ pub fn study(
     if opts.grid < 2 {
         bail!("--grid must be at least 2");
     }
+    let od = crate::artefact::OutDir::new(&opts.out, opts.force).context("--out")?;
+    od.reserve(FILES).context("--out")?;
     let mut techs: Vec<Entry> = Vec::new();
     let mut skipped = Vec::new();
     let p16 = Params {
@@ -93,14 +106,14 @@ pub fn study(
     let t0 = std::time::Instant::now();
     let report = stability::run(&cfg, &techs, &samples, progress)?;
     let secs = t0.elapsed().as_secs_f64();
-    std::fs::create_dir_all(&opts.out)
-        .with_context(|| format!("creating {}", opts.out.display()))?;
-    crate::artefact::write_json(&opts.out.join("stability.json"), &report)?;
+    od.write_json("stability.json", &report)?;
     let md = markdown(&report, &skipped, secs, opts);
-    write(&opts.out.join("stability.md"), &md)?;
+    od.write_text("stability.md", &md)?;
     for mode in [Mode::F64, Mode::F32, Mode::U16] {
-        let path = opts.out.join(format!("heatmap_{}.svg", mode.name()));
-        heat_maps(&path, &report, mode)?;
+        let name = format!("heatmap_{}.svg", mode.name());
+        let mut svg = String::new();
+        heat_maps(&mut svg, &od.path(&name)?, &report, mode)?;
+        od.write_text(&name, &svg)?;
     }
     Ok(Outcome {
         inputs: samples.len(),
@@ -108,10 +121,6 @@ pub fn study(
         skipped,
         seconds: secs,
     })
-}
-
-fn write(path: &Path, s: &str) -> Result<()> {
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
 }
 
 fn pct(x: f64) -> String {
@@ -239,13 +248,13 @@ fn ramp(t: f64) -> RGBColor {
     RGBColor(250, 230, 40)
 }
 
-fn heat_maps(path: &Path, r: &Report, mode: Mode) -> Result<()> {
+fn heat_maps(svg: &mut String, path: &Path, r: &Report, mode: Mode) -> Result<()> {
     let e = |e: &dyn std::fmt::Debug| anyhow!("writing {}: {e:?}", path.display());
     let nt = r.techniques.len();
     let cols = 4.min(nt).max(1);
     let rows_p = nt.div_ceil(cols);
     let width = (300 * cols as u32 + 20).max(760);
-    let root = SVGBackend::new(path, (width, 270 * rows_p as u32 + 70)).into_drawing_area();
+    let root = SVGBackend::with_string(svg, (width, 270 * rows_p as u32 + 70)).into_drawing_area();
     root.fill(&WHITE).map_err(|x| e(&x))?;
     let (title, body) = root.split_vertically(50);
     title

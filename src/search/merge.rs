@@ -1,36 +1,121 @@
 //! `merge` of sharded runs: the results directories of the shards of one sweep into one.
 
 use super::results::{
-    append_jsonl, read_json, read_rows, write_json, Row, COMPLETE_FILE, CONFIG_FILE, FAILED_FILE,
-    RESULTS_FILE,
+    read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE, FAILED_FILE, RESULTS_FILE,
 };
 use super::sweep::{SweepConfig, SweepSummary};
+use crate::artefact::{read_bytes, Limit, OutDir};
 use anyhow::{bail, Context, Result};
 use std::collections::BTreeSet;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-/// Merge the results directories of the shards of one sweep into `out`: checks the configs
-/// agree (except the shard), every shard 0..N is present once and complete, and no candidate
-/// appears twice; writes the rows sorted by index. Returns the number of rows.
-pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<usize> {
+/// A results directory checked to be whole: its configuration, its rows, and whether it is
+/// complete.
+pub struct Verified {
+    pub config: SweepConfig,
+    pub rows: Vec<Row>,
+    pub complete: bool,
+}
+
+/// Check the results directory `d` before its rows are trusted (by `merge` and by
+/// `search --report-only` alike): the rows file has no torn last line, no candidate twice, and
+/// only candidates of its shard; a directory with its completion marker has exactly as many
+/// rows as the marker says. Without the marker: an error unless `allow_partial`.
+pub fn verify_results(d: &Path, allow_partial: bool) -> Result<Verified> {
+    check_not_failed(d)?;
+    let config: SweepConfig = read_json(&d.join(CONFIG_FILE))?;
+    let [i, n] = config.shard;
+    let marker = d.join(COMPLETE_FILE);
+    let complete = std::fs::symlink_metadata(&marker).is_ok();
+    if !complete && !allow_partial {
+        bail!(
+            "{} (shard {i}/{n}) is not complete (no {COMPLETE_FILE}); rerun it or pass \
+             --allow-partial",
+            d.display()
+        );
+    }
+    let rows_path = d.join(RESULTS_FILE);
+    let rows: Vec<Row> = if std::fs::symlink_metadata(&rows_path).is_err() {
+        if complete {
+            bail!(
+                "{} is marked complete but has no {RESULTS_FILE}",
+                d.display()
+            );
+        }
+        Vec::new()
+    } else {
+        let bytes = read_bytes(&rows_path, Limit::ROWS)?;
+        if bytes.last().is_some_and(|&c| c != b'\n') {
+            let line = bytes.iter().filter(|&&c| c == b'\n').count() + 1;
+            bail!(
+                "{}: line {line} is a torn row (the run was killed while writing); rerun that \
+                 shard to repair it",
+                rows_path.display()
+            );
+        }
+        read_rows(d)?
+    };
+    let mut seen = BTreeSet::new();
+    for r in &rows {
+        if !seen.insert(r.index) {
+            bail!(
+                "{}: candidate {} appears twice (two runs wrote into one folder?)",
+                rows_path.display(),
+                r.index
+            );
+        }
+        if n > 1 && r.index % n as u64 != i as u64 {
+            bail!(
+                "{}: candidate {} does not belong to shard {i}/{n}",
+                rows_path.display(),
+                r.index
+            );
+        }
+    }
+    if complete {
+        let summary: SweepSummary = read_json(&marker)?;
+        if summary.candidates != rows.len() as u64 {
+            bail!(
+                "{}: {} rows, but {COMPLETE_FILE} says {} candidates (rows lost or added after \
+                 the run)",
+                rows_path.display(),
+                rows.len(),
+                summary.candidates
+            );
+        }
+    }
+    Ok(Verified {
+        config,
+        rows,
+        complete,
+    })
+}
+
+/// Merge the results directories of the shards of one sweep into `out`: every shard verified
+/// ([`verify_results`]), the configs agree (except the shard), every shard 0..N is present
+/// once, and no candidate appears twice; writes the rows sorted by index through the output
+/// writer (existing files refused unless `force`). Returns the number of rows.
+pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool) -> Result<usize> {
     if dirs.is_empty() {
         bail!("merge: no input directories");
+    }
+    let od = OutDir::new(out, force).context("merge --out")?;
+    od.reserve([CONFIG_FILE, RESULTS_FILE, COMPLETE_FILE])
+        .context("merge --out")?;
+    // A folder that exists may be in use by another writer: refuse that first. A new one is
+    // created (and locked) only after every shard passed.
+    if std::fs::symlink_metadata(out).is_ok() {
+        od.lock().context("merge --out")?;
     }
     let mut base: Option<SweepConfig> = None;
     let mut shards = BTreeSet::new();
     let mut count = None;
     let mut rows: Vec<Row> = Vec::new();
     for d in dirs {
-        check_not_failed(d)?;
-        let cfg: SweepConfig = read_json(&d.join(CONFIG_FILE))?;
+        let v = verify_results(d, allow_partial).context("merge")?;
+        let cfg = v.config;
         let [i, n] = cfg.shard;
-        if !d.join(COMPLETE_FILE).exists() && !allow_partial {
-            bail!(
-                "merge: {} (shard {i}/{n}) is not complete; rerun it or pass --allow-partial",
-                d.display()
-            );
-        }
         if *count.get_or_insert(n) != n {
             bail!(
                 "merge: {} is shard {i}/{n}, others are of {}",
@@ -54,7 +139,7 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<u
                 }
             }
         }
-        rows.extend(read_rows(d)?);
+        rows.extend(v.rows);
     }
     let n = count.unwrap();
     if let Some(missing) = (0..n).find(|i| !shards.contains(i)) {
@@ -66,18 +151,16 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<u
     if let Some(w) = rows.windows(2).find(|w| w[0].index == w[1].index) {
         bail!("merge: candidate {} appears twice", w[0].index);
     }
-    fs::create_dir_all(out).with_context(|| format!("creating {}", out.display()))?;
-    let path = out.join(RESULTS_FILE);
-    if path.exists() {
-        bail!("merge: {} exists already", path.display());
+    od.lock().context("merge --out")?;
+    od.write_json(CONFIG_FILE, base.as_ref().unwrap())?;
+    let mut text = Vec::new();
+    for r in &rows {
+        serde_json::to_writer(&mut text, r)?;
+        text.push(b'\n');
     }
-    write_json(&out.join(CONFIG_FILE), base.as_ref().unwrap())?;
-    append_jsonl(&path, &rows)?;
+    od.write(RESULTS_FILE, &text)?;
     if shards.len() == n {
-        write_json(
-            &out.join(COMPLETE_FILE),
-            &SweepSummary::merged(n, rows.len() as u64),
-        )?;
+        od.write_json(COMPLETE_FILE, &SweepSummary::merged(n, rows.len() as u64))?;
     }
     Ok(rows.len())
 }
@@ -92,7 +175,7 @@ fn check_not_failed(d: &Path) -> Result<()> {
             .find(|l| !l.trim().is_empty())
             .unwrap_or("no details");
         bail!(
-            "merge: {} failed: {}; fix the cause and resubmit that task \
+            "{} failed: {}; fix the cause and resubmit that task \
              (scripts/slurm/resubmit.sh, docs/search.md)",
             d.display(),
             why.trim()
@@ -100,7 +183,7 @@ fn check_not_failed(d: &Path) -> Result<()> {
     }
     if !d.join(CONFIG_FILE).exists() {
         bail!(
-            "merge: {} has no {CONFIG_FILE}: that shard never started \
+            "{} has no {CONFIG_FILE}: that shard never started \
              (not submitted, still pending, or failed before writing; check its log)",
             d.display()
         );
@@ -119,10 +202,12 @@ mod tests {
         fs::create_dir_all(&a).unwrap();
         fs::create_dir_all(&b).unwrap();
         let out = root.join("merged");
-        let e = merge_dirs(&[a.clone(), b.clone()], &out, false).unwrap_err();
+        let e = format!(
+            "{:#}",
+            merge_dirs(&[a.clone(), b.clone()], &out, false, false).unwrap_err()
+        );
         assert!(
-            e.to_string().contains("shard-0 has no config.json")
-                && e.to_string().contains("never started"),
+            e.contains("shard-0 has no config.json") && e.contains("never started"),
             "{e}"
         );
         fs::write(
@@ -132,8 +217,8 @@ mod tests {
         .unwrap();
         // The failure is reported even with --allow-partial, and before the missing config.
         for partial in [false, true] {
-            let e = merge_dirs(&[b.clone(), a.clone()], &out, partial).unwrap_err();
-            let e = e.to_string();
+            let e = merge_dirs(&[b.clone(), a.clone()], &out, partial, false).unwrap_err();
+            let e = format!("{e:#}");
             assert!(
                 e.contains("shard-1 failed: shard 1/2: exit status 1"),
                 "{e}"

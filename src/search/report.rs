@@ -395,8 +395,7 @@ pub fn write(
          fragment of the stacks. Errors and standard errors estimate the mean |G − PCF| over all \
          fragments of the stacks.\n",
     );
-    std::fs::write(dir.join(format!("search_m{m}.md")), md)
-        .with_context(|| format!("writing {}", dir.display()))?;
+    crate::artefact::write_text(&dir.join(format!("search_m{m}.md")), &md)?;
     Ok(summary)
 }
 
@@ -1152,7 +1151,7 @@ fn write_cap_list(path: &Path, t: &TieSet) -> Result<()> {
             o(r.diff_se)
         );
     }
-    std::fs::write(path, s).with_context(|| format!("writing {}", path.display()))
+    crate::artefact::write_text(path, &s)
 }
 
 /// Rank of an error value among the scored candidates: 1 + #candidates strictly better.

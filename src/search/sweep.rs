@@ -397,7 +397,11 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     if data.total_count() == 0 {
         bail!("the dataset has no fragments");
     }
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    // One writer per results folder: a second run into it at the same time is refused.
+    let _lock = crate::artefact::OutDir::new(dir, true)?;
+    _lock
+        .lock()
+        .with_context(|| format!("results {}", dir.display()))?;
     let cfg_path = dir.join(CONFIG_FILE);
     if cfg_path.exists() {
         let old: SweepConfig = read_json(&cfg_path)?;

@@ -3,6 +3,7 @@
 //! JSON sidecar `<name>.json` (= [`StackMeta`]). Layout: docs/stacks.md.
 
 use super::{validate, DepthStack, StackMeta};
+use crate::artefact::{input, Limit, OutDir};
 use anyhow::{anyhow, bail, Context, Result};
 use exr::prelude::*;
 use std::path::{Path, PathBuf};
@@ -17,9 +18,29 @@ pub fn sidecar_path(path: &Path) -> PathBuf {
     path.with_extension("json")
 }
 
-/// Writes `stack` to `path` (the `.exr`) and its sidecar (`.json` next to it). The stack is
-/// validated first; f32 values are stored losslessly (ZIP16), +inf included.
+/// Writes `stack` to `path` (the `.exr`) and its sidecar (`.json` next to it), replacing
+/// existing files. The stack is validated first; f32 values are stored losslessly (ZIP16),
+/// +inf included. Commands write through [`write_to`] instead.
 pub fn write(path: &Path, stack: &DepthStack) -> Result<()> {
+    let stem = path
+        .file_stem()
+        .with_context(|| format!("{}: no file name", path.display()))?
+        .to_string_lossy()
+        .into_owned();
+    let (dir, _) = OutDir::for_file(path, true)?;
+    write_to(&dir, &stem, stack).map(|_| ())
+}
+
+/// The two file names of stack `stem` in an output folder: `<stem>.exr`, `<stem>.json`.
+pub fn file_names(stem: &str) -> [String; 2] {
+    [format!("{stem}.exr"), format!("{stem}.json")]
+}
+
+/// Writes `stack` as `<stem>.exr` + `<stem>.json` into `out` (the output writer: confined,
+/// atomic, refused if they exist unless forced). Returns the path of the `.exr`.
+pub fn write_to(out: &OutDir, stem: &str, stack: &DepthStack) -> Result<PathBuf> {
+    let [exr_name, json_name] = file_names(stem);
+    let path = out.path(&exr_name)?;
     validate(stack).with_context(|| format!("refusing to write {}", path.display()))?;
     let m = &stack.meta;
     let mut list: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
@@ -45,14 +66,17 @@ pub fn write(path: &Path, stack: &DepthStack) -> Result<()> {
         encoding,
         AnyChannels::sort(list),
     );
-    Image::from_layer(layer)
-        .write()
-        .to_file(path)
-        .with_context(|| format!("writing {}", path.display()))?;
-    let side = sidecar_path(path);
-    let json = serde_json::to_string_pretty(m)?;
-    std::fs::write(&side, json + "\n").with_context(|| format!("writing {}", side.display()))?;
-    Ok(())
+    let image = Image::from_layer(layer);
+    out.write_with(&exr_name, |f| {
+        let mut w = std::io::BufWriter::new(f);
+        image
+            .write()
+            .to_buffered(&mut w)
+            .map_err(|e| anyhow!("encoding OpenEXR: {e}"))?;
+        Ok(std::io::Write::flush(&mut w)?)
+    })?;
+    out.write_json(&json_name, m)?;
+    Ok(path)
 }
 
 /// Reads and validates a depth stack: `path` is the `.exr`, the sidecar is `path` with `.json`.
@@ -66,15 +90,13 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
         return Ok(super::deep::read_deep_stack(path, false)?.0);
     }
     let side = sidecar_path(path);
-    let text = match std::fs::read_to_string(&side) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            bail!("missing sidecar {}", side.display())
-        }
-        Err(e) => return Err(e).with_context(|| format!("reading sidecar {}", side.display())),
-    };
+    if std::fs::symlink_metadata(&side).is_err() {
+        bail!("missing sidecar {}", side.display());
+    }
+    let text = input::read_text(&side, Limit::SIDECAR).context("reading sidecar")?;
     let meta: StackMeta = serde_json::from_str(&text)
         .with_context(|| format!("malformed sidecar {}", side.display()))?;
+    input::open_regular(path)?;
     check_size(&meta).with_context(|| format!("sidecar {}", side.display()))?;
     check_header(path, &meta)?;
 
@@ -214,10 +236,19 @@ fn check_header(path: &Path, meta: &StackMeta) -> Result<()> {
             h.compression
         );
     }
-    // Channel names and layers (the pixels of a channel are only decoded when it is expected).
+    // Channel names and layers (the pixels of a channel are only decoded when it is expected),
+    // one channel per layer and quantity: `layer0.Z` and `layer000.Z` together are refused.
+    let mut seen: std::collections::HashMap<(usize, &'static str), String> = Default::default();
     for ch in &h.channels.list {
         let name = ch.name.to_string();
-        layer_channel(&name, meta.layers)?;
+        let (l, q) = layer_channel(&name, meta.layers)?;
+        if let Some(other) = seen.insert((l, q.name()), name.clone()) {
+            bail!(
+                "channels '{other}' and '{name}' are both layer {l}'s {}: one channel per \
+                 layer and quantity",
+                q.name()
+            );
+        }
     }
     let (w, hh) = (h.layer_size.width(), h.layer_size.height());
     if (w, hh) != (meta.width, meta.height) {
@@ -234,6 +265,16 @@ enum Quantity {
     Z,
     Dzdu,
     Dzdv,
+}
+
+impl Quantity {
+    fn name(&self) -> &'static str {
+        match self {
+            Quantity::Z => "Z",
+            Quantity::Dzdu => "dzdu",
+            Quantity::Dzdv => "dzdv",
+        }
+    }
 }
 
 /// The layer and quantity of channel `name`, checked against the sidecar's layer count.

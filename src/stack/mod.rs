@@ -8,13 +8,17 @@
 pub mod deep;
 mod io;
 
-pub use io::{channel_name, exr_files, is_deep_file, load_dir, read, sidecar_path, write};
+pub use io::{
+    channel_name, exr_files, file_names, is_deep_file, load_dir, read, sidecar_path, write,
+    write_to,
+};
 
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
-/// The JSON sidecar of a depth-stack file.
+/// The JSON sidecar of a depth-stack file. Unknown fields are refused (a copy would drop them).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct StackMeta {
     /// Scene name (e.g. "stairs").
     pub scene: String,
