@@ -115,10 +115,15 @@ fn mismatched_shadow_maps_are_rejected() {
     };
     let e = pictures::view_picture(&s, &bad).unwrap_err().to_string();
     assert!(e.contains("test/box"), "{e}");
-    let e = pictures::write_png(
-        std::path::Path::new("/nonexistent-dir/x.png"),
-        &pictures::RgbImage::new(2, 2, GAP),
-    )
-    .unwrap_err();
-    assert!(format!("{e:#}").contains("/nonexistent-dir/x.png"));
+    // A picture whose folder is a regular file: a one-line error naming the path.
+    let blocker =
+        std::env::temp_dir().join(format!("momentlab-png-blocker-{}", std::process::id()));
+    std::fs::write(&blocker, b"not a folder").unwrap();
+    let e = pictures::write_png(&blocker.join("x.png"), &pictures::RgbImage::new(2, 2, GAP))
+        .unwrap_err();
+    std::fs::remove_file(&blocker).ok();
+    assert!(
+        format!("{e:#}").contains(&blocker.display().to_string()),
+        "{e:#}"
+    );
 }
