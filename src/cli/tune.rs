@@ -2,10 +2,11 @@
 //! setting within `--tolerance` of the best (library: `crate::tune`).
 
 use super::common::{non_negative, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION};
+use crate::artefact::OutDir;
 use crate::progress::Bar;
 use crate::tune::space::{parse_list, StorageKind, TechniqueKind};
 use crate::tune::{self, Options, Scored, Tuning};
-use anyhow::Result;
+use anyhow::{Context, Result};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -43,6 +44,9 @@ pub struct Args {
     /// Write tune.json into this folder.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Replace existing files in --out.
+    #[arg(long)]
+    pub force: bool,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -73,11 +77,19 @@ pub fn options(args: &Args) -> Result<Options> {
 
 pub fn run(args: Args) -> Result<()> {
     let opts = options(&args)?;
+    let out = match &args.out {
+        Some(dir) => {
+            let o = OutDir::new(dir, args.force).context("--out")?;
+            o.reserve(["tune.json"]).context("--out")?;
+            Some(o)
+        }
+        None => None,
+    };
     let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "tune")?;
     let bar = Bar::new("tune", 0);
     let t = tune::tune(&stacks, &opts, &bar)?;
-    if let Some(dir) = &args.out {
-        crate::artefact::write_json(&dir.join("tune.json"), &t)?;
+    if let Some(o) = &out {
+        o.write_json("tune.json", &t)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&t)?);
