@@ -41,7 +41,8 @@ pub struct Args {
     /// Seed of the fragment sample.
     #[arg(long, default_value_t = 2015)]
     pub seed: u64,
-    /// Write tune.json into this folder.
+    /// Write tune.json and export/<scene>/ (setting.json, shadow.glsl, shadow.hlsl) into this
+    /// folder.
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Replace existing files in --out.
@@ -90,6 +91,8 @@ pub fn run(args: Args) -> Result<()> {
     let t = tune::tune(&stacks, &opts, &bar)?;
     if let Some(o) = &out {
         o.write_json("tune.json", &t)?;
+        let ex = OutDir::new(o.root().join("export"), args.force)?;
+        tune::export::write(&ex, &t)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&t)?);

@@ -53,7 +53,8 @@ pub fn run(
 }
 
 /// The tuning of the run: read back from `out/tune/tune.json` when it exists (same tolerance
-/// and sample sizes), otherwise searched on `stacks` and written there.
+/// and sample sizes), otherwise searched on `stacks` and written there with the export of
+/// every chosen setting (`out/tune/export/<scene>/`, [`tune::export`]).
 pub fn tuning(
     stacks: &[DepthStack],
     plan: &super::Plan,
@@ -74,6 +75,8 @@ pub fn tuning(
     };
     let bar = Bar::new("tune", 0);
     let t = tune::tune(stacks, &opts, &bar)?;
+    let ex = crate::artefact::OutDir::new(out.join("tune").join("export"), true)?;
+    tune::export::write(&ex, &t)?;
     write_json(&file, &t)?;
     Ok(t)
 }

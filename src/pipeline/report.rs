@@ -517,7 +517,9 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
          confirmed on {} fragments per scene) and picks the cheapest setting within {} of the \
          best: fewest bits per texel, then fewest ns per fragment. Error = mean |G − PCF|, split \
          into light leaking (G < PCF) and over-darkening (G > PCF). Differences are paired on the \
-         same fragments with 95 % intervals (docs/tune.md).",
+         same fragments with 95 % intervals (docs/tune.md). `tune/export/<scene>/` holds each \
+         chosen setting as JSON and as GLSL/HLSL (encode, decode, reconstruction with the tuned \
+         constants; VSM, ESM, EVSM and Hamburger 4MSM).",
         t.settings_screened,
         t.screen_per_scene,
         t.settings_confirmed,
