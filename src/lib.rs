@@ -42,5 +42,6 @@ pub mod search;
 pub mod shader;
 pub mod stack;
 pub mod technique;
+pub mod tune;
 
 pub use grid::Grid;

@@ -20,6 +20,7 @@ pub mod shadow;
 pub mod stability;
 pub mod theta;
 pub mod threads;
+pub mod tune;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -86,6 +87,8 @@ pub enum Command {
     Merge(merge::Args),
     /// The cheapest technique within a tolerance of the best, per scene.
     Recommend(recommend::Args),
+    /// Search technique × storage × biases per scene: the cheapest setting within a tolerance.
+    Tune(tune::Args),
     /// Reproduce the whole study on the default data and write the report.
     Reproduce(reproduce::Args),
 }
@@ -142,6 +145,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Search(a) => search::run(a),
         Command::Merge(a) => merge::run(a),
         Command::Recommend(a) => recommend::run(a),
+        Command::Tune(a) => tune::run(a),
         Command::Reproduce(a) => reproduce::run(a),
     }
 }

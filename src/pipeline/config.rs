@@ -133,6 +133,9 @@ pub struct Plan {
     pub search_max_fragments: usize,
     /// Shadow pictures in the report.
     pub pictures: usize,
+    /// `tune`: fragments per scene, and per scene in the screening pass.
+    pub tune_fragments: usize,
+    pub tune_screen: usize,
 }
 
 /// (m, restarts, start) of the recorded seed-1 searches at the start that reached the best
@@ -160,6 +163,8 @@ impl Plan {
                 search_subset: Some(20),
                 search_max_fragments: 4096,
                 pictures: 1,
+                tune_fragments: 1024,
+                tune_screen: 256,
             },
             Preset::Full => Plan {
                 resolution: 512,
@@ -179,6 +184,8 @@ impl Plan {
                 search_subset: None,
                 search_max_fragments: 131_072,
                 pictures: 12,
+                tune_fragments: 32_768,
+                tune_screen: 4096,
             },
             Preset::Default => Plan {
                 resolution: 512,
@@ -197,6 +204,8 @@ impl Plan {
                 search_subset: Some(150),
                 search_max_fragments: 32_768,
                 pictures: 4,
+                tune_fragments: 8192,
+                tune_screen: 1024,
             },
         };
         if let Some(r) = resolution {

@@ -10,7 +10,8 @@
 //! 5 theta       optimal quantization transforms θ               theta/
 //! 6 quantize    8/16/32-bit moment shadow maps                  quantize/
 //! 7 stability   where each technique fails                      stability/
-//! 8 recommend   speed against accuracy, per-scene recommendation speed_accuracy.svg, recommend.json
+//! 8 recommend   speed against accuracy, per-scene recommendation speed_accuracy.svg, recommend.json,
+//!               tuned technique × storage × biases per scene       tune/tune.json
 //! 9 report      index.html + report.md
 //! ```
 //!
@@ -165,6 +166,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
 
     step.start("speed against accuracy, recommendations");
     let (entries, recs) = recommend::run(&all, cfg.tolerance, &p.out)?;
+    let tuning = recommend::tuning(&stacks, &plan, cfg.tolerance, &p.out)?;
 
     step.start("report");
     let doc = report::build(report::ReportInputs {
@@ -174,6 +176,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         all: &all,
         entries: &entries,
         recs: &recs,
+        tuning: &tuning,
         chosen_grid: &chosen_grid,
         refinement: &refinement,
         theta_rows: &theta_rows,

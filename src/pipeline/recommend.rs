@@ -1,10 +1,14 @@
-//! Step 8: speed against accuracy (`speed_accuracy.svg`, Pareto front) and the per-scene
-//! recommendations (`recommend.json`).
+//! Step 8: speed against accuracy (`speed_accuracy.svg`, Pareto front), the per-scene
+//! recommendations among the measured closed forms (`recommend.json`) and the tuned setting
+//! per scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]).
 
 use crate::artefact::write_json;
+use crate::progress::Bar;
 use crate::report::chart;
 use crate::report::pareto::Entry;
 use crate::report::recommend::{recommendations, Measured, Recommendation};
+use crate::stack::DepthStack;
+use crate::tune::{self, Options, Tuning};
 use anyhow::Result;
 use std::path::Path;
 
@@ -46,4 +50,33 @@ pub fn run(
     let recs = recommendations(all, tolerance);
     write_json(&out.join("recommend.json"), &recs)?;
     Ok((entries, recs))
+}
+
+/// The tuning of the run: read back from `out/tune/tune.json` when it exists (same tolerance
+/// and sample sizes), otherwise searched on `stacks` and written there with the export of
+/// every chosen setting (`out/tune/export/<scene>/`, [`tune::export`]).
+pub fn tuning(
+    stacks: &[DepthStack],
+    plan: &super::Plan,
+    tolerance: f64,
+    out: &Path,
+) -> Result<Tuning> {
+    let file = out.join("tune").join("tune.json");
+    if let Ok(t) = crate::artefact::read_json::<Tuning>(&file) {
+        if t.tolerance == tolerance && t.fragments_per_scene == plan.tune_fragments {
+            return Ok(t);
+        }
+    }
+    let opts = Options {
+        tolerance,
+        fragments_per_scene: plan.tune_fragments,
+        screen_per_scene: plan.tune_screen.min(plan.tune_fragments),
+        ..Options::default()
+    };
+    let bar = Bar::new("tune", 0);
+    let t = tune::tune(stacks, &opts, &bar)?;
+    let ex = crate::artefact::OutDir::new(out.join("tune").join("export"), true)?;
+    tune::export::write(&ex, &t)?;
+    write_json(&file, &t)?;
+    Ok(t)
 }

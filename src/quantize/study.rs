@@ -25,6 +25,9 @@ pub enum Storage {
     Unorm(u32),
     /// IEEE single precision (round to nearest).
     Float32,
+    /// IEEE half precision (binary16, round to nearest even; beyond ±65504 it is ±∞, as a
+    /// GPU's R16F/RGBA16F target stores it).
+    Half,
     /// No rounding (f64): the reference for the quantization deviation.
     Exact,
 }
@@ -38,9 +41,50 @@ impl Storage {
                 (v.clamp(0.0, 1.0) * q).round() / q
             }
             Storage::Float32 => v as f32 as f64,
+            Storage::Half => half::f16::from_f64(v).to_f64(),
             Storage::Exact => v,
         }
     }
+
+    /// Bits per stored channel (64 for the unrounded reference).
+    pub fn bits(self) -> u32 {
+        match self {
+            Storage::Unorm(bits) => bits,
+            Storage::Float32 => 32,
+            Storage::Half => 16,
+            Storage::Exact => 64,
+        }
+    }
+}
+
+/// One texel as a texture of `storage` holds it: s = θ(b) rounded channel by channel.
+pub fn store_texel(theta: &Theta, storage: Storage, b: &[f64], out: &mut [f64]) {
+    theta.encode(b, out);
+    for v in out.iter_mut() {
+        *v = storage.store(*v);
+    }
+}
+
+/// The decoded filtered moments of one filter window Σ w_l·δ(z_l): every texel stores
+/// θ(b(z_l)) in `storage` ([`store_texel`]), the filter sums the stored values with the weights,
+/// θ⁻¹ decodes the sum. `basis(z, out)` is b(z) (any basis with m = θ's size).
+pub fn decoded_window(
+    window: impl IntoIterator<Item = (f64, f64)>,
+    basis: &dyn Fn(f64, &mut [f64]),
+    theta: &Theta,
+    storage: Storage,
+    out: &mut [f64],
+) {
+    let m = theta.m();
+    let (mut b, mut s, mut sum) = (vec![0.0; m], vec![0.0; m], vec![0.0; m]);
+    for (z, w) in window {
+        basis(z, &mut b);
+        store_texel(theta, storage, &b, &mut s);
+        for (a, v) in sum.iter_mut().zip(&s) {
+            *a += w * v;
+        }
+    }
+    theta.decode(&sum, out);
 }
 
 /// A reconstruction technique of the study with its m (power basis z, …, z^m).
@@ -113,12 +157,8 @@ pub fn decoded_moments(
     let mut b = vec![0.0; m];
     let mut s = vec![0.0; m];
     for (t, &z) in front.iter().enumerate() {
-        let mut p = 1.0;
-        for v in b.iter_mut() {
-            p *= z;
-            *v = p;
-        }
-        theta.encode(&b, &mut s);
+        crate::technique::hamburger4::power_basis(z, &mut b);
+        store_texel(theta, storage, &b, &mut s);
         for j in 0..m {
             stored[j][t] = storage.store(s[j]);
         }
@@ -274,6 +314,43 @@ mod tests {
         let v = 0.123456789123;
         assert!((Storage::Float32.store(v) - v).abs() < 1e-8);
         assert!((Storage::Unorm(16).store(v) - v).abs() <= 0.5 / 65535.0 + 1e-15);
+        // binary16: 11 significant bits, largest finite 65504, then infinity
+        assert_eq!(Storage::Half.store(1.0 + 2f64.powi(-11)), 1.0); // tie to even
+        assert_eq!(
+            Storage::Half.store(1.0 + 3.0 * 2f64.powi(-11)),
+            1.0 + 2f64.powi(-9)
+        );
+        assert_eq!(Storage::Half.store(65504.0), 65504.0);
+        assert_eq!(Storage::Half.store(70000.0), f64::INFINITY);
+        assert!((Storage::Half.store(v) - v).abs() <= v * 2f64.powi(-11));
+    }
+
+    #[test]
+    fn a_window_decodes_like_the_filtered_maps() {
+        // the same texels through decoded_moments (separable filter of the stored maps) and
+        // through decoded_window (weighted sum over the 9×9 window) agree to rounding
+        let (w, h) = (16, 13);
+        let front: Vec<f64> = (0..w * h)
+            .map(|i| ((i * 7919) % 101) as f64 / 101.0)
+            .collect();
+        let k = Gaussian::paper();
+        let th = published_theta4();
+        let maps = decoded_moments(&front, w, h, &th, Storage::Unorm(16), &k);
+        let r = k.radius() as i64;
+        for (x, y) in [(0usize, 0usize), (7, 6), (15, 12), (3, 11)] {
+            let window = k.taps().into_iter().map(|(dx, dy, wt)| {
+                let xx = crate::kernel::clamp_coord(x, dx, w);
+                let yy = crate::kernel::clamp_coord(y, dy, h);
+                (front[yy * w + xx], wt)
+            });
+            let mut out = [0.0; 4];
+            let pb: &dyn Fn(f64, &mut [f64]) = &crate::technique::hamburger4::power_basis;
+            decoded_window(window, pb, &th, Storage::Unorm(16), &mut out);
+            for j in 0..4 {
+                let d = (out[j] - maps[y * w + x][j]).abs();
+                assert!(d < 1e-9, "texel ({x},{y}) moment {j}: {d} (radius {r})");
+            }
+        }
     }
 
     #[test]

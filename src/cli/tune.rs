@@ -1,0 +1,167 @@
+//! `momentlab tune`: per scene and over all scenes, the cheapest technique × storage × bias
+//! setting within `--tolerance` of the best (library: `crate::tune`).
+
+use super::common::{non_negative, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION};
+use crate::artefact::OutDir;
+use crate::progress::Bar;
+use crate::tune::space::{parse_list, StorageKind, TechniqueKind};
+use crate::tune::{self, Options, Scored, Tuning};
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// Depth stacks (default: render the embedded scenes, said so on stderr).
+    #[arg(long)]
+    pub stacks: Option<PathBuf>,
+    /// Resolution when rendering the embedded scenes (16..=4096).
+    #[arg(long, default_value_t = 512, value_parser = usize_in(16, MAX_RESOLUTION))]
+    pub resolution: usize,
+    /// Absolute error above the best setting that is acceptable (0.002 = 0.2 points; ≥ 0).
+    #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
+    pub tolerance: f64,
+    /// Comma-separated techniques to search.
+    #[arg(
+        long,
+        default_value = "vsm,esm,evsm,hamburger4,hausdorff4,hamburger6,tmsm"
+    )]
+    pub techniques: String,
+    /// Comma-separated storages to search (f32, unorm16-theta, unorm16, f16).
+    #[arg(long, default_value = "f32,unorm16-theta,unorm16,f16")]
+    pub storages: String,
+    /// Fragments sampled per scene (1..=10000000).
+    #[arg(long, default_value_t = 8192, value_parser = usize_in(1, MAX_INPUTS))]
+    pub fragments: usize,
+    /// Fragments per scene of the screening pass over the whole grid (1..=10000000).
+    #[arg(long, default_value_t = 1024, value_parser = usize_in(1, MAX_INPUTS))]
+    pub screen: usize,
+    /// Settings per scene and family re-scored on all sampled fragments (1..=100).
+    #[arg(long, default_value_t = 2, value_parser = usize_in(1, 100))]
+    pub keep: usize,
+    /// Seed of the fragment sample.
+    #[arg(long, default_value_t = 2015)]
+    pub seed: u64,
+    /// Write tune.json and export/<scene>/ (setting.json, shadow.glsl, shadow.hlsl) into this
+    /// folder.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Replace existing files in --out.
+    #[arg(long)]
+    pub force: bool,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The options of `args`; a one-line error for a bad list or an empty space.
+pub fn options(args: &Args) -> Result<Options> {
+    let tnames: Vec<&str> = TechniqueKind::ALL.iter().map(|t| t.name()).collect();
+    let snames: Vec<&str> = StorageKind::ALL.iter().map(|s| s.name()).collect();
+    let opts = Options {
+        techniques: parse_list(
+            "--techniques",
+            &args.techniques,
+            TechniqueKind::parse,
+            &tnames,
+        )?,
+        storages: parse_list("--storages", &args.storages, StorageKind::parse, &snames)?,
+        tolerance: args.tolerance,
+        fragments_per_scene: args.fragments,
+        screen_per_scene: args.screen.min(args.fragments),
+        keep: args.keep,
+        seed: args.seed,
+        ..Options::default()
+    };
+    opts.check()?;
+    Ok(opts)
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let opts = options(&args)?;
+    let out = match &args.out {
+        Some(dir) => {
+            let o = OutDir::new(dir, args.force).context("--out")?;
+            o.reserve(["tune.json"]).context("--out")?;
+            Some(o)
+        }
+        None => None,
+    };
+    let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "tune")?;
+    let bar = Bar::new("tune", 0);
+    let t = tune::tune(&stacks, &opts, &bar)?;
+    if let Some(o) = &out {
+        o.write_json("tune.json", &t)?;
+        let ex = OutDir::new(o.root().join("export"), args.force)?;
+        tune::export::write(&ex, &t)?;
+    }
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&t)?);
+        return Ok(());
+    }
+    print!("{}", table(&t));
+    Ok(())
+}
+
+fn pct(x: f64) -> String {
+    format!("{:.3}%", 100.0 * x)
+}
+
+fn row(scene: &str, s: &Scored) -> String {
+    format!(
+        "{:<8} {:<48} {:>5} {:>8.1} {:>8} {:>8} {:>8}",
+        scene,
+        s.label,
+        s.bits_per_texel,
+        s.ns_per_fragment,
+        pct(s.error),
+        pct(s.leak),
+        pct(s.darkening)
+    )
+}
+
+/// The text table of a tuning: per target the chosen setting, the best, the runner-up and the
+/// gain over the published defaults.
+pub fn table(t: &Tuning) -> String {
+    let mut out = format!(
+        "{:<8} {:<48} {:>5} {:>8} {:>8} {:>8} {:>8}\n",
+        "scene", "setting", "bits", "ns/frag", "error", "leak", "darken"
+    );
+    for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
+        out += &row(&target.scene, &target.chosen);
+        out += "   ← chosen\n";
+        out += &row("", &target.best);
+        out += &format!(
+            "   best (chosen − best {:+.3} ± {:.3} pp)\n",
+            100.0 * target.chosen_minus_best.mean,
+            100.0 * target.chosen_minus_best.half_width
+        );
+        if let (Some(r), Some(p)) = (&target.runner_up, &target.chosen_minus_runner_up) {
+            out += &row("", r);
+            out += &format!(
+                "   runner-up (chosen − it {:+.3} ± {:.3} pp)\n",
+                100.0 * p.mean,
+                100.0 * p.half_width
+            );
+        }
+        for r in &target.references {
+            out += &format!(
+                "{:<8}   vs {:<40} error {:>8}: tuned gains {:+.3} ± {:.3} pp\n",
+                "",
+                r.name,
+                pct(r.scored.error),
+                100.0 * r.gain.mean,
+                100.0 * r.gain.half_width
+            );
+        }
+    }
+    out += &format!(
+        "(tolerance {} absolute; {} fragments per scene, {} settings screened on {} per scene, {} confirmed; 95 % paired intervals; {:.1} s)\n",
+        pct(t.tolerance),
+        t.fragments_per_scene,
+        t.settings_screened,
+        t.screen_per_scene,
+        t.settings_confirmed,
+        t.seconds
+    );
+    out
+}

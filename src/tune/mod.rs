@@ -1,0 +1,752 @@
+//! `momentlab tune`: no more model than a scene needs, chosen from data. Per scene and over all
+//! scenes, search technique × storage × moment bias α × technique depth bias × the technique's
+//! own parameters ([`space`]) for the cheapest setting whose error is within a tolerance of the
+//! best one, and compare it with the paper's and the engines' published defaults.
+//!
+//! Score of a setting: mean |G − PCF| over a seeded fragment sample ([`sample`]) — G from the
+//! moments each texel stores in the setting's format (the quantization study's storage
+//! simulation, `quantize::study::decoded_window`), filtered with the paper's 9×9 Gaussian,
+//! decoded, biased, and evaluated in f32 at z_f − ε′ — split into light leaking (G < PCF) and
+//! over-darkening (G > PCF). Non-finite G counts as error 1.
+//!
+//! Coarse to fine: every setting of the grid is scored on a screening subsample; per target
+//! (scene or all) and family the `keep` best are re-scored on the whole sample. On that sample
+//! the chosen setting is the cheapest within `tolerance` of the best (bits per texel first, as
+//! in the paper's cost model, then ns per fragment, then error); the runner-up is the setting
+//! chosen when the chosen one's technique and storage are left out. Differences to the
+//! runner-up and to the published defaults are paired (same fragments) with a 95 % normal
+//! confidence interval: mean ± 1.96·sd/√n.
+
+pub mod export;
+pub mod sample;
+pub mod space;
+
+use crate::progress::Bar;
+use crate::stack::DepthStack;
+use crate::technique::timing;
+use crate::technique::{Evaluator, Technique};
+use anyhow::{bail, Result};
+use rayon::prelude::*;
+use sample::Sample;
+use serde::{Deserialize, Serialize};
+use space::{DepthBias, Family, Own, Setting, StorageKind, TechniqueKind};
+use std::time::Instant;
+
+/// What to search and how much data to score on.
+#[derive(Clone, Debug)]
+pub struct Options {
+    pub techniques: Vec<TechniqueKind>,
+    pub storages: Vec<StorageKind>,
+    /// Error above the best setting that is acceptable (absolute; 0.002 = 0.2 points).
+    pub tolerance: f64,
+    /// Fragments sampled per scene (the confirming sample).
+    pub fragments_per_scene: usize,
+    /// Fragments per scene of the screening subsample (at most `fragments_per_scene`).
+    pub screen_per_scene: usize,
+    /// Settings per target and family re-scored on the whole sample.
+    pub keep: usize,
+    pub seed: u64,
+    /// Fragments of the speed measurement per family.
+    pub speed_inputs: usize,
+}
+
+impl Default for Options {
+    fn default() -> Options {
+        Options {
+            techniques: TechniqueKind::ALL.to_vec(),
+            storages: StorageKind::ALL.to_vec(),
+            tolerance: 0.002,
+            fragments_per_scene: 8192,
+            screen_per_scene: 1024,
+            keep: 2,
+            seed: 2015,
+            speed_inputs: 4096,
+        }
+    }
+}
+
+impl Options {
+    /// The families to search; a one-line error for an unusable option or an empty space.
+    pub fn check(&self) -> Result<Vec<Family>> {
+        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+            bail!(
+                "tolerance must be a finite number ≥ 0, got {}",
+                self.tolerance
+            );
+        }
+        if self.fragments_per_scene == 0 || self.screen_per_scene == 0 || self.keep == 0 {
+            bail!("fragments per scene, screening fragments and kept settings must be ≥ 1");
+        }
+        if self.speed_inputs == 0 {
+            bail!("speed inputs must be ≥ 1");
+        }
+        space::families(&self.techniques, &self.storages)
+    }
+}
+
+/// A setting scored on a set of fragments.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Scored {
+    pub setting: Setting,
+    pub label: String,
+    pub bits_per_texel: u32,
+    pub ns_per_fragment: f64,
+    /// Mean |G − PCF| (= leak + darkening + non_finite/fragments).
+    pub error: f64,
+    /// Mean max(PCF − G, 0): light leaking.
+    pub leak: f64,
+    /// Mean max(G − PCF, 0): over-darkening.
+    pub darkening: f64,
+    pub non_finite: usize,
+    pub fragments: usize,
+}
+
+/// A paired difference of mean errors on the same fragments with its 95 % interval.
+#[derive(Clone, Copy, Debug, Serialize, Deserialize)]
+pub struct Paired {
+    pub mean: f64,
+    /// 1.96·sd/√n of the per-fragment differences.
+    pub half_width: f64,
+    pub fragments: usize,
+}
+
+impl Paired {
+    /// mean(a − b) of per-fragment values.
+    pub fn of(a: &[f64], b: &[f64]) -> Paired {
+        let n = a.len().min(b.len());
+        if n == 0 {
+            return Paired {
+                mean: f64::NAN,
+                half_width: f64::NAN,
+                fragments: 0,
+            };
+        }
+        let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+        let mean = d.iter().sum::<f64>() / n as f64;
+        let var = if n > 1 {
+            d.iter().map(|x| (x - mean) * (x - mean)).sum::<f64>() / (n - 1) as f64
+        } else {
+            f64::INFINITY
+        };
+        Paired {
+            mean,
+            half_width: 1.96 * (var / n as f64).sqrt(),
+            fragments: n,
+        }
+    }
+    pub fn lo(&self) -> f64 {
+        self.mean - self.half_width
+    }
+    pub fn hi(&self) -> f64 {
+        self.mean + self.half_width
+    }
+}
+
+/// A published default evaluated on the same fragments, and what the tuned setting gains.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Reference {
+    pub name: String,
+    pub scored: Scored,
+    /// Its error minus the tuned (chosen) setting's error: > 0 means tuning helps.
+    pub gain: Paired,
+}
+
+/// The result for one target: a scene, or all scenes ("all").
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Target {
+    pub scene: String,
+    pub fragments: usize,
+    pub best: Scored,
+    pub chosen: Scored,
+    /// Chosen minus best error (≤ tolerance by construction), paired.
+    pub chosen_minus_best: Paired,
+    pub runner_up: Option<Scored>,
+    /// Chosen minus runner-up error, paired.
+    pub chosen_minus_runner_up: Option<Paired>,
+    /// Settings no other setting beats in bits per texel, ns per fragment and error at once
+    /// (ascending bits, then ns).
+    pub pareto: Vec<Scored>,
+    pub references: Vec<Reference>,
+}
+
+/// Everything `tune` found.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Tuning {
+    pub tolerance: f64,
+    pub fragments_per_scene: usize,
+    pub screen_per_scene: usize,
+    pub seed: u64,
+    pub families: usize,
+    pub settings_screened: usize,
+    pub settings_confirmed: usize,
+    pub scenes: Vec<Target>,
+    pub overall: Target,
+    pub seconds: f64,
+}
+
+/// The published defaults compared against (depth bias: momentlab's evaluation default,
+/// ε = 10⁻⁴, s = 2, so only α and the exponents differ).
+pub fn references() -> Vec<(String, Setting)> {
+    let db = DepthBias {
+        constant: 1e-4,
+        slope_scale: 2.0,
+    };
+    let s = |t, st, own, alpha| Setting {
+        family: Family {
+            technique: t,
+            storage: st,
+            own,
+        },
+        alpha,
+        depth_bias: db,
+    };
+    use StorageKind::*;
+    use TechniqueKind::*;
+    vec![
+        (
+            "paper 4MSM 16-bit θ₄ (α = 3e-5)".into(),
+            s(Hamburger4, Unorm16Theta, Own::None, 3e-5),
+        ),
+        (
+            "paper 4MSM 32-bit (α = 2e-6)".into(),
+            s(Hamburger4, F32, Own::None, 2e-6),
+        ),
+        (
+            "MJP 4MSM 32-bit (α = 3e-6)".into(),
+            s(Hamburger4, F32, Own::None, 3e-6),
+        ),
+        (
+            "MJP EVSM 32-bit (c = 40/5)".into(),
+            s(
+                Evsm,
+                F32,
+                Own::Evsm {
+                    c_pos: 40.0,
+                    c_neg: 5.0,
+                },
+                0.0,
+            ),
+        ),
+        (
+            "Filament EVSM fp16 (c = 5.54)".into(),
+            s(
+                Evsm,
+                F16,
+                Own::Evsm {
+                    c_pos: 5.54,
+                    c_neg: 5.54,
+                },
+                0.0,
+            ),
+        ),
+        (
+            "Filament EVSM fp32 (c = 42)".into(),
+            s(
+                Evsm,
+                F32,
+                Own::Evsm {
+                    c_pos: 42.0,
+                    c_neg: 42.0,
+                },
+                0.0,
+            ),
+        ),
+        (
+            "HDRP HDIMS 4MSM 32-bit (α = 6e-7)".into(),
+            s(Hamburger4, F32, Own::None, 6e-7),
+        ),
+    ]
+}
+
+/// Decoded filtered moments of every fragment for one family (row-major, n × m).
+struct Moments {
+    family: Family,
+    values: Vec<f64>,
+}
+
+fn decode_family(f: &Family, sample: &Sample) -> Result<Moments> {
+    let t = f.build(f.technique.alphas()[0])?;
+    let theta = f.technique.theta(f.storage);
+    let storage = f.storage.storage();
+    let m = t.moment_count();
+    let basis = |z: f64, o: &mut [f64]| t.basis(z, o);
+    let mut values = vec![0.0; sample.len() * m];
+    values
+        .par_chunks_mut(m * 256)
+        .enumerate()
+        .for_each(|(c, chunk)| {
+            for (k, row) in chunk.chunks_mut(m).enumerate() {
+                let i = c * 256 + k;
+                crate::quantize::study::decoded_window(
+                    sample.window_of(i),
+                    &basis,
+                    &theta,
+                    storage,
+                    row,
+                );
+            }
+        });
+    Ok(Moments { family: *f, values })
+}
+
+/// Per-scene sums of one setting.
+#[derive(Clone, Copy, Debug, Default)]
+struct Acc {
+    n: usize,
+    leak: f64,
+    dark: f64,
+    non_finite: usize,
+}
+
+impl Acc {
+    fn add(&mut self, e: f64) {
+        self.n += 1;
+        if !e.is_finite() {
+            self.non_finite += 1;
+        } else if e < 0.0 {
+            self.leak -= e;
+        } else {
+            self.dark += e;
+        }
+    }
+    fn merge(&mut self, o: &Acc) {
+        self.n += o.n;
+        self.leak += o.leak;
+        self.dark += o.dark;
+        self.non_finite += o.non_finite;
+    }
+    fn error(&self) -> f64 {
+        (self.leak + self.dark + self.non_finite as f64) / self.n.max(1) as f64
+    }
+}
+
+/// Signed errors G − PCF (NaN where G is not finite) of a setting on fragments `idx`.
+fn signed_errors(
+    s: &Setting,
+    t: &dyn Technique,
+    mom: &Moments,
+    sample: &Sample,
+    idx: &[usize],
+) -> Vec<f64> {
+    let m = t.moment_count();
+    let mut ev: Box<dyn Evaluator + '_> = t.evaluator();
+    idx.iter()
+        .map(|&i| {
+            let zf =
+                sample.z[i] - (s.depth_bias.constant + s.depth_bias.slope_scale * sample.slope[i]);
+            let g = ev.shadow(&mom.values[i * m..(i + 1) * m], zf);
+            if g.is_finite() {
+                g - sample.pcf[i]
+            } else {
+                f64::NAN
+            }
+        })
+        .collect()
+}
+
+/// |e| with a non-finite G counted as 1.
+fn abs_err(e: f64) -> f64 {
+    if e.is_finite() {
+        e.abs()
+    } else {
+        1.0
+    }
+}
+
+/// Per-scene accumulators of each setting on fragments `idx` (parallel over settings).
+fn score_all(
+    settings: &[(usize, Setting)],
+    moments: &[Moments],
+    sample: &Sample,
+    idx: &[usize],
+    bar: &Bar,
+) -> Result<Vec<Vec<Acc>>> {
+    let ns = sample.scenes.len();
+    settings
+        .par_iter()
+        .map(|(fi, s)| {
+            let t = s.family.build(s.alpha)?;
+            let e = signed_errors(s, t.as_ref(), &moments[*fi], sample, idx);
+            let mut acc = vec![Acc::default(); ns];
+            for (&i, &x) in idx.iter().zip(&e) {
+                acc[sample.scene[i]].add(x);
+            }
+            bar.inc(1);
+            Ok(acc)
+        })
+        .collect()
+}
+
+/// Evaluator of stored (filtered, still encoded) values: θ⁻¹ in f32, then the technique.
+struct Decoding<'a> {
+    inner: &'a dyn Technique,
+    /// (m × m inverse, offset), None for θ = identity (nothing to decode).
+    theta: Option<(Vec<f32>, Vec<f32>)>,
+}
+
+impl Technique for Decoding<'_> {
+    fn name(&self) -> String {
+        self.inner.name()
+    }
+    fn moment_count(&self) -> usize {
+        self.inner.moment_count()
+    }
+    fn basis(&self, z: f64, out: &mut [f64]) {
+        self.inner.basis(z, out)
+    }
+    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
+        Box::new(DecodingEval {
+            d: self,
+            inner: self.inner.evaluator(),
+            buf: vec![0.0; self.moment_count()],
+        })
+    }
+}
+
+struct DecodingEval<'a> {
+    d: &'a Decoding<'a>,
+    inner: Box<dyn Evaluator + 'a>,
+    buf: Vec<f64>,
+}
+
+impl Evaluator for DecodingEval<'_> {
+    fn shadow(&mut self, s: &[f64], zf: f64) -> f64 {
+        let Some((inv, off)) = &self.d.theta else {
+            return self.inner.shadow(s, zf);
+        };
+        let m = self.buf.len();
+        for r in 0..m {
+            let mut acc = 0.0f32;
+            for c in 0..m {
+                acc += inv[r * m + c] * (s[c] as f32 - off[c]);
+            }
+            self.buf[r] = acc as f64;
+        }
+        self.inner.shadow(&self.buf, zf)
+    }
+}
+
+/// ns per fragment of a family: decode θ⁻¹ (f32) and reconstruct, on the stored values of the
+/// first `n` sample fragments (one core; the median over batches of 5 passes, robust to a
+/// loaded machine).
+fn speed_of(mom: &Moments, sample: &Sample, n: usize) -> Result<f64> {
+    let f = &mom.family;
+    let t = f.build(f.technique.alphas()[0])?;
+    let m = t.moment_count();
+    let theta = f.technique.theta(f.storage);
+    let identity = f.storage != StorageKind::Unorm16Theta;
+    let d = Decoding {
+        inner: t.as_ref(),
+        theta: (!identity).then(|| {
+            (
+                theta.inverse.iter().flatten().map(|&v| v as f32).collect(),
+                theta.offset.iter().map(|&v| v as f32).collect(),
+            )
+        }),
+    };
+    let n = n.min(sample.len());
+    let mut stored = vec![0.0; n * m];
+    for i in 0..n {
+        theta.encode(
+            &mom.values[i * m..(i + 1) * m],
+            &mut stored[i * m..(i + 1) * m],
+        );
+    }
+    let zfs: Vec<f64> = (0..n)
+        .map(|i| sample.z[i] - 1e-4 - 2.0 * sample.slope[i])
+        .collect();
+    Ok(timing::speed(&d, &stored, &zfs, 5).median)
+}
+
+fn scored(s: &Setting, acc: &Acc, ns: f64) -> Scored {
+    let n = acc.n.max(1) as f64;
+    Scored {
+        setting: *s,
+        label: s.label(),
+        bits_per_texel: s.family.bits_per_texel(),
+        ns_per_fragment: ns,
+        error: acc.error(),
+        leak: acc.leak / n,
+        darkening: acc.dark / n,
+        non_finite: acc.non_finite,
+        fragments: acc.n,
+    }
+}
+
+/// Cheapest first: bits per texel, then ns per fragment, then error.
+fn cheaper(a: &Scored, b: &Scored) -> std::cmp::Ordering {
+    a.bits_per_texel
+        .cmp(&b.bits_per_texel)
+        .then(a.ns_per_fragment.total_cmp(&b.ns_per_fragment))
+        .then(a.error.total_cmp(&b.error))
+}
+
+/// Index of the cheapest entry within `tolerance` of the best error among `rows`.
+pub fn cheapest_within(rows: &[Scored], tolerance: f64) -> Option<usize> {
+    let best = rows.iter().map(|r| r.error).fold(f64::INFINITY, f64::min);
+    if !best.is_finite() {
+        return None;
+    }
+    (0..rows.len())
+        .filter(|&i| rows[i].error <= best + tolerance)
+        .min_by(|&i, &j| cheaper(&rows[i], &rows[j]))
+}
+
+/// Indices of the rows no other row beats in (bits, ns, error) at once, cheapest first.
+pub fn pareto(rows: &[Scored]) -> Vec<usize> {
+    let le = |a: &Scored, b: &Scored| {
+        a.bits_per_texel <= b.bits_per_texel
+            && a.ns_per_fragment <= b.ns_per_fragment
+            && a.error <= b.error
+    };
+    let lt = |a: &Scored, b: &Scored| {
+        a.bits_per_texel < b.bits_per_texel
+            || a.ns_per_fragment < b.ns_per_fragment
+            || a.error < b.error
+    };
+    let mut out: Vec<usize> = (0..rows.len())
+        .filter(|&i| rows[i].error.is_finite())
+        .filter(|&i| {
+            !(0..rows.len()).any(|j| j != i && le(&rows[j], &rows[i]) && lt(&rows[j], &rows[i]))
+        })
+        .collect();
+    out.sort_by(|&i, &j| cheaper(&rows[i], &rows[j]));
+    out
+}
+
+/// Run the search on `stacks`; progress on `bar`.
+pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> {
+    let start = Instant::now();
+    let families = opts.check()?;
+    crate::metrics::require_fragments(stacks)?;
+    for s in stacks {
+        crate::metrics::check_stack(s)?;
+    }
+    bar.phase("tune: sampling fragments", stacks.len() as u64);
+    let sample = sample::draw(stacks, opts.fragments_per_scene, opts.seed, &|v| {
+        bar.set_done(v as u64)
+    })?;
+    let nscenes = sample.scenes.len();
+
+    // Families of the space, then those of the references that are not in it.
+    let refs = references();
+    let mut fams = families.clone();
+    for (_, r) in &refs {
+        if !fams.contains(&r.family) {
+            fams.push(r.family);
+        }
+    }
+    let fam_index = |f: &Family| fams.iter().position(|g| g == f).expect("family listed");
+    bar.phase("tune: storing and filtering moments", fams.len() as u64);
+    let mut moments = Vec::with_capacity(fams.len());
+    for f in &fams {
+        moments.push(decode_family(f, &sample)?);
+        bar.inc(1);
+    }
+    bar.phase("tune: speed per technique and storage", fams.len() as u64);
+    let mut ns = Vec::with_capacity(fams.len());
+    for m in &moments {
+        ns.push(speed_of(m, &sample, opts.speed_inputs)?);
+        bar.inc(1);
+    }
+
+    // Screening: the whole grid on every k-th fragment of each scene.
+    let mut screen = Vec::new();
+    for s in 0..nscenes {
+        let of = sample.of_scene(s);
+        let k = of
+            .len()
+            .div_ceil(opts.screen_per_scene.min(of.len()).max(1));
+        screen.extend(of.into_iter().step_by(k.max(1)));
+    }
+    let grid: Vec<(usize, Setting)> = families
+        .iter()
+        .flat_map(|f| space::grid(f).into_iter().map(|s| (fam_index(f), s)))
+        .collect();
+    bar.phase("tune: screening the grid", grid.len() as u64);
+    let screened = score_all(&grid, &moments, &sample, &screen, bar)?;
+
+    // Per target and family, the `keep` best settings of the screen.
+    let mut confirm: Vec<(usize, Setting)> = Vec::new();
+    let push = |c: &mut Vec<(usize, Setting)>, x: (usize, Setting)| {
+        if !c.iter().any(|y| y.1 == x.1) {
+            c.push(x);
+        }
+    };
+    for target in 0..=nscenes {
+        let err = |accs: &Vec<Acc>| {
+            if target == nscenes {
+                let mut a = Acc::default();
+                accs.iter().for_each(|x| a.merge(x));
+                a.error()
+            } else {
+                accs[target].error()
+            }
+        };
+        for fi in 0..families.len() {
+            let mut rows: Vec<usize> = (0..grid.len()).filter(|&g| grid[g].0 == fi).collect();
+            rows.sort_by(|&a, &b| err(&screened[a]).total_cmp(&err(&screened[b])));
+            for &g in rows.iter().take(opts.keep) {
+                push(&mut confirm, grid[g]);
+            }
+        }
+    }
+    let n_searched = confirm.len();
+    for (_, r) in &refs {
+        push(&mut confirm, (fam_index(&r.family), *r));
+    }
+    let all: Vec<usize> = (0..sample.len()).collect();
+    bar.phase("tune: confirming on the whole sample", confirm.len() as u64);
+    let confirmed = score_all(&confirm, &moments, &sample, &all, bar)?;
+    bar.finish();
+
+    let target = |t: usize| -> Result<Target> {
+        let idx: Vec<usize> = if t == nscenes {
+            all.clone()
+        } else {
+            sample.of_scene(t)
+        };
+        let acc_of = |accs: &Vec<Acc>| {
+            if t == nscenes {
+                let mut a = Acc::default();
+                accs.iter().for_each(|x| a.merge(x));
+                a
+            } else {
+                accs[t]
+            }
+        };
+        let rows: Vec<Scored> = (0..n_searched)
+            .map(|k| scored(&confirm[k].1, &acc_of(&confirmed[k]), ns[confirm[k].0]))
+            .collect();
+        let Some(c) = cheapest_within(&rows, opts.tolerance) else {
+            bail!("no setting with a finite error");
+        };
+        let b = (0..rows.len())
+            .min_by(|&i, &j| rows[i].error.total_cmp(&rows[j].error))
+            .expect("rows");
+        let errs = |k: usize| -> Result<Vec<f64>> {
+            let (fi, s) = &confirm[k];
+            let tech = s.family.build(s.alpha)?;
+            Ok(
+                signed_errors(s, tech.as_ref(), &moments[*fi], &sample, &idx)
+                    .into_iter()
+                    .map(abs_err)
+                    .collect(),
+            )
+        };
+        let chosen_errs = errs(c)?;
+        let same = |k: usize| {
+            rows[k].setting.family.technique == rows[c].setting.family.technique
+                && rows[k].setting.family.storage == rows[c].setting.family.storage
+        };
+        let others: Vec<usize> = (0..rows.len()).filter(|&k| !same(k)).collect();
+        let sub: Vec<Scored> = others.iter().map(|&k| rows[k].clone()).collect();
+        let runner = cheapest_within(&sub, opts.tolerance).map(|k| others[k]);
+        let runner_pair = match runner {
+            Some(r) => Some(Paired::of(&chosen_errs, &errs(r)?)),
+            None => None,
+        };
+        let mut references = Vec::new();
+        for (name, r) in &refs {
+            let k = confirm
+                .iter()
+                .position(|x| x.1 == *r)
+                .expect("reference confirmed");
+            references.push(Reference {
+                name: name.clone(),
+                scored: scored(r, &acc_of(&confirmed[k]), ns[confirm[k].0]),
+                gain: Paired::of(&errs(k)?, &chosen_errs),
+            });
+        }
+        Ok(Target {
+            scene: if t == nscenes {
+                "all".into()
+            } else {
+                sample.scenes[t].clone()
+            },
+            fragments: idx.len(),
+            best: rows[b].clone(),
+            chosen: rows[c].clone(),
+            chosen_minus_best: Paired::of(&chosen_errs, &errs(b)?),
+            runner_up: runner.map(|r| rows[r].clone()),
+            chosen_minus_runner_up: runner_pair,
+            pareto: pareto(&rows).into_iter().map(|k| rows[k].clone()).collect(),
+            references,
+        })
+    };
+    let scenes = (0..nscenes).map(target).collect::<Result<Vec<_>>>()?;
+    let overall = target(nscenes)?;
+    Ok(Tuning {
+        tolerance: opts.tolerance,
+        fragments_per_scene: opts.fragments_per_scene,
+        screen_per_scene: opts.screen_per_scene,
+        seed: opts.seed,
+        families: families.len(),
+        settings_screened: grid.len(),
+        settings_confirmed: n_searched,
+        scenes,
+        overall,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(bits: u32, ns: f64, error: f64) -> Scored {
+        let f = Family {
+            technique: TechniqueKind::Vsm,
+            storage: StorageKind::F32,
+            own: Own::None,
+        };
+        Scored {
+            setting: Setting {
+                family: f,
+                alpha: 0.0,
+                depth_bias: DepthBias {
+                    constant: 0.0,
+                    slope_scale: 0.0,
+                },
+            },
+            label: String::new(),
+            bits_per_texel: bits,
+            ns_per_fragment: ns,
+            error,
+            leak: error,
+            darkening: 0.0,
+            non_finite: 0,
+            fragments: 1,
+        }
+    }
+
+    #[test]
+    fn cheapest_within_orders_bits_then_ns_then_error() {
+        let rows = vec![
+            row(128, 10.0, 0.010),
+            row(64, 50.0, 0.011),
+            row(64, 20.0, 0.0115),
+        ];
+        assert_eq!(cheapest_within(&rows, 0.002), Some(2));
+        assert_eq!(cheapest_within(&rows, 0.0012), Some(1));
+        assert_eq!(cheapest_within(&rows, 0.0), Some(0));
+        assert_eq!(pareto(&rows), vec![2, 1, 0]);
+        let dominated = vec![
+            row(64, 10.0, 0.01),
+            row(64, 20.0, 0.02),
+            row(32, 30.0, 0.005),
+        ];
+        assert_eq!(pareto(&dominated), vec![2, 0]);
+    }
+
+    #[test]
+    fn paired_interval_is_normal_theory() {
+        let a = [1.0, 2.0, 3.0, 4.0];
+        let b = [0.0, 0.0, 0.0, 0.0];
+        let p = Paired::of(&a, &b);
+        assert!((p.mean - 2.5).abs() < 1e-15);
+        // sd = sqrt(5/3), n = 4
+        assert!((p.half_width - 1.96 * (5.0f64 / 3.0 / 4.0).sqrt()).abs() < 1e-12);
+        assert!(p.lo() < p.mean && p.mean < p.hi());
+    }
+}

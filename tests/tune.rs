@@ -1,0 +1,224 @@
+//! `tune` on constructed depth stacks whose answer is known, and its one-line errors.
+//!
+//! The scene: a receiver plane at depth z_r, half of it under an occluder plane tilted by
+//! g = 10⁻⁴ per texel in x and y at least Δ in front of it (two layers where the occluder
+//! covers the receiver), with its exact slopes, so the PCF reference and a slope-scaled technique
+//! bias keep both planes lit where they are lit. Fully shadowed receiver fragments see a
+//! filter window of depths spread by the tilt (variance ≈ 2g²·σ_k² ≈ 10⁻⁷) at z_f ≤ z_r, so the
+//! shadow map must resolve a gap Δ next to that spread.
+//! * Δ = 0.25: every storage resolves it; 16-bit storage costs half the bits, so with the
+//!   default tolerance the choice is a 16-bit setting.
+//! * Δ = 5·10⁻⁴: 16-bit storage resolves it worse. Its rounding (UNORM 1.5·10⁻⁵ per channel
+//!   and texel, binary16 2⁻¹¹ relative) perturbs the filtered moments, so a valid reconstruction
+//!   needs α ≳ 10⁻⁵, whose bias variance α/4 is not small against Δ²; the exponential warps
+//!   under the binary16 limit c ≤ 5.5 (EVSM) leak e^{−cΔ} ≈ 1 of the shadow. 32-bit floats
+//!   (rounding 6·10⁻⁸ relative) allow α ≈ 10⁻⁷. The test asserts the gap (the best 16-bit
+//!   setting is more than twice the tolerance worse than the best 32-bit one), so the choice
+//!   is 32-bit at the default tolerance, and 16-bit again at a tolerance above the gap.
+
+use momentlab::progress::Bar;
+use momentlab::stack::{DepthStack, StackMeta};
+use momentlab::tune::space::{StorageKind, TechniqueKind};
+use momentlab::tune::{tune, Options};
+use std::process::Command;
+
+fn scene(name: &str, delta: f32, n: usize) -> DepthStack {
+    let zr = 0.6f32;
+    let t = n * n;
+    let mut front = vec![zr; t];
+    let mut back = vec![f32::INFINITY; t];
+    let g = 1e-4f32;
+    let mut slope = vec![0.0f32; t];
+    for y in 0..n {
+        for x in 0..n / 2 {
+            front[y * n + x] = zr - delta - g * (x + y) as f32;
+            back[y * n + x] = zr;
+            slope[y * n + x] = -g;
+        }
+    }
+    DepthStack {
+        meta: StackMeta {
+            scene: name.into(),
+            view: "light0".into(),
+            light_dir: [0.0, 0.0, -1.0],
+            near: 1.0,
+            far: 2.0,
+            width: n,
+            height: n,
+            layers: 2,
+            ..Default::default()
+        },
+        depth: vec![front, back],
+        dzdu: vec![slope.clone(), vec![0.0; t]],
+        dzdv: vec![slope, vec![0.0; t]],
+    }
+}
+
+/// The four-moment techniques: 16-bit storage is 64 bits per texel, 32-bit 128.
+fn options(tolerance: f64) -> Options {
+    Options {
+        techniques: vec![
+            TechniqueKind::Evsm,
+            TechniqueKind::Hamburger4,
+            TechniqueKind::Hausdorff4,
+            TechniqueKind::Tmsm,
+        ],
+        tolerance,
+        fragments_per_scene: 3000,
+        screen_per_scene: 600,
+        speed_inputs: 500,
+        ..Options::default()
+    }
+}
+
+#[test]
+fn picks_16_bit_when_the_tolerance_allows_and_32_bit_when_not() {
+    let stacks = vec![scene("far", 0.25, 40), scene("near", 5e-4, 40)];
+    let t = tune(&stacks, &options(0.002), &Bar::hidden()).unwrap();
+    let far = t.scenes.iter().find(|s| s.scene == "far").unwrap();
+    let near = t.scenes.iter().find(|s| s.scene == "near").unwrap();
+    eprintln!("{}", momentlab::cli::tune::table(&t));
+    // Far: some setting is (nearly) exact, and a 16-bit one is within the tolerance.
+    assert!(far.best.error < 0.002, "{:?}", far.best);
+    assert_eq!(
+        far.chosen.setting.family.storage.bits(),
+        16,
+        "{:?}",
+        far.chosen
+    );
+    assert_eq!(far.chosen.bits_per_texel, 64);
+    assert!(far.chosen.error <= far.best.error + 0.002);
+    // Near: every 16-bit setting misses the shadow; the choice is 32-bit.
+    assert!(near.best.error < 0.01, "{:?}", near.best);
+    assert_eq!(
+        near.chosen.setting.family.storage.bits(),
+        32,
+        "{:?}",
+        near.chosen
+    );
+    assert_eq!(near.chosen.bits_per_texel, 128);
+    let only16 = tune(
+        &stacks,
+        &Options {
+            storages: vec![
+                StorageKind::Unorm16Theta,
+                StorageKind::Unorm16,
+                StorageKind::F16,
+            ],
+            ..options(0.0)
+        },
+        &Bar::hidden(),
+    )
+    .unwrap();
+    let best16 = only16.scenes.iter().find(|s| s.scene == "near").unwrap();
+    assert!(
+        best16.best.error > near.best.error + 2.0 * 0.002,
+        "16-bit {:?}",
+        best16.best
+    );
+    // A tolerance above the gap lets 16 bits back in.
+    let loose = tune(&stacks[1..], &options(0.01), &Bar::hidden()).unwrap();
+    assert_eq!(
+        loose.scenes[0].chosen.bits_per_texel, 64,
+        "{:?}",
+        loose.scenes[0].chosen
+    );
+    // The runner-up of Far is another family, with a paired interval.
+    let p = far.chosen_minus_runner_up.unwrap();
+    assert!(p.half_width.is_finite() && p.fragments == far.fragments);
+    // Leak + darkening + non-finite = error, everywhere.
+    for s in t.scenes.iter().flat_map(|s| s.pareto.iter()) {
+        let sum = s.leak + s.darkening + s.non_finite as f64 / s.fragments as f64;
+        assert!((sum - s.error).abs() < 1e-12, "{s:?}");
+    }
+    // With a huge tolerance the cheapest setting wins everywhere (16 bits, one moment: ESM).
+    let t = tune(
+        &stacks,
+        &Options {
+            techniques: vec![TechniqueKind::Hamburger4, TechniqueKind::Esm],
+            ..options(1.0)
+        },
+        &Bar::hidden(),
+    )
+    .unwrap();
+    assert_eq!(t.overall.chosen.bits_per_texel, 16);
+    assert_eq!(
+        t.overall.chosen.setting.family.technique,
+        TechniqueKind::Esm
+    );
+    // Restricted to 32-bit storage, the choice is 32-bit whatever the tolerance.
+    let t = tune(
+        &stacks,
+        &Options {
+            storages: vec![StorageKind::F32],
+            ..options(1.0)
+        },
+        &Bar::hidden(),
+    )
+    .unwrap();
+    assert!(t
+        .scenes
+        .iter()
+        .all(|s| s.chosen.setting.family.storage == StorageKind::F32));
+}
+
+fn momentlab(args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
+        .args(args)
+        .env("MOMENTLAB_PROGRESS", "off")
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into(),
+        String::from_utf8_lossy(&out.stderr).into(),
+    )
+}
+
+#[test]
+fn bad_input_is_one_line_before_any_work() {
+    let dir = std::env::temp_dir().join(format!("momentlab-tune-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let missing = dir.join("missing");
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["--stacks".into(), missing.display().to_string()],
+            "missing",
+        ),
+        (
+            vec!["--stacks".into(), dir.display().to_string()],
+            "--stacks",
+        ),
+        (
+            vec![
+                "--techniques".into(),
+                "esm".into(),
+                "--storages".into(),
+                "unorm16".into(),
+            ],
+            "empty search space",
+        ),
+        (
+            vec!["--techniques".into(), "hamburger5".into()],
+            "hamburger5",
+        ),
+        (vec!["--storages".into(), "f8".into()], "f8"),
+        (
+            vec!["--techniques".into(), ",".into()],
+            "empty search space",
+        ),
+        (vec!["--tolerance".into(), "-1".into()], "tolerance"),
+    ];
+    for (args, what) in cases {
+        let mut a = vec!["tune"];
+        a.extend(args.iter().map(String::as_str));
+        let (code, out, err) = momentlab(&a);
+        assert_ne!(code, 0, "{a:?}");
+        assert!(out.is_empty(), "{a:?}: {out}");
+        assert_eq!(err.trim().lines().count(), 1, "{a:?}: {err}");
+        assert!(err.contains(what), "{a:?}: {err}");
+        assert!(!err.contains("rendering"), "{a:?} did work first: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
