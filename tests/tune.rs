@@ -192,7 +192,7 @@ fn bad_input_is_one_line_before_any_work() {
         ),
         (
             vec![
-                "--techniques".into(),
+                "--technique".into(),
                 "esm".into(),
                 "--storages".into(),
                 "unorm16".into(),
@@ -200,14 +200,11 @@ fn bad_input_is_one_line_before_any_work() {
             "empty search space",
         ),
         (
-            vec!["--techniques".into(), "hamburger5".into()],
+            vec!["--technique".into(), "hamburger5".into()],
             "hamburger5",
         ),
         (vec!["--storages".into(), "f8".into()], "f8"),
-        (
-            vec!["--techniques".into(), ",".into()],
-            "empty search space",
-        ),
+        (vec!["--technique".into(), ",".into()], "empty search space"),
         (vec!["--tolerance".into(), "-1".into()], "tolerance"),
     ];
     for (args, what) in cases {

@@ -20,12 +20,13 @@ pub struct Args {
     /// Absolute error above the best setting that is acceptable (0.002 = 0.2 points; ≥ 0).
     #[arg(long, default_value_t = 0.002, value_parser = non_negative, allow_negative_numbers = true)]
     pub tolerance: f64,
-    /// Comma-separated techniques to search.
+    /// Techniques to search (repeatable; comma lists).
     #[arg(
         long,
+        alias = "techniques",
         default_value = "vsm,esm,evsm,hamburger4,hausdorff4,hamburger6,tmsm"
     )]
-    pub techniques: String,
+    pub technique: Vec<String>,
     /// Comma-separated storages to search (f32, unorm16-theta, unorm16, f16).
     #[arg(long, default_value = "f32,unorm16-theta,unorm16,f16")]
     pub storages: String,
@@ -59,8 +60,8 @@ pub fn options(args: &Args) -> Result<Options> {
     let snames: Vec<&str> = StorageKind::ALL.iter().map(|s| s.name()).collect();
     let opts = Options {
         techniques: parse_list(
-            "--techniques",
-            &args.techniques,
+            "--technique",
+            &super::common::technique_list(&args.technique).join(","),
             TechniqueKind::parse,
             &tnames,
         )?,
