@@ -335,8 +335,8 @@ fn check_affine(m: &Affine) -> Result<()> {
     Ok(())
 }
 
-/// The scene must have an extent: its bounding box is not a single point.
-fn check_extent(name: &str, tris: &[Tri]) -> Result<()> {
+/// Axis-aligned bounding box (lo, hi) of the triangles' vertices (±∞ when there are none).
+fn bounds(tris: &[Tri]) -> ([f64; 3], [f64; 3]) {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
     for v in tris.iter().flatten() {
@@ -345,6 +345,12 @@ fn check_extent(name: &str, tris: &[Tri]) -> Result<()> {
             hi[k] = hi[k].max(v[k]);
         }
     }
+    (lo, hi)
+}
+
+/// The scene must have an extent: its bounding box is not a single point.
+fn check_extent(name: &str, tris: &[Tri]) -> Result<()> {
+    let (lo, hi) = bounds(tris);
     let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     if !(ext.is_finite() && ext > 0.0) {
         bail!("scene '{name}' has no extent (every vertex at one point)");
@@ -869,14 +875,7 @@ impl Shape {
 }
 
 fn fit_mesh(tris: &mut [Tri], fit: f64) {
-    let mut lo = [f64::INFINITY; 3];
-    let mut hi = [f64::NEG_INFINITY; 3];
-    for v in tris.iter().flatten() {
-        for k in 0..3 {
-            lo[k] = lo[k].min(v[k]);
-            hi[k] = hi[k].max(v[k]);
-        }
-    }
+    let (lo, hi) = bounds(tris);
     let ext = (0..3).map(|k| hi[k] - lo[k]).fold(0.0, f64::max);
     let s = if ext > 0.0 { fit / ext } else { 1.0 };
     let c = [(lo[0] + hi[0]) / 2.0, lo[1], (lo[2] + hi[2]) / 2.0];
