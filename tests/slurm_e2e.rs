@@ -287,7 +287,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
     // Progress in batch logs: plain lines with done/total, rate and time; no carriage returns.
     assert!(!log.contains('\r'), "{log}");
     // The stage label ("search exhaustive:", "search final:") depends on the sweep mode.
-    let done = " 167 candidates × 1032 fragments: 172 344/172 344 (100.0 %), ";
+    let done = " 167 candidates × 1024 fragments: 171 008/171 008 (100.0 %), ";
     assert!(
         log.lines()
             .any(|l| l.starts_with("search ") && l.contains(done) && l.contains("/s, elapsed ")),

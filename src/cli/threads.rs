@@ -45,8 +45,17 @@ pub fn clamp(want: usize, cores: usize, var: &str) -> (usize, Option<String>) {
     (cores, Some(note))
 }
 
+/// "momentlab: N threads (VAR)": the pool size and where it came from.
+pub fn pool_note(n: usize, var: &str) -> String {
+    format!(
+        "momentlab: {n} thread{} ({var})",
+        if n == 1 { "" } else { "s" }
+    )
+}
+
 /// Configure rayon's global pool from the environment (call once, before any parallel work).
-/// Returns the note to show after the command succeeded, if the request was clamped.
+/// Returns the note to show after the command succeeded: the pool size taken from
+/// `SLURM_CPUS_PER_TASK` (so a batch log says what a task ran on), or the clamp of a request.
 pub fn init_from_env() -> Result<Option<String>> {
     let rayon = std::env::var("RAYON_NUM_THREADS").ok();
     let slurm = std::env::var("SLURM_CPUS_PER_TASK").ok();
@@ -61,6 +70,7 @@ pub fn init_from_env() -> Result<Option<String>> {
     };
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let (n, note) = clamp(want, cores, var);
+    let note = note.or_else(|| (var == "SLURM_CPUS_PER_TASK").then(|| pool_note(n, var)));
     rayon::ThreadPoolBuilder::new()
         .num_threads(n)
         .build_global()
@@ -90,6 +100,11 @@ mod tests {
     fn requests_above_the_cores_are_clamped_with_a_note() {
         assert_eq!(clamp(2, 4, "X"), (2, None));
         assert_eq!(clamp(4, 4, "X"), (4, None));
+        assert_eq!(
+            pool_note(1, "SLURM_CPUS_PER_TASK"),
+            "momentlab: 1 thread (SLURM_CPUS_PER_TASK)"
+        );
+        assert_eq!(pool_note(2, "X"), "momentlab: 2 threads (X)");
         let (n, note) = clamp(20000, 2, "SLURM_CPUS_PER_TASK");
         assert_eq!(n, 2);
         let note = note.unwrap();
