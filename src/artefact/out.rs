@@ -693,4 +693,69 @@ mod tests {
         assert!(OutDir::new(&f, false).is_err());
         fs::remove_dir_all(&d).unwrap();
     }
+
+    /// Calls that open, create, replace or fill a file directly, bypassing [`OutDir`].
+    const DIRECT_WRITES: [&str; 10] = [
+        "File::create",
+        "fs::write",
+        "OpenOptions",
+        "fs::copy",
+        "fs::rename",
+        "hard_link",
+        "SVGBackend::new",
+        "BitMapBackend",
+        "write_to_file",
+        "save_buffer",
+    ];
+
+    /// (line number, call) of every direct write in `code` before its `#[cfg(test)]` module
+    /// (test fixtures may write files directly).
+    fn direct_writes(code: &str) -> Vec<(usize, &'static str)> {
+        let body = code.split("#[cfg(test)]\nmod tests").next().unwrap_or("");
+        let mut hits = Vec::new();
+        for (i, line) in body.lines().enumerate() {
+            let code_part = line.split("//").next().unwrap_or("");
+            for call in DIRECT_WRITES {
+                if code_part.contains(call) {
+                    hits.push((i + 1, call));
+                }
+            }
+        }
+        hits
+    }
+
+    #[test]
+    fn only_the_writer_opens_files_for_writing() {
+        // The scanner finds a planted write, and ignores comments and test modules.
+        let planted = "fn f() {\n    // fs::write in a comment\n    let root = SVGBackend::new(p, (1, 1));\n}\n#[cfg(test)]\nmod tests {\n    fn t() { std::fs::write(\"x\", \"\").unwrap(); }\n}\n";
+        assert_eq!(direct_writes(planted), vec![(3, "SVGBackend::new")]);
+        let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+        let mut todo = vec![src.clone()];
+        let mut found = Vec::new();
+        let mut files = 0;
+        while let Some(d) = todo.pop() {
+            for e in fs::read_dir(&d).unwrap() {
+                let p = e.unwrap().path();
+                let rel = p.strip_prefix(&src).unwrap().to_path_buf();
+                if rel.starts_with("artefact") || rel == Path::new("artefact.rs") {
+                    continue;
+                }
+                if p.is_dir() {
+                    todo.push(p);
+                } else if p.extension().is_some_and(|x| x == "rs") {
+                    files += 1;
+                    let code = fs::read_to_string(&p).unwrap();
+                    for (line, call) in direct_writes(&code) {
+                        found.push(format!("src/{}:{line}: {call}", rel.display()));
+                    }
+                }
+            }
+        }
+        assert!(files > 50, "scanned only {files} files");
+        assert!(
+            found.is_empty(),
+            "files written past artefact::OutDir:\n{}",
+            found.join("\n")
+        );
+    }
 }

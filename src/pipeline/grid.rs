@@ -120,14 +120,14 @@ pub fn chart(refinement: &Refinement, chosen: &[(String, usize)], file: &Path) -
             )
         })
         .collect();
-    chart::lines_svg(
-        file,
+    let svg = chart::lines_svg(
         "LP b_MSM error against grid size n",
         "grid points n (log scale)",
         "mean |G − PCF| (%)",
         &series,
         true,
-    )
+    )?;
+    crate::artefact::write_text(file, &svg)
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! recommendations among the measured closed forms (`recommend.json`) and the tuned setting
 //! per scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]).
 
-use crate::artefact::write_json;
+use crate::artefact::{write_json, write_text};
 use crate::progress::Bar;
 use crate::report::chart;
 use crate::report::pareto::Entry;
@@ -32,20 +32,24 @@ pub fn run(
     out: &Path,
 ) -> Result<(Vec<Entry>, Vec<Recommendation>)> {
     let entries = entries(all);
-    chart::speed_accuracy_svg(
+    write_text(
         &out.join("speed_accuracy.svg"),
-        "Error against PCF vs cost per fragment (marker size: bits per texel)",
-        &entries,
+        &chart::speed_accuracy_svg(
+            "Error against PCF vs cost per fragment (marker size: bits per texel)",
+            &entries,
+        )?,
     )?;
     let hists: Vec<(String, Vec<u64>)> = all
         .iter()
         .filter(|m| m.precision == "f32" || m.name.starts_with("lp:"))
         .map(|m| (format!("{} ({})", m.name, m.precision), m.histogram.clone()))
         .collect();
-    chart::histograms_svg(
+    write_text(
         &out.join("error_histograms.svg"),
-        "Distribution of |G − PCF| over fragments (log counts)",
-        &hists,
+        &chart::histograms_svg(
+            "Distribution of |G − PCF| over fragments (log counts)",
+            &hists,
+        )?,
     )?;
     let recs = recommendations(all, tolerance);
     write_json(&out.join("recommend.json"), &recs)?;

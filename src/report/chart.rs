@@ -2,8 +2,8 @@
 
 use super::pareto::{pareto_front, Entry};
 use anyhow::{anyhow, Result};
+use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::path::Path;
 
 /// A tick label as a plain number: thousands separated by a space, no trailing ".0"
 /// (10, 100, 1 000, 0.5).
@@ -26,8 +26,19 @@ pub fn plain(v: f64) -> String {
     s.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
-fn err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> anyhow::Error + '_ {
-    move |e| anyhow!("writing chart {}: {e:?}", path.display())
+fn err<E: std::fmt::Debug>(title: &str) -> impl Fn(E) -> anyhow::Error + '_ {
+    move |e| anyhow!("drawing chart '{title}': {e:?}")
+}
+
+/// Draw an SVG of `size` pixels in memory with `draw` (which presents its root) and return the
+/// SVG text; callers write it through the output writer ([`crate::artefact::OutDir`]).
+pub fn svg_string(
+    size: (u32, u32),
+    draw: impl for<'a> FnOnce(DrawingArea<SVGBackend<'a>, Shift>) -> Result<()>,
+) -> Result<String> {
+    let mut svg = String::new();
+    draw(SVGBackend::with_string(&mut svg, size).into_drawing_area())?;
+    Ok(svg)
 }
 
 /// Speed against accuracy: error against PCF (y) over nanoseconds per fragment (x, log scale,
@@ -37,7 +48,7 @@ fn err<E: std::fmt::Debug>(path: &Path) -> impl Fn(E) -> anyhow::Error + '_ {
 /// (★, also drawn as a red line). Colour: LP candidates (Algorithm 1 on a grid, references)
 /// blue, closed forms black; marker: f32 circle, f64 triangle; marker size grows with bits per
 /// texel.
-pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result<()> {
+pub fn speed_accuracy_svg(title: &str, entries: &[Entry]) -> Result<String> {
     let ok =
         |e: &Entry| e.error.is_finite() && e.ns_per_fragment.is_finite() && e.ns_per_fragment > 0.0;
     let idx: Vec<usize> = (0..entries.len()).filter(|&i| ok(&entries[i])).collect();
@@ -54,210 +65,211 @@ pub fn speed_accuracy_svg(path: &Path, title: &str, entries: &[Entry]) -> Result
     let (lx0, lx1) = (x0.log10() - 0.15, x1.log10() + 0.15);
     let legend_w = 380;
     let height = (120 + 16 * idx.len() as u32).max(600);
-    let root = SVGBackend::new(path, (1000 + legend_w, height)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
-    let (plot_area, legend_area) = root.split_horizontally(1000);
-    let mut chart = ChartBuilder::on(&plot_area)
-        .caption(title, ("sans-serif", 20))
-        .margin(20)
-        .x_label_area_size(50)
-        .y_label_area_size(80)
-        .build_cartesian_2d(lx0..lx1, 0.0..y1 * 1.12 + 1e-6)
-        .map_err(err(path))?;
-    let fmt_x = |x: &f64| {
-        if (x - x.round()).abs() < 1e-6 {
-            plain(10f64.powf(x.round()))
-        } else {
-            String::new()
+    svg_string((1000 + legend_w, height), |root| {
+        root.fill(&WHITE).map_err(err(title))?;
+        let (plot_area, legend_area) = root.split_horizontally(1000);
+        let mut chart = ChartBuilder::on(&plot_area)
+            .caption(title, ("sans-serif", 20))
+            .margin(20)
+            .x_label_area_size(50)
+            .y_label_area_size(80)
+            .build_cartesian_2d(lx0..lx1, 0.0..y1 * 1.12 + 1e-6)
+            .map_err(err(title))?;
+        let fmt_x = |x: &f64| {
+            if (x - x.round()).abs() < 1e-6 {
+                plain(10f64.powf(x.round()))
+            } else {
+                String::new()
+            }
+        };
+        let fmt_y = |y: &f64| format!("{} %", plain(100.0 * y));
+        chart
+            .configure_mesh()
+            .x_desc("nanoseconds per fragment (one core, log scale)")
+            .y_desc("mean |G − PCF|")
+            .x_labels(((lx1.floor() - lx0.ceil()) as usize + 1).clamp(2, 10))
+            .x_label_formatter(&fmt_x)
+            .y_label_formatter(&fmt_y)
+            .draw()
+            .map_err(err(title))?;
+        let front = pareto_front(entries);
+        let mut front_pts: Vec<(f64, f64)> = front
+            .iter()
+            .map(|&i| (entries[i].ns_per_fragment.log10(), entries[i].error))
+            .collect();
+        front_pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        chart
+            .draw_series(LineSeries::new(front_pts, RED.stroke_width(2)))
+            .map_err(err(title))?;
+        let colour = |e: &Entry| {
+            if e.name.starts_with("lp:") {
+                RGBColor(30, 90, 200)
+            } else {
+                RGBColor(40, 40, 40)
+            }
+        };
+        // Markers, and their pixel boxes as obstacles for the numbers.
+        let mut boxes: Vec<(i32, i32, i32, i32)> = Vec::new();
+        let mut pix = Vec::new();
+        for &i in &idx {
+            let e = &entries[i];
+            let r = (3.0 + e.bits_per_texel as f64 / 48.0).min(10.0) as i32;
+            let p = (e.ns_per_fragment.log10(), e.error);
+            let c = colour(e);
+            if e.precision == "f64" {
+                chart
+                    .draw_series(std::iter::once(TriangleMarker::new(
+                        p,
+                        r + 1,
+                        c.mix(0.6).filled(),
+                    )))
+                    .map_err(err(title))?;
+            } else {
+                chart
+                    .draw_series(std::iter::once(Circle::new(p, r, c.mix(0.6).filled())))
+                    .map_err(err(title))?;
+            }
+            let (px, py) = chart.backend_coord(&p);
+            boxes.push((px - r, py - r, px + r, py + r));
+            pix.push((px, py, r));
         }
-    };
-    let fmt_y = |y: &f64| format!("{} %", plain(100.0 * y));
-    chart
-        .configure_mesh()
-        .x_desc("nanoseconds per fragment (one core, log scale)")
-        .y_desc("mean |G − PCF|")
-        .x_labels(((lx1.floor() - lx0.ceil()) as usize + 1).clamp(2, 10))
-        .x_label_formatter(&fmt_x)
-        .y_label_formatter(&fmt_y)
-        .draw()
-        .map_err(err(path))?;
-    let front = pareto_front(entries);
-    let mut front_pts: Vec<(f64, f64)> = front
-        .iter()
-        .map(|&i| (entries[i].ns_per_fragment.log10(), entries[i].error))
-        .collect();
-    front_pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-    chart
-        .draw_series(LineSeries::new(front_pts, RED.stroke_width(2)))
-        .map_err(err(path))?;
-    let colour = |e: &Entry| {
-        if e.name.starts_with("lp:") {
-            RGBColor(30, 90, 200)
-        } else {
-            RGBColor(40, 40, 40)
-        }
-    };
-    // Markers, and their pixel boxes as obstacles for the numbers.
-    let mut boxes: Vec<(i32, i32, i32, i32)> = Vec::new();
-    let mut pix = Vec::new();
-    for &i in &idx {
-        let e = &entries[i];
-        let r = (3.0 + e.bits_per_texel as f64 / 48.0).min(10.0) as i32;
-        let p = (e.ns_per_fragment.log10(), e.error);
-        let c = colour(e);
-        if e.precision == "f64" {
-            chart
-                .draw_series(std::iter::once(TriangleMarker::new(
-                    p,
-                    r + 1,
-                    c.mix(0.6).filled(),
-                )))
-                .map_err(err(path))?;
-        } else {
-            chart
-                .draw_series(std::iter::once(Circle::new(p, r, c.mix(0.6).filled())))
-                .map_err(err(path))?;
-        }
-        let (px, py) = chart.backend_coord(&p);
-        boxes.push((px - r, py - r, px + r, py + r));
-        pix.push((px, py, r));
-    }
-    // Numbers: the first free spot on rings of growing radius around the marker.
-    let (pw, ph) = plot_area.dim_in_pixel();
-    let inside = |b: &(i32, i32, i32, i32)| {
-        b.0 >= 85 && b.2 <= pw as i32 - 5 && b.1 >= 40 && b.3 <= ph as i32 - 55
-    };
-    let overlaps = |a: &(i32, i32, i32, i32), b: &(i32, i32, i32, i32)| {
-        a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
-    };
-    for (k, &(px, py, r)) in pix.iter().enumerate() {
-        let label = format!("{}", k + 1);
-        let (tw, th) = (7 * label.len() as i32 + 2, 12);
-        let mut placed = None;
-        'search: for ring in 0..12 {
-            let d = r + 3 + ring * 7;
-            for (dx, dy) in [
-                (1, -1),
-                (1, 0),
-                (1, 1),
-                (0, -1),
-                (-1, -1),
-                (-1, 0),
-                (-1, 1),
-                (0, 1),
-            ] {
-                let (cx, cy) = (px + dx * d, py + dy * d);
-                let bx = (
-                    if dx < 0 {
-                        cx - tw
-                    } else if dx == 0 {
-                        cx - tw / 2
-                    } else {
-                        cx
-                    },
-                    if dy < 0 {
-                        cy - th
-                    } else if dy == 0 {
-                        cy - th / 2
-                    } else {
-                        cy
-                    },
-                );
-                let b = (bx.0, bx.1, bx.0 + tw, bx.1 + th);
-                if inside(&b) && !boxes.iter().any(|o| overlaps(o, &b)) {
-                    placed = Some((b, ring > 0));
-                    break 'search;
+        // Numbers: the first free spot on rings of growing radius around the marker.
+        let (pw, ph) = plot_area.dim_in_pixel();
+        let inside = |b: &(i32, i32, i32, i32)| {
+            b.0 >= 85 && b.2 <= pw as i32 - 5 && b.1 >= 40 && b.3 <= ph as i32 - 55
+        };
+        let overlaps = |a: &(i32, i32, i32, i32), b: &(i32, i32, i32, i32)| {
+            a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+        };
+        for (k, &(px, py, r)) in pix.iter().enumerate() {
+            let label = format!("{}", k + 1);
+            let (tw, th) = (7 * label.len() as i32 + 2, 12);
+            let mut placed = None;
+            'search: for ring in 0..12 {
+                let d = r + 3 + ring * 7;
+                for (dx, dy) in [
+                    (1, -1),
+                    (1, 0),
+                    (1, 1),
+                    (0, -1),
+                    (-1, -1),
+                    (-1, 0),
+                    (-1, 1),
+                    (0, 1),
+                ] {
+                    let (cx, cy) = (px + dx * d, py + dy * d);
+                    let bx = (
+                        if dx < 0 {
+                            cx - tw
+                        } else if dx == 0 {
+                            cx - tw / 2
+                        } else {
+                            cx
+                        },
+                        if dy < 0 {
+                            cy - th
+                        } else if dy == 0 {
+                            cy - th / 2
+                        } else {
+                            cy
+                        },
+                    );
+                    let b = (bx.0, bx.1, bx.0 + tw, bx.1 + th);
+                    if inside(&b) && !boxes.iter().any(|o| overlaps(o, &b)) {
+                        placed = Some((b, ring > 0));
+                        break 'search;
+                    }
                 }
             }
-        }
-        let Some((b, far)) = placed else { continue };
-        boxes.push(b);
-        if far {
-            let (cx, cy) = ((b.0 + b.2) / 2, (b.1 + b.3) / 2);
+            let Some((b, far)) = placed else { continue };
+            boxes.push(b);
+            if far {
+                let (cx, cy) = ((b.0 + b.2) / 2, (b.1 + b.3) / 2);
+                plot_area
+                    .draw(&PathElement::new(vec![(px, py), (cx, cy)], BLACK.mix(0.35)))
+                    .map_err(err(title))?;
+            }
             plot_area
-                .draw(&PathElement::new(vec![(px, py), (cx, cy)], BLACK.mix(0.35)))
-                .map_err(err(path))?;
+                .draw(&Text::new(
+                    label,
+                    (b.0 + 1, b.1),
+                    ("sans-serif", 12).into_font().color(&BLACK),
+                ))
+                .map_err(err(title))?;
         }
-        plot_area
-            .draw(&Text::new(
-                label,
-                (b.0 + 1, b.1),
-                ("sans-serif", 12).into_font().color(&BLACK),
+        // Legend: key, then one numbered line per point.
+        let font = ("sans-serif", 12).into_font();
+        let mut y = 30;
+        let line =
+            |area: &DrawingArea<SVGBackend, plotters::coord::Shift>, text: String, y: &mut i32| {
+                let r = area.draw(&Text::new(text, (10, *y), font.clone()));
+                *y += 16;
+                r
+            };
+        line(&legend_area, "Key".into(), &mut y).map_err(err(title))?;
+        legend_area
+            .draw(&Circle::new(
+                (16, y + 6),
+                5,
+                RGBColor(40, 40, 40).mix(0.6).filled(),
             ))
-            .map_err(err(path))?;
-    }
-    // Legend: key, then one numbered line per point.
-    let font = ("sans-serif", 12).into_font();
-    let mut y = 30;
-    let line =
-        |area: &DrawingArea<SVGBackend, plotters::coord::Shift>, text: String, y: &mut i32| {
-            let r = area.draw(&Text::new(text, (10, *y), font.clone()));
-            *y += 16;
-            r
-        };
-    line(&legend_area, "Key".into(), &mut y).map_err(err(path))?;
-    legend_area
-        .draw(&Circle::new(
-            (16, y + 6),
-            5,
-            RGBColor(40, 40, 40).mix(0.6).filled(),
-        ))
-        .map_err(err(path))?;
-    legend_area
-        .draw(&Text::new(
-            "closed form, f32 (● f32, ▲ f64)",
-            (28, y),
-            font.clone(),
-        ))
-        .map_err(err(path))?;
-    y += 16;
-    legend_area
-        .draw(&Circle::new(
-            (16, y + 6),
-            5,
-            RGBColor(30, 90, 200).mix(0.6).filled(),
-        ))
-        .map_err(err(path))?;
-    legend_area
-        .draw(&Text::new(
-            "LP candidate (Algorithm 1, reference)",
-            (28, y),
-            font.clone(),
-        ))
-        .map_err(err(path))?;
-    y += 16;
-    legend_area
-        .draw(&PathElement::new(
-            vec![(8, y + 6), (24, y + 6)],
-            RED.stroke_width(2),
-        ))
-        .map_err(err(path))?;
-    legend_area
-        .draw(&Text::new(
-            "Pareto front (★ in the list)",
-            (28, y),
-            font.clone(),
-        ))
-        .map_err(err(path))?;
-    y += 16;
-    line(&legend_area, "marker size: bits per texel".into(), &mut y).map_err(err(path))?;
-    y += 8;
-    for (k, &i) in idx.iter().enumerate() {
-        let e = &entries[i];
-        let star = if front.contains(&i) { "★" } else { " " };
-        let text = format!(
-            "{:>2}{star} {} ({}, {} bit): {} %, {} ns",
-            k + 1,
-            e.name,
-            e.precision,
-            e.bits_per_texel,
-            plain((1e4 * e.error).round() / 100.0),
-            plain(e.ns_per_fragment.round())
-        );
-        line(&legend_area, text, &mut y).map_err(err(path))?;
-    }
-    root.present().map_err(err(path))?;
-    Ok(())
+            .map_err(err(title))?;
+        legend_area
+            .draw(&Text::new(
+                "closed form, f32 (● f32, ▲ f64)",
+                (28, y),
+                font.clone(),
+            ))
+            .map_err(err(title))?;
+        y += 16;
+        legend_area
+            .draw(&Circle::new(
+                (16, y + 6),
+                5,
+                RGBColor(30, 90, 200).mix(0.6).filled(),
+            ))
+            .map_err(err(title))?;
+        legend_area
+            .draw(&Text::new(
+                "LP candidate (Algorithm 1, reference)",
+                (28, y),
+                font.clone(),
+            ))
+            .map_err(err(title))?;
+        y += 16;
+        legend_area
+            .draw(&PathElement::new(
+                vec![(8, y + 6), (24, y + 6)],
+                RED.stroke_width(2),
+            ))
+            .map_err(err(title))?;
+        legend_area
+            .draw(&Text::new(
+                "Pareto front (★ in the list)",
+                (28, y),
+                font.clone(),
+            ))
+            .map_err(err(title))?;
+        y += 16;
+        line(&legend_area, "marker size: bits per texel".into(), &mut y).map_err(err(title))?;
+        y += 8;
+        for (k, &i) in idx.iter().enumerate() {
+            let e = &entries[i];
+            let star = if front.contains(&i) { "★" } else { " " };
+            let text = format!(
+                "{:>2}{star} {} ({}, {} bit): {} %, {} ns",
+                k + 1,
+                e.name,
+                e.precision,
+                e.bits_per_texel,
+                plain((1e4 * e.error).round() / 100.0),
+                plain(e.ns_per_fragment.round())
+            );
+            line(&legend_area, text, &mut y).map_err(err(title))?;
+        }
+        root.present().map_err(err(title))?;
+        Ok(())
+    })
 }
 
 /// Where an empty bin is drawn on the log₁₀ count axis: a count of 0.5 (log₁₀ = −0.30), on a
@@ -285,7 +297,7 @@ pub fn histogram_points(h: &[u64]) -> Vec<(f64, f64)> {
 /// at the dashed baseline [`EMPTY_BIN_COUNT`]), the legend in a margin right of the plot so it
 /// covers no line. The paper's way to see where a technique fails: the mass in the right-hand
 /// bins.
-pub fn histograms_svg(path: &Path, title: &str, hists: &[(String, Vec<u64>)]) -> Result<()> {
+pub fn histograms_svg(title: &str, hists: &[(String, Vec<u64>)]) -> Result<String> {
     let series: Vec<(String, Vec<(f64, f64)>)> = hists
         .iter()
         .map(|(name, h)| (name.clone(), histogram_points(h)))
@@ -298,72 +310,72 @@ pub fn histograms_svg(path: &Path, title: &str, hists: &[(String, Vec<u64>)]) ->
         .fold(1.0f64, f64::max);
     let (x0, x1) = (-4.0, 0.0);
     let legend_w = 330;
-    let root = SVGBackend::new(path, (800 + legend_w, 520)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
-    let (plot_area, legend_area) = root.split_horizontally(800);
-    let mut chart = ChartBuilder::on(&plot_area)
-        .caption(title, ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(x0 - 0.1..x1 + 0.1, floor - 0.3..top.ceil() + 0.2)
-        .map_err(err(path))?;
-    chart
-        .configure_mesh()
-        .x_desc("log₁₀ |G − PCF| (upper edge of the bin)")
-        .y_desc("log₁₀ fragments (empty bin: 0.5)")
-        .draw()
-        .map_err(err(path))?;
-    chart
-        .draw_series(DashedLineSeries::new(
-            vec![(x0 - 0.1, floor), (x1 + 0.1, floor)],
-            6,
-            4,
-            BLACK.stroke_width(1),
-        ))
-        .map_err(err(path))?;
-    let font = ("sans-serif", 13).into_font();
-    let mut y = 20;
-    legend_area
-        .draw(&Text::new(
-            "- - - empty bins (count 0 drawn as 0.5)",
-            (8, y),
-            font.clone(),
-        ))
-        .map_err(err(path))?;
-    y += 24;
-    for (k, (name, s)) in series.iter().enumerate() {
-        let c = Palette99::pick(k).to_rgba();
+    svg_string((800 + legend_w, 520), |root| {
+        root.fill(&WHITE).map_err(err(title))?;
+        let (plot_area, legend_area) = root.split_horizontally(800);
+        let mut chart = ChartBuilder::on(&plot_area)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(x0 - 0.1..x1 + 0.1, floor - 0.3..top.ceil() + 0.2)
+            .map_err(err(title))?;
         chart
-            .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
-            .map_err(err(path))?;
+            .configure_mesh()
+            .x_desc("log₁₀ |G − PCF| (upper edge of the bin)")
+            .y_desc("log₁₀ fragments (empty bin: 0.5)")
+            .draw()
+            .map_err(err(title))?;
         chart
-            .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
-            .map_err(err(path))?;
-        legend_area
-            .draw(&PathElement::new(
-                vec![(8, y + 6), (32, y + 6)],
-                c.stroke_width(2),
+            .draw_series(DashedLineSeries::new(
+                vec![(x0 - 0.1, floor), (x1 + 0.1, floor)],
+                6,
+                4,
+                BLACK.stroke_width(1),
             ))
-            .map_err(err(path))?;
+            .map_err(err(title))?;
+        let font = ("sans-serif", 13).into_font();
+        let mut y = 20;
         legend_area
-            .draw(&Text::new(name.clone(), (38, y), font.clone()))
-            .map_err(err(path))?;
-        y += 18;
-    }
-    root.present().map_err(err(path))?;
-    Ok(())
+            .draw(&Text::new(
+                "- - - empty bins (count 0 drawn as 0.5)",
+                (8, y),
+                font.clone(),
+            ))
+            .map_err(err(title))?;
+        y += 24;
+        for (k, (name, s)) in series.iter().enumerate() {
+            let c = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
+                .map_err(err(title))?;
+            chart
+                .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                .map_err(err(title))?;
+            legend_area
+                .draw(&PathElement::new(
+                    vec![(8, y + 6), (32, y + 6)],
+                    c.stroke_width(2),
+                ))
+                .map_err(err(title))?;
+            legend_area
+                .draw(&Text::new(name.clone(), (38, y), font.clone()))
+                .map_err(err(title))?;
+            y += 18;
+        }
+        root.present().map_err(err(title))?;
+        Ok(())
+    })
 }
 
 /// A line chart of several named series (x log-scaled when `log_x`).
 pub fn lines_svg(
-    path: &Path,
     title: &str,
     x_desc: &str,
     y_desc: &str,
     series: &[(String, Vec<(f64, f64)>)],
     log_x: bool,
-) -> Result<()> {
+) -> Result<String> {
     let pts = series.iter().flat_map(|s| s.1.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
@@ -396,59 +408,60 @@ pub fn lines_svg(
         .iter()
         .map(|(n, s)| (n.clone(), s.iter().map(|&(x, y)| (tx(x), y)).collect()))
         .collect();
-    let root = SVGBackend::new(path, (800, 500)).into_drawing_area();
-    root.fill(&WHITE).map_err(err(path))?;
-    let mut chart = ChartBuilder::on(&root)
-        .caption(title, ("sans-serif", 20))
-        .margin(15)
-        .x_label_area_size(45)
-        .y_label_area_size(70)
-        .build_cartesian_2d(
-            lx0 - 0.05 * (lx1 - lx0)..lx1 + 0.05 * (lx1 - lx0),
-            y0 - pad..y1 + pad,
-        )
-        .map_err(err(path))?;
-    let ticks = if log {
-        (lx1.floor() - lx0.ceil()) as usize + 1
-    } else {
-        10
-    };
-    let fmt_x = |x: &f64| {
-        if !log {
-            plain(*x)
-        } else if (x - x.round()).abs() < 1e-6 {
-            plain(x.round().exp2())
+    svg_string((800, 500), |root| {
+        root.fill(&WHITE).map_err(err(title))?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(15)
+            .x_label_area_size(45)
+            .y_label_area_size(70)
+            .build_cartesian_2d(
+                lx0 - 0.05 * (lx1 - lx0)..lx1 + 0.05 * (lx1 - lx0),
+                y0 - pad..y1 + pad,
+            )
+            .map_err(err(title))?;
+        let ticks = if log {
+            (lx1.floor() - lx0.ceil()) as usize + 1
         } else {
-            String::new()
+            10
+        };
+        let fmt_x = |x: &f64| {
+            if !log {
+                plain(*x)
+            } else if (x - x.round()).abs() < 1e-6 {
+                plain(x.round().exp2())
+            } else {
+                String::new()
+            }
+        };
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .x_labels(ticks.clamp(2, 16))
+            .x_label_formatter(&fmt_x)
+            .draw()
+            .map_err(err(title))?;
+        for (k, (name, s)) in series.iter().enumerate() {
+            let c = Palette99::pick(k).to_rgba();
+            chart
+                .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
+                .map_err(err(title))?
+                .label(name.as_str())
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
+            chart
+                .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
+                .map_err(err(title))?;
         }
-    };
-    chart
-        .configure_mesh()
-        .x_desc(x_desc)
-        .y_desc(y_desc)
-        .x_labels(ticks.clamp(2, 16))
-        .x_label_formatter(&fmt_x)
-        .draw()
-        .map_err(err(path))?;
-    for (k, (name, s)) in series.iter().enumerate() {
-        let c = Palette99::pick(k).to_rgba();
         chart
-            .draw_series(LineSeries::new(s.clone(), c.stroke_width(2)))
-            .map_err(err(path))?
-            .label(name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c));
-        chart
-            .draw_series(s.iter().map(|&p| Circle::new(p, 3, c.filled())))
-            .map_err(err(path))?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err(path))?;
-    root.present().map_err(err(path))?;
-    Ok(())
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .draw()
+            .map_err(err(title))?;
+        root.present().map_err(err(title))?;
+        Ok(())
+    })
 }
 
 #[cfg(test)]
@@ -476,11 +489,7 @@ mod tests {
         assert!((pts[0].1 - 3.0).abs() < 1e-12 && (pts[5].1 - 1.0).abs() < 1e-12);
         assert!((pts[1].1 - EMPTY_BIN_COUNT.log10()).abs() < 1e-12);
         assert!(histogram_points(&h[1..]).is_empty());
-        let dir = std::env::temp_dir().join(format!("momentlab-hist-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("h.svg");
-        histograms_svg(&p, "t", &[("tech-a".into(), h)]).unwrap();
-        let svg = std::fs::read_to_string(&p).unwrap();
+        let svg = histograms_svg("t", &[("tech-a".into(), h)]).unwrap();
         // The legend text starts right of the 800-px plot area.
         let at = svg.find(">\ntech-a\n<").expect("legend entry");
         let tag = &svg[svg[..at].rfind("<text").unwrap()..at];
@@ -494,32 +503,23 @@ mod tests {
             .parse()
             .unwrap();
         assert!(x > 800.0, "{tag}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
     fn log_x_line_chart_has_one_label_per_power_of_two() {
-        let dir = std::env::temp_dir().join(format!("momentlab-lines-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("l.svg");
         let s = vec![(
             "a".to_string(),
             vec![(64.0, 0.03), (1024.0, 0.02), (4096.0, 0.019)],
         )];
-        lines_svg(&p, "t", "n", "e", &s, true).unwrap();
-        let svg = std::fs::read_to_string(&p).unwrap();
+        let svg = lines_svg("t", "n", "e", &s, true).unwrap();
         for n in ["64", "128", "1 024", "4 096"] {
             assert_eq!(svg.matches(&format!(">\n{n}\n<")).count(), 1, "{n}");
         }
         assert!(!svg.contains("1000.0"));
-        std::fs::remove_dir_all(&dir).ok();
     }
 
     #[test]
     fn speed_accuracy_chart_is_valid_svg_with_front_labels() {
-        let dir = std::env::temp_dir().join(format!("momentlab-chart-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let p = dir.join("c.svg");
         let v = vec![
             Entry {
                 name: "vsm".into(),
@@ -543,8 +543,7 @@ mod tests {
                 bits_per_texel: 128,
             },
         ];
-        speed_accuracy_svg(&p, "t", &v).unwrap();
-        let s = std::fs::read_to_string(&p).unwrap();
+        let s = speed_accuracy_svg("t", &v).unwrap();
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
         // Every point is in the numbered legend; the front is starred, dominated points not.
         assert!(s.contains("★ hamburger4 (f32, 128 bit)"), "{s}");
@@ -554,6 +553,5 @@ mod tests {
         for k in ["1", "2", "3"] {
             assert!(s.contains(&format!(">\n{k}\n<")), "number {k} drawn");
         }
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

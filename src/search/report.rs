@@ -8,14 +8,16 @@ use super::results::{ranking, read_json, read_rows, Row};
 use super::score::bound_curve;
 use super::tieset::{status, tie_set, TieSet};
 use super::{Dataset, FunctionTable, RaceSummary, Scorer, SweepConfig};
+use crate::artefact::OutDir;
 use crate::metrics::{self, Bias, EvalOptions};
+use crate::report::chart::svg_string;
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
 use plotters::prelude::*;
 use serde::Serialize;
 use std::f64::consts::PI;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 /// A labelled error value marked in the histogram (e.g. "b_MSM (LP)").
 #[derive(Clone, Debug, PartialEq)]
@@ -333,7 +335,7 @@ impl Default for ReportOptions {
 /// `distributions.svg` (this sweep and `opts.compare` side by side), `fig3.svg` and
 /// `search_m<m>.md` (ranking text, top-20 table). Returns the numbers the text states.
 pub fn write(
-    dir: &Path,
+    out: &OutDir,
     rows: &[Row],
     data: &Dataset,
     refs: &[Reference],
@@ -344,16 +346,19 @@ pub fn write(
         bail!("no scored candidates to report");
     };
     let m = best.functions.len();
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let errs = errors_of(rows);
     let ties = tie_set(rows);
-    plot_fig4(
-        &dir.join(format!("fig4_m{m}.svg")),
-        &format!("Candidate errors, m = {m} ({} candidates)", errs.len()),
-        rows,
-        refs,
+    out.write_text(
+        &format!("fig4_m{m}.svg"),
+        &plot_fig4(
+            &format!("Candidate errors, m = {m} ({} candidates)", errs.len()),
+            rows,
+            refs,
+        )?,
     )?;
-    write_cap_list(&dir.join(format!("cap_eliminated_m{m}.csv")), &ties)?;
+    if let Some(csv) = cap_list(&ties) {
+        out.write_text(&format!("cap_eliminated_m{m}.csv"), &csv)?;
+    }
     let mut sets = vec![(format!("m = {m}"), errs.clone())];
     for d in &opts.compare {
         let r = read_rows(d)?;
@@ -363,10 +368,10 @@ pub fn write(
         }
     }
     sets.sort_by(|a, b| a.0.cmp(&b.0));
-    plot_side_by_side(&dir.join("distributions.svg"), &sets)?;
+    out.write_text("distributions.svg", &plot_side_by_side(&sets)?)?;
     let kernels = pick_kernels(data, 3);
     let panels = fig3_panels(data, &kernels, opts.fig3_points, &opts.solver)?;
-    plot_fig3(&dir.join("fig3.svg"), &panels)?;
+    out.write_text("fig3.svg", &plot_fig3(&panels)?)?;
     let sampled = data.sampled_fraction();
     let mut md = format!(
         "# Candidate sweep, m = {m}\n\nWritten by {}.\n\nResults: `{}`. {} fragments, {} non-trivial; the sweep's dataset \
@@ -395,8 +400,13 @@ pub fn write(
          fragment of the stacks. Errors and standard errors estimate the mean |G − PCF| over all \
          fragments of the stacks.\n",
     );
-    crate::artefact::write_text(&dir.join(format!("search_m{m}.md")), &md)?;
+    out.write_text(&format!("search_m{m}.md"), &md)?;
     Ok(summary)
+}
+
+/// The error of drawing chart `what`.
+fn drawing<E: std::fmt::Debug>(what: &str) -> impl Fn(E) -> anyhow::Error + '_ {
+    move |e| anyhow::anyhow!("drawing chart '{what}': {e:?}")
 }
 
 /// Scored errors of a results set (duplicates resolved), ascending.
@@ -431,12 +441,11 @@ fn range_of(values: &[f64], refs: &[Reference]) -> (f64, f64) {
 }
 
 /// Fig. 4 analogue: histogram of candidate errors (%) with vertical reference markers.
-pub fn plot_histogram(path: &Path, title: &str, errors: &[f64], refs: &[Reference]) -> Result<()> {
-    let root = SVGBackend::new(path, (900, 500)).into_drawing_area();
-    draw_histogram(&root, title, errors, refs, 60)?;
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+pub fn plot_histogram(title: &str, errors: &[f64], refs: &[Reference]) -> Result<String> {
+    svg_string((900, 500), |root| {
+        draw_histogram(&root, title, errors, refs, 60)?;
+        root.present().map_err(drawing(title))
+    })
 }
 
 fn draw_histogram<DB: DrawingBackend>(
@@ -530,39 +539,38 @@ fn fig4_classes(rows: &[Row]) -> [Vec<f64>; 3] {
 /// Fig. 4 analogue: the histogram of candidate errors with the set tied for first (red) and
 /// the cap-eliminated candidates (grey) marked, the references as lines; below, the same
 /// zoomed on the top of the ranking.
-pub fn plot_fig4(path: &Path, title: &str, rows: &[Row], refs: &[Reference]) -> Result<()> {
-    let root = SVGBackend::new(path, (900, 900)).into_drawing_area();
-    let (top, bottom) = root.split_vertically(500);
-    let classes = fig4_classes(rows);
-    let all: Vec<f64> = classes.iter().flatten().copied().collect();
-    let (lo, hi) = range_of(&all, refs);
-    draw_stacked(&top, title, &classes, refs, lo, hi, 60)?;
-    let best = all.iter().copied().fold(f64::INFINITY, f64::min);
-    let worst_tied = classes[0].iter().copied().fold(best, f64::max);
-    let zhi = best + (2.0 * (worst_tied - best)).max(0.002);
-    let zoom: [Vec<f64>; 3] = classes
-        .clone()
-        .map(|v| v.into_iter().filter(|&e| e <= zhi).collect());
-    let zrefs: Vec<Reference> = refs
-        .iter()
-        .filter(|r| r.error <= zhi && r.error >= best - 1e-3)
-        .cloned()
-        .collect();
-    draw_stacked(
-        &bottom,
-        &format!(
-            "zoom: the best {:.2} percentage points",
-            (zhi - best) * 100.0
-        ),
-        &zoom,
-        &zrefs,
-        (best - 0.02 * (zhi - best)).max(0.0),
-        zhi,
-        40,
-    )?;
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+pub fn plot_fig4(title: &str, rows: &[Row], refs: &[Reference]) -> Result<String> {
+    svg_string((900, 900), |root| {
+        let (top, bottom) = root.split_vertically(500);
+        let classes = fig4_classes(rows);
+        let all: Vec<f64> = classes.iter().flatten().copied().collect();
+        let (lo, hi) = range_of(&all, refs);
+        draw_stacked(&top, title, &classes, refs, lo, hi, 60)?;
+        let best = all.iter().copied().fold(f64::INFINITY, f64::min);
+        let worst_tied = classes[0].iter().copied().fold(best, f64::max);
+        let zhi = best + (2.0 * (worst_tied - best)).max(0.002);
+        let zoom: [Vec<f64>; 3] = classes
+            .clone()
+            .map(|v| v.into_iter().filter(|&e| e <= zhi).collect());
+        let zrefs: Vec<Reference> = refs
+            .iter()
+            .filter(|r| r.error <= zhi && r.error >= best - 1e-3)
+            .cloned()
+            .collect();
+        draw_stacked(
+            &bottom,
+            &format!(
+                "zoom: the best {:.2} percentage points",
+                (zhi - best) * 100.0
+            ),
+            &zoom,
+            &zrefs,
+            (best - 0.02 * (zhi - best)).max(0.0),
+            zhi,
+            40,
+        )?;
+        root.present().map_err(drawing(title))
+    })
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -661,26 +669,25 @@ where
 }
 
 /// Error distributions of several sweeps (e.g. m = 2, 3, 4) side by side on a common axis.
-pub fn plot_side_by_side(path: &Path, sets: &[(String, Vec<f64>)]) -> Result<()> {
-    let root = SVGBackend::new(path, (420 * sets.len().max(1) as u32, 420)).into_drawing_area();
-    let all: Vec<f64> = sets.iter().flat_map(|s| s.1.iter().copied()).collect();
-    let (lo, hi) = range_of(&all, &[]);
-    let areas = root.split_evenly((1, sets.len().max(1)));
-    for (area, (label, v)) in areas.iter().zip(sets) {
-        let refs = [Reference {
-            label: "best".into(),
-            m: 0,
-            error: v.first().copied().unwrap_or(f64::NAN),
-            stderr: 0.0,
-            closed_form: false,
-            diff: None,
-        }];
-        let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
-        draw_histogram_range(area, label, &finite, &refs, lo, hi)?;
-    }
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+pub fn plot_side_by_side(sets: &[(String, Vec<f64>)]) -> Result<String> {
+    svg_string((420 * sets.len().max(1) as u32, 420), |root| {
+        let all: Vec<f64> = sets.iter().flat_map(|s| s.1.iter().copied()).collect();
+        let (lo, hi) = range_of(&all, &[]);
+        let areas = root.split_evenly((1, sets.len().max(1)));
+        for (area, (label, v)) in areas.iter().zip(sets) {
+            let refs = [Reference {
+                label: "best".into(),
+                m: 0,
+                error: v.first().copied().unwrap_or(f64::NAN),
+                stderr: 0.0,
+                closed_form: false,
+                diff: None,
+            }];
+            let finite: Vec<f64> = v.iter().copied().filter(|x| x.is_finite()).collect();
+            draw_histogram_range(area, label, &finite, &refs, lo, hi)?;
+        }
+        root.present().map_err(drawing("error distributions"))
+    })
 }
 
 fn draw_histogram_range<DB: DrawingBackend>(
@@ -795,59 +802,58 @@ pub fn pick_kernels(data: &Dataset, count: usize) -> Vec<u32> {
 }
 
 /// Draw Fig. 3 panels in a grid (two columns: polynomial, trigonometric).
-pub fn plot_fig3(path: &Path, panels: &[Fig3Panel]) -> Result<()> {
+pub fn plot_fig3(panels: &[Fig3Panel]) -> Result<String> {
     let rows = panels.len().div_ceil(2).max(1);
-    let root = SVGBackend::new(path, (900, 300 * rows as u32)).into_drawing_area();
-    root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let areas = root.split_evenly((rows, 2));
-    for (area, p) in areas.iter().zip(panels) {
-        let (zlo, zhi) = (p.z[0], *p.z.last().unwrap());
-        let mut chart = ChartBuilder::on(area)
-            .caption(&p.title, ("sans-serif", 14))
-            .margin(6)
-            .x_label_area_size(30)
-            .y_label_area_size(35)
-            .build_cartesian_2d(zlo..zhi, 0.0..1.05)
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        chart
-            .configure_mesh()
-            .x_desc("z_f")
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-        let series: Vec<(String, RGBColor, &Vec<f64>)> =
-            std::iter::once(("F_Z".into(), BLUE, &p.cdf))
-                .chain(
-                    p.bounds
-                        .iter()
-                        .zip([RED, CYAN, GREEN])
-                        .map(|((l, g), c)| (l.clone(), c, g)),
-                )
-                .collect();
-        for (label, c, v) in series {
+    svg_string((900, 300 * rows as u32), |root| {
+        root.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
+        let areas = root.split_evenly((rows, 2));
+        for (area, p) in areas.iter().zip(panels) {
+            let (zlo, zhi) = (p.z[0], *p.z.last().unwrap());
+            let mut chart = ChartBuilder::on(area)
+                .caption(&p.title, ("sans-serif", 14))
+                .margin(6)
+                .x_label_area_size(30)
+                .y_label_area_size(35)
+                .build_cartesian_2d(zlo..zhi, 0.0..1.05)
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
             chart
-                .draw_series(LineSeries::new(
-                    p.z.iter()
-                        .zip(v)
-                        .filter(|(_, g)| g.is_finite())
-                        .map(|(&z, &g)| (z, g)),
-                    c.stroke_width(2),
-                ))
-                .map_err(|e| anyhow::anyhow!("{e:?}"))?
-                .label(label)
-                .legend(move |(a, b)| {
-                    PathElement::new(vec![(a, b), (a + 15, b)], c.stroke_width(2))
-                });
+                .configure_mesh()
+                .x_desc("z_f")
+                .draw()
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+            let series: Vec<(String, RGBColor, &Vec<f64>)> =
+                std::iter::once(("F_Z".into(), BLUE, &p.cdf))
+                    .chain(
+                        p.bounds
+                            .iter()
+                            .zip([RED, CYAN, GREEN])
+                            .map(|((l, g), c)| (l.clone(), c, g)),
+                    )
+                    .collect();
+            for (label, c, v) in series {
+                chart
+                    .draw_series(LineSeries::new(
+                        p.z.iter()
+                            .zip(v)
+                            .filter(|(_, g)| g.is_finite())
+                            .map(|(&z, &g)| (z, g)),
+                        c.stroke_width(2),
+                    ))
+                    .map_err(|e| anyhow::anyhow!("{e:?}"))?
+                    .label(label)
+                    .legend(move |(a, b)| {
+                        PathElement::new(vec![(a, b), (a + 15, b)], c.stroke_width(2))
+                    });
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperLeft)
+                .background_style(WHITE.mix(0.85))
+                .draw()
+                .map_err(|e| anyhow::anyhow!("{e:?}"))?;
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.85))
-            .draw()
-            .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    }
-    root.present()
-        .with_context(|| format!("writing {}", path.display()))?;
-    Ok(())
+        root.present().map_err(drawing("Fig. 3"))
+    })
 }
 
 /// Markdown table of the `count` best candidates: the candidates scored on every fragment
@@ -1129,10 +1135,10 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
 }
 
 /// Every candidate eliminated by the cap (CSV: index, functions, error, stderr, fragments,
-/// stage, versus, diff, diff_se).
-fn write_cap_list(path: &Path, t: &TieSet) -> Result<()> {
+/// stage, versus, diff, diff_se); None for a run without racing.
+fn cap_list(t: &TieSet) -> Option<String> {
     if !t.raced {
-        return Ok(());
+        return None;
     }
     let mut s = String::from("index,functions,error,stderr,fragments,stage,versus,diff,diff_se\n");
     for r in &t.cap {
@@ -1151,7 +1157,7 @@ fn write_cap_list(path: &Path, t: &TieSet) -> Result<()> {
             o(r.diff_se)
         );
     }
-    crate::artefact::write_text(path, &s)
+    Some(s)
 }
 
 /// Rank of an error value among the scored candidates: 1 + #candidates strictly better.
@@ -1286,9 +1292,7 @@ mod tests {
     }
 
     #[test]
-    fn svg_files_are_written() {
-        let dir = std::env::temp_dir().join(format!("momentlab-report-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+    fn svg_charts_are_drawn() {
         let errs: Vec<f64> = (0..100).map(|k| 0.02 + k as f64 * 1e-4).collect();
         let refs = vec![Reference {
             label: "b_MSM (LP)".into(),
@@ -1298,14 +1302,11 @@ mod tests {
             closed_form: false,
             diff: None,
         }];
-        plot_histogram(&dir.join("h.svg"), "test", &errs, &refs).unwrap();
-        plot_side_by_side(
-            &dir.join("s.svg"),
-            &[("m = 2".into(), errs.clone()), ("m = 4".into(), errs)],
-        )
-        .unwrap();
-        let svg = std::fs::read_to_string(dir.join("h.svg")).unwrap();
+        let svg = plot_histogram("test", &errs, &refs).unwrap();
         assert!(svg.contains("<svg") && svg.contains("b_MSM"));
+        let svg =
+            plot_side_by_side(&[("m = 2".into(), errs.clone()), ("m = 4".into(), errs)]).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("m = 4"));
         let g = crate::Grid::uniform(16).unwrap();
         let data = Dataset::synthetic(1, &g, 1, 5, 2).unwrap();
         let panels = fig3_panels(&data, &pick_kernels(&data, 1), 8, "reference").unwrap();
@@ -1319,7 +1320,7 @@ mod tests {
                 assert!(p.bounds[2].1[k] >= p.bounds[0].1[k] - 1e-7);
             }
         }
-        plot_fig3(&dir.join("f3.svg"), &panels).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
+        let svg = plot_fig3(&panels).unwrap();
+        assert!(svg.trim_end().ends_with("</svg>") && svg.contains("F_Z"));
     }
 }

@@ -300,7 +300,7 @@ pub fn report_for(
     }
     let summary = match &opts.report_dir {
         Some(dir) => report::write(
-            dir,
+            &crate::artefact::OutDir::new(dir, true)?,
             rows,
             data,
             &refs,
