@@ -127,3 +127,70 @@ fn mismatched_shadow_maps_are_rejected() {
         "{e:#}"
     );
 }
+
+#[test]
+fn layer_pictures_show_the_shadow_on_the_hidden_layer() {
+    let s = scene();
+    let t = AlwaysLit;
+    let (w, h) = (48, 32);
+    let sh = metrics::layer_shadows(&s, 1, Subject::Technique(&t), &Bias::default()).unwrap();
+    let img = pictures::layer_picture(&s, 1, &sh).unwrap();
+    assert_eq!(img.width, 4 * w + 4 * GAP_PX + pictures::BAR_PX);
+    assert_eq!(img.height, h);
+    let px = |panel: usize, x: usize, y: usize| img.get(panel * (w + GAP_PX) + x, y);
+    // Layer 1 exists only under the box: elsewhere every panel is background.
+    for p in 0..4 {
+        assert_eq!(px(p, 5, 5), BACKGROUND);
+    }
+    // Under the box's centre the ground is fully shadowed by the box: PCF black, the
+    // always-lit technique white, |error| = 1 (top of the colour map).
+    assert_eq!(
+        px(0, 22, 22),
+        pictures::depth_colour(s.depth[1][22 * w + 22] as f64)
+    );
+    assert_eq!(sh.pcf[22 * w + 22], 1.0);
+    assert_eq!(px(1, 22, 22), [0, 0, 0]);
+    assert_eq!(px(2, 22, 22), [255, 255, 255]);
+    assert_eq!(px(3, 22, 22), pictures::error_colour(1.0));
+    // The front layer's picture of the same texel is lit (the box top).
+    let front = metrics::layer_shadows(&s, 0, Subject::Technique(&t), &Bias::default()).unwrap();
+    assert_eq!(front.pcf[22 * w + 22], 0.0);
+    // Colour bar: top = error 1, bottom = error 0.
+    let bar_x = 4 * (w + GAP_PX) + pictures::BAR_PX - 1;
+    assert_eq!(img.get(bar_x, 0), pictures::error_colour(1.0));
+    assert_eq!(img.get(bar_x, h - 1), pictures::error_colour(0.0));
+    // A layer the stack does not have, or maps of the wrong size, are errors.
+    let e = pictures::layer_picture(&s, 2, &sh).unwrap_err().to_string();
+    assert!(e.contains("test/box layer 2"), "{e}");
+    let none = metrics::layer_shadows(&s, 5, Subject::Pcf, &Bias::default()).unwrap();
+    assert!(none.pcf.iter().all(|v| v.is_nan()));
+}
+
+#[test]
+fn one_colour_convention_for_depth_in_every_picture() {
+    let s = scene();
+    let (w, h) = (48, 32);
+    let shadows = metrics::front_shadows(&s, Subject::Pcf, &Bias::default()).unwrap();
+    let view = pictures::view_picture(&s, &shadows).unwrap();
+    let prev = pictures::preview_picture(&s);
+    assert_eq!((prev.width, prev.height), (2 * w + GAP_PX, h));
+    // The preview is panels 1 and 2 of the light-view picture, pixel for pixel.
+    for y in 0..h {
+        for x in 0..w {
+            assert_eq!(prev.get(x, y), view.get(x, y), "depth at {x},{y}");
+            assert_eq!(
+                prev.get(w + GAP_PX + x, y),
+                view.get(w + GAP_PX + x, y),
+                "layers at {x},{y}"
+            );
+        }
+    }
+    // Near is bright: the box top (z = 0.2) is brighter than the ground (z ≥ 0.7).
+    assert!(prev.get(20, 20)[0] > prev.get(5, 5)[0] + 100);
+    assert_eq!(pictures::depth_colour(0.0), [255, 255, 255]);
+    assert_eq!(pictures::depth_colour(1.0), [0, 0, 0]);
+    assert_eq!(pictures::depth_colour(f64::INFINITY), BACKGROUND);
+    // Lit is white, shadowed black.
+    assert_eq!(pictures::shadow_colour(0.0), [255, 255, 255]);
+    assert_eq!(pictures::shadow_colour(1.0), [0, 0, 0]);
+}

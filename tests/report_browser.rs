@@ -1,6 +1,7 @@
 //! The HTML report in a real browser: headless Chromium (Debian's `chromium`) loads
 //! reports/<run>/index.html of a `reproduce --tiny` run; every image must load and no error may
-//! reach the console (script errors, console.error, failed resource loads). A screenshot is
+//! reach the console (script errors, console.error, failed resource loads); every eye-view
+//! picture must have pixel variance > 0 (read back through a canvas). A screenshot is
 //! kept under the target directory and its path printed. A control page with a missing image
 //! must be reported as broken (the check can fail).
 //!
@@ -93,12 +94,30 @@ window.__momentlabErrors = [];
     for (var k = 0; k < pres.length; k++) {
       if (/^\s*\|.*\|\s*$/m.test(pres[k].textContent) && /\|\s*:?-{3,}/.test(pres[k].textContent)) mdpre++;
     }
+    // Eye-view pictures (src under eye/): drawn into a canvas, variance of the pixel grey.
+    var eye = [];
+    for (var e = 0; e < imgs.length; e++) {
+      var src = imgs[e].getAttribute('src') || '';
+      if (!/(^|\/)eye\//.test(src)) continue;
+      try {
+        var cv = document.createElement('canvas');
+        cv.width = imgs[e].naturalWidth; cv.height = imgs[e].naturalHeight;
+        var g2 = cv.getContext('2d');
+        g2.drawImage(imgs[e], 0, 0);
+        var px = g2.getImageData(0, 0, cv.width, cv.height).data, n = 0, s1 = 0, s2 = 0;
+        for (var q = 0; q < px.length; q += 4) {
+          var y = (px[q] + px[q + 1] + px[q + 2]) / 3; s1 += y; s2 += y * y; n++;
+        }
+        var mean = n ? s1 / n : 0;
+        eye.push({ src: src, pixels: n, variance: n ? s2 / n - mean * mean : 0 });
+      } catch (err) { eye.push({ src: src, error: String(err) }); }
+    }
     var text = document.body.innerText;
     var provenance = ['git commit', 'command', 'CPU', 'threads', 'date (UTC)'].filter(function (w) { return text.indexOf(w) < 0; });
     var r = document.createElement('pre');
     r.id = 'momentlab-check';
     r.textContent = JSON.stringify({ images: imgs.length, broken: broken, errors: errs,
-      uncaptioned: uncaptioned, markdown_pre: mdpre, provenance_missing: provenance });
+      uncaptioned: uncaptioned, markdown_pre: mdpre, provenance_missing: provenance, eye: eye });
     document.body.appendChild(r);
   });
 })();
@@ -116,6 +135,8 @@ fn chromium(bin: &Path, profile: &Path) -> Command {
         "--disable-component-update",
         "--disable-sync",
         "--hide-scrollbars",
+        // file:// pictures may be read back through a canvas (the eye-view variance check)
+        "--allow-file-access-from-files",
     ])
     .arg(format!("--user-data-dir={}", profile.display()));
     c
@@ -207,6 +228,26 @@ fn report_loads_in_headless_chromium() {
         serde_json::json!([]),
         "provenance: {v}"
     );
+    // Every eye-view picture loads and is not blank (pixel variance > 0), and the report shows
+    // PCF, Hamburger 4MSM, TMSM, VSM and EVSM from the eye.
+    let eye = v["eye"].as_array().expect("eye list");
+    for e in eye {
+        assert!(e.get("error").is_none(), "eye view not readable: {e}");
+        assert!(e["pixels"].as_u64().unwrap_or(0) > 0, "empty eye view: {e}");
+        assert!(
+            e["variance"].as_f64().unwrap_or(0.0) > 1.0,
+            "blank eye view: {e}"
+        );
+    }
+    for t in ["pcf", "hamburger4", "tmsm", "vsm", "evsm"] {
+        let hit = eye.iter().any(|e| {
+            e["src"]
+                .as_str()
+                .unwrap_or("")
+                .ends_with(&format!("_{t}_eye.png"))
+        });
+        assert!(hit, "no eye view of {t}: {v}");
+    }
     // Provenance on the first screen: before the first figure and the first section.
     let prov = html.find("git commit").expect("no provenance");
     assert!(prov < html.find("<figure").unwrap_or(usize::MAX));
@@ -214,13 +255,22 @@ fn report_loads_in_headless_chromium() {
     // Sub-reports are HTML: their tables are <table>s, not Markdown text.
     assert!(!html.contains("|---"), "Markdown table text in the HTML");
 
-    // Control: a missing image and a console error are caught.
+    // Control: a missing image, a console error and a blank eye view are caught.
+    let blank = run.join("eye/blank_eye.png");
+    {
+        let f = std::io::BufWriter::new(std::fs::File::create(&blank).unwrap());
+        let mut enc = png::Encoder::new(f, 8, 8);
+        enc.set_color(png::ColorType::Rgb);
+        let mut w = enc.write_header().unwrap();
+        w.write_image_data(&[90u8; 8 * 8 * 3]).unwrap();
+    }
     let control = run.join("index.control.html");
     std::fs::write(
         &control,
         with_checker(
             &html,
             "<img src=\"no-such-figure.svg\"><pre>| a | b |\n|---|---|\n| 1 | 2 |</pre>\
+             <figure><img src=\"eye/blank_eye.png\"><figcaption>blank</figcaption></figure>\
              <script>console.error('planted')</script>",
         ),
     )
@@ -237,6 +287,15 @@ fn report_loads_in_headless_chromium() {
         "{c}"
     );
     assert_eq!(c["markdown_pre"], serde_json::json!(1), "{c}");
+    let planted = c["eye"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["src"] == "eye/blank_eye.png")
+        .cloned()
+        .unwrap_or_else(|| panic!("blank eye view not checked: {c}"));
+    assert_eq!(planted["pixels"], serde_json::json!(64), "{c}");
+    assert_eq!(planted["variance"].as_f64(), Some(0.0), "{c}");
     let errs = c["errors"].to_string();
     assert!(
         errs.contains("no-such-figure.svg") && errs.contains("planted"),

@@ -8,6 +8,7 @@ use super::common::{
 use crate::artefact::OutDir;
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::progress::Bar;
+use crate::render::{self, eye, Scene};
 use crate::report::pictures;
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
@@ -33,10 +34,25 @@ pub struct Args {
     /// Shadow-map resolution when rendering the default dataset (16..=4096).
     #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
-    /// Output folder: write one five-panel PNG per view and technique into it (see
-    /// docs/evaluation.md); without it nothing is written.
+    /// Output folder: write per view and technique the five-panel light-view PNG and the
+    /// eye-view PNG (PCF-shaded | technique-shaded | |difference| with colour bar; needs the
+    /// scenes: the embedded dataset or --scenes) into it (see docs/evaluation.md); without it
+    /// nothing is written.
     #[arg(long, alias = "pictures")]
     pub out: Option<PathBuf>,
+    /// Scenes of the stacks (a folder of scene JSON files, a scene file, or a mesh file with
+    /// its light sidecar): the geometry and cameras of the eye-view pictures. Without --stacks
+    /// they are rendered at --resolution; with --stacks every stack must be a view of them.
+    #[arg(long)]
+    pub scenes: Option<PathBuf>,
+    /// Eye-view picture resolution in pixels per side (16..=2048).
+    #[arg(long, default_value_t = eye::DEFAULT_RESOLUTION, value_parser = usize_in(16, 2048), requires = "out")]
+    pub eye_resolution: usize,
+    /// Also write, per view and technique, light-view pictures of the first K layers
+    /// (`<scene>_<view>_<technique>.layer<k>.png`: layer-k depth | PCF | technique | |error|
+    /// with colour bar): where the shadows cast onto layer k fall (K in 1..=64).
+    #[arg(long, value_name = "K", value_parser = usize_in(1, 64), requires = "out")]
+    pub layer_pictures: Option<usize>,
     /// Replace pictures that already exist in --out (otherwise refused before the evaluation).
     #[arg(long, requires = "out")]
     pub force: bool,
@@ -117,7 +133,29 @@ pub fn run(args: Args) -> Result<()> {
         },
         (None, None) => Subsample::All,
     };
-    let mut stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "evaluate")?;
+    // The scenes (eye-view geometry) before any rendering or evaluation.
+    let scenes: Option<Vec<Scene>> = match (&args.scenes, &args.stacks) {
+        (Some(p), _) => Some(render::load_scenes(p, &[], None).context("--scenes")?),
+        (None, None) => Some(render::embedded_scenes()?),
+        (None, Some(_)) => None,
+    };
+    let mut stacks = match (&args.scenes, &scenes) {
+        (Some(p), Some(sc)) if args.stacks.is_none() => {
+            eprintln!(
+                "evaluate: rendering the scenes of {} at {1}×{1}",
+                p.display(),
+                args.resolution
+            );
+            let st: Vec<DepthStack> = sc
+                .iter()
+                .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
+                .map(|(s, i)| render::render_view(s, i, args.resolution))
+                .collect();
+            require_fragments(&st, Some(p))?;
+            st
+        }
+        _ => stacks_or_default(args.stacks.as_deref(), args.resolution, "evaluate")?,
+    };
     if let Some(only) = &args.only {
         stacks.retain(|s| format!("{}/{}", s.meta.scene, s.meta.view).contains(only.as_str()));
         if stacks.is_empty() {
@@ -134,16 +172,47 @@ pub fn run(args: Args) -> Result<()> {
             None => Subject::Cdf,
         })
         .collect();
+    // The eye view of each stack: its scene and light (checked against the stack's frame).
+    let lights: Vec<Option<(&Scene, usize)>> = match (&scenes, &args.out) {
+        (Some(sc), Some(_)) => stacks
+            .iter()
+            .map(|st| match eye::light_of(sc, st)? {
+                Some(l) => Ok(Some(l)),
+                None => bail!(
+                    "--scenes: no scene named '{}' for stack {}/{} (scenes: {})",
+                    st.meta.scene,
+                    st.meta.scene,
+                    st.meta.view,
+                    sc.iter()
+                        .map(|s| s.name.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            })
+            .collect::<Result<_>>()?,
+        (None, Some(_)) => {
+            eprintln!(
+                "evaluate: no eye-view pictures (they need the scenes of the stacks: pass --scenes)"
+            );
+            vec![None; stacks.len()]
+        }
+        _ => vec![None; stacks.len()],
+    };
+    let plan = PicturePlan {
+        eye_resolution: args.eye_resolution,
+        layers: args.layer_pictures.unwrap_or(0),
+    };
     // The picture files before the evaluation: no name twice, none replaced without --force.
     let pictures_out = match &args.out {
         Some(dir) => {
             let od = OutDir::new(dir, args.force).context("--out")?;
-            od.reserve(
-                subjects
-                    .iter()
-                    .flat_map(|&subject| stacks.iter().map(move |s| picture_name(s, subject))),
-            )
-            .context("--out")?;
+            let mut names = Vec::new();
+            for &subject in &subjects {
+                for (st, light) in stacks.iter().zip(&lights) {
+                    names.extend(plan.names(st, subject, light.is_some()));
+                }
+            }
+            od.reserve(names).context("--out")?;
             Some(od)
         }
         None => None,
@@ -166,9 +235,6 @@ pub fn run(args: Args) -> Result<()> {
         if report.fragments == 0 {
             bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
         }
-        if let Some(od) = &pictures_out {
-            write_pictures(od, &stacks, subject, &bias)?;
-        }
         if !args.json {
             if !reports.is_empty() {
                 println!();
@@ -176,6 +242,9 @@ pub fn run(args: Args) -> Result<()> {
             print_table(&report);
         }
         reports.push(report);
+    }
+    if let Some(od) = &pictures_out {
+        write_pictures(od, &stacks, &lights, &subjects, &bias, &plan)?;
     }
     if args.json {
         let text = match reports.as_slice() {
@@ -197,20 +266,76 @@ fn picture_name(s: &DepthStack, subject: Subject) -> String {
     )
 }
 
-fn write_pictures(od: &OutDir, stacks: &[DepthStack], subject: Subject, bias: &Bias) -> Result<()> {
-    let dir = od.root();
+/// Which pictures a run writes besides the light-view ones.
+struct PicturePlan {
+    eye_resolution: usize,
+    /// Per-layer pictures of the first `layers` layers (0 = none).
+    layers: usize,
+}
+
+impl PicturePlan {
+    /// The files of view `s` and `subject`: the light-view picture, `.eye.png` (when the view
+    /// has its scene; not for cdf, which has no shadow map) and `.layer<k>.png`.
+    fn names(&self, s: &DepthStack, subject: Subject, has_scene: bool) -> Vec<String> {
+        let base = picture_name(s, subject);
+        let stem = base.trim_end_matches(".png");
+        let mut v = vec![base.clone()];
+        if has_scene && !matches!(subject, Subject::Cdf) {
+            v.push(format!("{stem}.eye.png"));
+        }
+        for k in 0..self.layers.min(s.depth.len()) {
+            v.push(format!("{stem}.layer{k}.png"));
+        }
+        v
+    }
+}
+
+fn write_pictures(
+    od: &OutDir,
+    stacks: &[DepthStack],
+    lights: &[Option<(&Scene, usize)>],
+    subjects: &[Subject],
+    bias: &Bias,
+    plan: &PicturePlan,
+) -> Result<()> {
     let bar = Bar::new("pictures (views)", stacks.len() as u64);
-    for s in stacks {
-        let shadows = metrics::front_shadows(s, subject, bias)?;
-        let img = pictures::view_picture(s, &shadows)?;
-        pictures::write_png_to(od, &picture_name(s, subject), &img)?;
+    let mut files = 0;
+    for (st, light) in stacks.iter().zip(lights) {
+        let cmp = match light {
+            Some((sc, i)) => Some(eye::EyeComparison::new(
+                sc,
+                *i,
+                st,
+                bias,
+                plan.eye_resolution,
+            )?),
+            None => None,
+        };
+        for &subject in subjects {
+            let names = plan.names(st, subject, light.is_some());
+            let shadows = metrics::front_shadows(st, subject, bias)?;
+            pictures::write_png_to(od, &names[0], &pictures::view_picture(st, &shadows)?)?;
+            let mut rest = names[1..].iter();
+            if let Some(c) = &cmp {
+                if !matches!(subject, Subject::Cdf) {
+                    let img = pictures::eye_comparison(c, st, subject, bias)?;
+                    pictures::write_png_to(od, rest.next().expect("eye name"), &img)?;
+                }
+            }
+            for (k, name) in rest.enumerate() {
+                let sh = metrics::layer_shadows(st, k, subject, bias)?;
+                pictures::write_png_to(od, name, &pictures::layer_picture(st, k, &sh)?)?;
+            }
+            files += names.len();
+        }
         bar.inc(1);
     }
     bar.finish();
     eprintln!(
-        "wrote {} pictures to {} (panels: front depth | layers | PCF | technique | |error|)",
-        stacks.len(),
-        dir.display()
+        "wrote {files} pictures to {} (light view: front depth | layers | PCF | technique | \
+         |error|; .eye.png: PCF | technique | |difference| from the eye camera; .layer<k>.png: \
+         layer-k depth | PCF | technique | |error|)",
+        od.root().display()
     );
     Ok(())
 }

@@ -36,37 +36,13 @@ pub struct Args {
     /// Render only the scene with this name.
     #[arg(long)]
     pub only: Option<String>,
-    /// Also write `<scene>_<view>.preview.png`: front depth (left) and layer count (right).
+    /// Also write `<scene>_<view>.preview.png`: front depth (near = bright) | layer count
+    /// (viridis), the colours of every picture (docs/evaluation.md).
     #[arg(long)]
     pub preview: bool,
     /// Print one JSON object per run (views, files, fragments, layers) instead of the table.
     #[arg(long)]
     pub json: bool,
-}
-
-/// Grey-scale preview: front depth (black = near, white = far/background) | layer count
-/// (white = the view's maximum).
-fn write_preview(out: &OutDir, name: &str, st: &crate::stack::DepthStack) -> Result<()> {
-    let (w, h) = (st.meta.width, st.meta.height);
-    let maxl = st.meta.layers.max(1) as f32;
-    let mut img = vec![0u8; 2 * w * h];
-    for y in 0..h {
-        for x in 0..w {
-            let t = y * w + x;
-            img[y * 2 * w + x] = (st.front(t).clamp(0.0, 1.0) * 255.0) as u8;
-            img[y * 2 * w + w + x] = (st.layer_count_at(t) as f32 / maxl * 255.0) as u8;
-        }
-    }
-    out.write_with(name, |file| {
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), (2 * w) as u32, h as u32);
-        enc.set_color(png::ColorType::Grayscale);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc.write_header()?;
-        wr.write_image_data(&img)?;
-        wr.finish()?;
-        Ok(())
-    })?;
-    Ok(())
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -109,7 +85,11 @@ pub fn run(args: Args) -> Result<()> {
             let dt = t0.elapsed().as_secs_f64();
             let path = stack::write_to(&out, &st.file_stem(), &st)?;
             if args.preview {
-                write_preview(&out, &format!("{}.preview.png", st.file_stem()), &st)?;
+                crate::report::pictures::write_png_to(
+                    &out,
+                    &format!("{}.preview.png", st.file_stem()),
+                    &crate::report::pictures::preview_picture(&st),
+                )?;
             }
             let frags = st.fragment_count();
             rows.push(serde_json::json!({

@@ -913,13 +913,24 @@ pub fn front_shadows(
     subject: Subject<'_>,
     bias: &Bias,
 ) -> Result<FrontShadows> {
+    layer_shadows(stack, 0, subject, bias)
+}
+
+/// PCF and G of every fragment of layer `layer` (the layer+1-th surface along each texel's
+/// ray; NaN where a texel has fewer surfaces): where the shadows cast onto that layer fall.
+pub fn layer_shadows(
+    stack: &DepthStack,
+    layer: usize,
+    subject: Subject<'_>,
+    bias: &Bias,
+) -> Result<FrontShadows> {
     check_stack(stack)?;
     bias.validate()?;
     let n = stack.texel_count();
-    let picked: Vec<(usize, usize)> = match stack.depth.first() {
+    let picked: Vec<(usize, usize)> = match stack.depth.get(layer) {
         Some(l) => (0..n)
             .filter(|&t| l[t].is_finite())
-            .map(|t| (0, t))
+            .map(|t| (layer, t))
             .collect(),
         None => Vec::new(),
     };

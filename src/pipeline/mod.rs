@@ -3,8 +3,8 @@
 //!
 //! ```text
 //! 1 stacks      render (or read back) the depth stacks          results/<run>/stacks/
-//! 2 techniques  every technique against PCF on the same fragments, speed, pictures
-//!                                                               <reports>/<run>/evaluate/, pictures/
+//! 2 techniques  every technique against PCF on the same fragments, speed, light-view and
+//!               eye-view pictures                   <reports>/<run>/evaluate/, pictures/, eye/
 //! 3 grid        LP grid refinement per scene                    grid_refinement.{json,svg}
 //! 4 sweep       candidate sweeps (racing)                       results/<run>/search-m<m>/, search/
 //! 5 theta       optimal quantization transforms θ               theta/
@@ -137,6 +137,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     ));
     let all = techniques::evaluate_all(&stacks, &plan, &p.out.join("evaluate"), lp_grid)?;
     let pictures = techniques::pictures(&stacks, &plan, &p.out.join("pictures"))?;
+    let eye = techniques::eye_pictures(&stacks, &plan, &p.out.join("eye"), lp_grid)?;
 
     step.start("candidate sweep (racing)");
     let search_report = p.out.join("search");
@@ -184,6 +185,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         search_report: &search_report,
         out: &p.out,
         pictures: &pictures,
+        eye: &eye,
         seconds: step.elapsed(),
     })?;
     doc.write(&p.out)?;

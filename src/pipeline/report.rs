@@ -33,7 +33,108 @@ pub struct ReportInputs<'a> {
     pub search_report: &'a Path,
     pub out: &'a Path,
     pub pictures: &'a [(String, String)],
+    pub eye: &'a [super::techniques::EyeFigure],
     pub seconds: f64,
+}
+
+/// What to look for in the eye view of each technique the report shows (a sentence).
+fn eye_look_for(name: &str) -> &'static str {
+    match name {
+        "pcf" => {
+            "This is the reference itself (its heat map is black by construction): the \
+                  shadows every other picture is compared with."
+        }
+        "vsm" => {
+            "Look for light leaking: where a receiver lies far behind its occluder (ground \
+                  behind tall buildings, a second occluder behind the first) VSM's Chebyshev \
+                  bound lets light through, so its shadows are lighter than PCF's and the heat \
+                  map glows inside them."
+        }
+        "evsm" => {
+            "Look for leaking left after the exponential warp (compare with VSM), mostly \
+                   where several occluders overlap, and over-darkening at contact shadows."
+        }
+        "esm" => {
+            "Look for over-darkening and leaking at contact: the exponential test darkens \
+                  lit receivers just behind an occluder's edge and lightens shadows where the \
+                  occluder touches the receiver."
+        }
+        "hamburger4" => {
+            "Look for small leaks where several occluders overlap in one filter \
+                         window (the 4-moment bound); elsewhere it should match PCF."
+        }
+        "hausdorff4" => {
+            "Look for the same leaks as Hamburger 4MSM with a different \
+                         reconstruction: compare where the two differ."
+        }
+        "hamburger6" => {
+            "Look for leaks smaller than with four moments, where several occluders \
+                         overlap."
+        }
+        "tmsm" => {
+            "Look for leaking and acne (speckles on lit surfaces) of the trigonometric \
+                   basis against Hamburger 4MSM."
+        }
+        _ => {
+            "Look for light leaking (heat inside shadows, technique lighter than PCF), acne \
+              (speckles on lit surfaces) and over-darkening (technique darker than PCF)."
+        }
+    }
+}
+
+/// The eye views (Fig. 6 analogue) of the recommended techniques, the paper's bases and the
+/// baselines.
+fn eye_section(d: &mut Document, r: &ReportInputs) {
+    if r.eye.is_empty() {
+        return;
+    }
+    d.heading("Eye views: each technique beside PCF (Fig. 6 analogue)");
+    d.paragraph(format!(
+        "Each scene seen by its default camera (orthographic, 40° above the horizon, from the \
+         side of the light's travel) at {0}×{0}, shaded 0.15 + 0.85·(n·l)⁺·(1 − shadow) with \
+         the shadow each technique computes from the light's shadow map (filtered moments \
+         interpolated bilinearly, as a GPU samples a filtered texture). Left: PCF; middle: the \
+         technique; right: |technique − PCF| (inferno on a square-root scale; colour bar from \
+         0 at the bottom to 1 at the top, ticks at 0.01, 0.04, 0.25). A technique lighter than \
+         PCF inside a shadow leaks light; darker on a lit surface is over-darkening, and \
+         speckles there are acne.",
+        super::techniques::eye_resolution(r.plan)
+    ));
+    let mut names: Vec<(String, String)> = Vec::new();
+    for rec in r.recs {
+        if !names.iter().any(|n| n.0 == rec.name) {
+            names.push((rec.name.clone(), format!("recommended for {}", rec.scene)));
+        } else if let Some(n) = names.iter_mut().find(|n| n.0 == rec.name) {
+            n.1.push_str(&format!(", {}", rec.scene));
+        }
+    }
+    for (n, why) in [
+        ("hamburger4", "the paper's b_MSM, Hamburger 4MSM"),
+        ("hausdorff4", "the paper's b_MSM, Hausdorff 4MSM"),
+        ("hamburger6", "the paper's 6MSM"),
+        ("tmsm", "the paper's b_TMSM"),
+        ("pcf", "the reference"),
+        ("vsm", "baseline"),
+        ("evsm", "baseline"),
+        ("esm", "baseline"),
+    ] {
+        match names.iter_mut().find(|x| x.0 == n) {
+            Some(x) => x.1.push_str(&format!("; {why}")),
+            None => names.push((n.to_string(), why.to_string())),
+        }
+    }
+    for (name, why) in names {
+        for f in r.eye.iter().filter(|f| f.technique == name) {
+            d.figure(
+                f.file.clone(),
+                format!(
+                    "{name} ({why}), {}: PCF | {name} | |difference|. {}",
+                    f.view,
+                    eye_look_for(&name)
+                ),
+            );
+        }
+    }
 }
 
 /// What to read from a sub-report's figure, by its file name (every figure of the report is
@@ -369,10 +470,13 @@ pub fn build(r: ReportInputs) -> Result<Document> {
          finest grid, and a curve can rise before it settles (snapping to the grid).",
     );
 
-    d.heading("Shadow pictures (Hamburger 4MSM)");
+    eye_section(&mut d, &r);
+
+    d.heading("Light-view pictures (Hamburger 4MSM)");
     d.paragraph(
-        "Panels, left to right: front depth, layer count, PCF shadow, technique shadow, |error| \
-         heat map.",
+        "Seen from the light. Panels, left to right: front depth (near = bright), layer count, \
+         PCF shadow, technique shadow (lit = white), |error| heat map (inferno, square root). \
+         The front layer is lit by definition; the eye views above show the receivers behind it.",
     );
     for (f, c) in r.pictures {
         d.figure(

@@ -5,6 +5,7 @@ use super::progress::{bar, pct};
 use super::Plan;
 use crate::artefact::{read_json, write_json};
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
+use crate::render::eye;
 use crate::report::pictures;
 use crate::report::recommend::{per_scene, Measured};
 use crate::stack::DepthStack;
@@ -197,19 +198,24 @@ pub fn measured(
     })
 }
 
+/// The `plan.pictures` evenly spaced views of the pictures.
+fn picture_views<'a>(stacks: &'a [DepthStack], plan: &Plan) -> Vec<&'a DepthStack> {
+    stacks
+        .iter()
+        .step_by((stacks.len() / plan.pictures.max(1)).max(1))
+        .take(plan.pictures)
+        .collect()
+}
+
 /// Hamburger 4MSM pictures of `plan.pictures` evenly spaced views into `dir` (kept when they
 /// exist); returns (path relative to the report, caption).
 pub fn pictures(stacks: &[DepthStack], plan: &Plan, dir: &Path) -> Result<Vec<(String, String)>> {
     let h4 = technique::by_name("hamburger4")?;
     let mut files = Vec::new();
-    for st in stacks
-        .iter()
-        .step_by((stacks.len() / plan.pictures.max(1)).max(1))
-    {
+    for st in picture_views(stacks, plan) {
         let name = format!("{}_{}_hamburger4.png", st.meta.scene, st.meta.view);
         let p = dir.join(&name);
         if !p.exists() {
-            std::fs::create_dir_all(dir)?;
             let sh = metrics::front_shadows(st, Subject::Technique(h4.as_ref()), &Bias::default())?;
             pictures::write_png(&p, &pictures::view_picture(st, &sh)?)?;
         }
@@ -217,9 +223,96 @@ pub fn pictures(stacks: &[DepthStack], plan: &Plan, dir: &Path) -> Result<Vec<(S
             format!("pictures/{name}"),
             format!("{} / {}", st.meta.scene, st.meta.view),
         ));
-        if files.len() >= plan.pictures {
-            break;
-        }
     }
     Ok(files)
+}
+
+/// One eye-view picture of the report.
+#[derive(Clone, Debug)]
+pub struct EyeFigure {
+    /// Technique name as evaluated ("pcf", "hamburger4", "lp:z,z^2", …).
+    pub technique: String,
+    /// "scene / view".
+    pub view: String,
+    /// Path relative to the report.
+    pub file: String,
+}
+
+/// Eye-view resolution of the pipeline: [`eye::DEFAULT_RESOLUTION`], or the shadow-map
+/// resolution when that is smaller.
+pub fn eye_resolution(plan: &Plan) -> usize {
+    plan.resolution.min(eye::DEFAULT_RESOLUTION)
+}
+
+/// Eye-view pictures (PCF-shaded | technique-shaded | |difference| with colour bar, each
+/// view's default camera) of the views of [`pictures`] for PCF, every closed form and every LP
+/// candidate (on `lp_grid` points) into `dir` as `<scene>_<view>_<technique>.png` (kept when
+/// they exist). The stacks are the default dataset's.
+pub fn eye_pictures(
+    stacks: &[DepthStack],
+    plan: &Plan,
+    dir: &Path,
+    lp_grid: usize,
+) -> Result<Vec<EyeFigure>> {
+    let scenes = crate::render::embedded_scenes()?;
+    let mut subjects: Vec<(String, Option<Box<dyn Technique>>)> = vec![("pcf".into(), None)];
+    for name in closed_forms() {
+        subjects.push((name.into(), Some(technique::by_name(name)?)));
+    }
+    for &(spec, _) in LP_CANDIDATES {
+        let list = spec.strip_prefix("lp:").unwrap_or(spec);
+        subjects.push((
+            spec.into(),
+            Some(Box::new(LpCandidate::from_spec_on(list, lp_grid)?)),
+        ));
+    }
+    let bias = Bias::default();
+    let views = picture_views(stacks, plan);
+    let b = bar((views.len() * subjects.len()) as u64, "eye-view pictures");
+    let mut out = Vec::new();
+    for st in views {
+        let Some((sc, light)) = eye::light_of(&scenes, st)? else {
+            continue;
+        };
+        let mut cmp = None;
+        for (name, t) in &subjects {
+            let stem = if name.starts_with("lp:") {
+                format!("{name} n{lp_grid}")
+            } else {
+                name.clone()
+            };
+            let file = format!(
+                "{}_{}_{}",
+                st.meta.scene,
+                st.meta.view,
+                artefact_name(&stem, "eye").replace(".json", ".png")
+            );
+            let p = dir.join(&file);
+            if !p.exists() {
+                if cmp.is_none() {
+                    cmp = Some(eye::EyeComparison::new(
+                        sc,
+                        light,
+                        st,
+                        &bias,
+                        eye_resolution(plan),
+                    )?);
+                }
+                let c = cmp.as_ref().expect("set above");
+                let subject = match t {
+                    Some(t) => Subject::Technique(t.as_ref()),
+                    None => Subject::Pcf,
+                };
+                pictures::write_png(&p, &pictures::eye_comparison(c, st, subject, &bias)?)?;
+            }
+            b.inc(1);
+            out.push(EyeFigure {
+                technique: name.clone(),
+                view: format!("{} / {}", st.meta.scene, st.meta.view),
+                file: format!("eye/{file}"),
+            });
+        }
+    }
+    b.finish();
+    Ok(out)
 }

@@ -6,7 +6,7 @@
 //! texel centre along its receiver plane) blended with the same bilinear weights.
 
 use super::scene::{dot, norm, scale, sub};
-use super::{light_bvh, LightFrame, Tri, V3};
+use super::{light_bvh, Light, LightFrame, Scene, Tri, V3};
 use crate::kernel::{self, Gaussian};
 use crate::metrics::{self, Bias, FrontMap, Subject};
 use crate::stack::DepthStack;
@@ -31,11 +31,62 @@ pub fn default_camera(light_dir: V3) -> V3 {
     [-hz * el.cos(), -el.sin(), hx * el.cos()]
 }
 
-/// A camera direction from azimuth/elevation in degrees (the scene file's convention for
-/// lights: the direction the camera looks along).
-pub fn camera_from_angles(azimuth_deg: f64, elevation_deg: f64) -> V3 {
-    let (az, el) = (azimuth_deg.to_radians(), elevation_deg.to_radians());
-    [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
+/// Eye-view resolution (pixels per side) of `evaluate --out` and the reproduce pipeline: a
+/// 256² picture costs one ray cast and one shadow lookup per pixel per technique, a small
+/// fraction of evaluating a 512² light view.
+pub const DEFAULT_RESOLUTION: usize = 256;
+
+/// The camera of a view: the scene file's `camera` of the light, else [`default_camera`].
+pub fn camera_of(light: &Light) -> V3 {
+    light.camera.unwrap_or_else(|| default_camera(light.dir))
+}
+
+/// The light of `scenes` that `stack` was rendered from: same scene and view names, and the
+/// light frame [`LightFrame::fit`] gives for the scene's triangles at the stack's resolution
+/// equals the stack's (so the eye view's geometry is the shadow map's). `Ok(None)` when no
+/// scene has that name; an error when the names match but the frame does not.
+pub fn light_of<'a>(scenes: &'a [Scene], stack: &DepthStack) -> Result<Option<(&'a Scene, usize)>> {
+    let m = &stack.meta;
+    let Some(sc) = scenes.iter().find(|s| s.name == m.scene) else {
+        return Ok(None);
+    };
+    let Some(i) = sc.lights.iter().position(|l| l.name == m.view) else {
+        bail!(
+            "stack {}/{}: scene '{}' has no light '{}' (lights: {})",
+            m.scene,
+            m.view,
+            sc.name,
+            m.view,
+            sc.lights
+                .iter()
+                .map(|l| l.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    };
+    let f = LightFrame::fit(&sc.triangles, sc.lights[i].dir, m.width);
+    let scale = (m.far - m.near)
+        .abs()
+        .max(m.texel_size * m.width as f64)
+        .max(1e-300);
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * scale;
+    let same = m.width == m.height
+        && close(f.near, m.near)
+        && close(f.far, m.far)
+        && close(f.uv_origin[0], m.uv_origin[0])
+        && close(f.uv_origin[1], m.uv_origin[1])
+        && close(f.texel * m.width as f64, m.texel_size * m.width as f64)
+        && (0..3).all(|k| (f.dir[k] - m.light_dir[k]).abs() <= 1e-6);
+    if !same {
+        bail!(
+            "stack {}/{} was not rendered from scene '{}' as loaded (its light frame differs): \
+             render the stacks from these scene files or pass the matching --scenes",
+            m.scene,
+            m.view,
+            sc.name
+        );
+    }
+    Ok(Some((sc, i)))
 }
 
 /// The surface point seen through one pixel: world position and unit normal facing the camera.
@@ -221,6 +272,46 @@ pub fn shadows(
         .flatten()
         .collect();
     Ok(out)
+}
+
+/// One view seen by its eye camera: the visible points and their PCF shadow, shared by the
+/// pictures of every technique of that view.
+pub struct EyeComparison {
+    pub view: EyeView,
+    pub light_dir: V3,
+    pub pcf: Vec<f64>,
+}
+
+impl EyeComparison {
+    /// The eye view of light `light` of `scene` (camera [`camera_of`]) at `resolution`² and
+    /// its PCF shadows from `stack` (that light's view).
+    pub fn new(
+        scene: &Scene,
+        light: usize,
+        stack: &DepthStack,
+        bias: &Bias,
+        resolution: usize,
+    ) -> Result<EyeComparison> {
+        let view = eye_view(
+            &scene.triangles,
+            camera_of(&scene.lights[light]),
+            resolution,
+        )?;
+        let pcf = shadows(&view, stack, Subject::Pcf, bias)?;
+        Ok(EyeComparison {
+            view,
+            light_dir: stack.meta.light_dir,
+            pcf,
+        })
+    }
+
+    /// The shadows of `subject` in this view (PCF's are already computed).
+    pub fn subject(&self, stack: &DepthStack, subject: Subject, bias: &Bias) -> Result<Vec<f64>> {
+        match subject {
+            Subject::Pcf => Ok(self.pcf.clone()),
+            s => shadows(&self.view, stack, s, bias),
+        }
+    }
 }
 
 /// Lambert shading under the light with a shadow: 0.15 + 0.85·max(0, n·(−l))·(1 − shadow).

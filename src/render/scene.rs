@@ -22,6 +22,9 @@ pub struct Light {
     pub name: String,
     /// Unit direction the light travels (world space).
     pub dir: V3,
+    /// Viewing direction (unit) of this view's eye-view camera from the scene file; `None`:
+    /// [`crate::render::eye::default_camera`] of `dir`.
+    pub camera: Option<V3>,
 }
 
 /// A scene ready to render: world-space triangles and its lights.
@@ -53,6 +56,7 @@ impl Scene {
                 Ok(Light {
                     name,
                     dir: scale(d, 1.0 / n),
+                    camera: None,
                 })
             })
             .collect::<Result<Vec<_>>>()?;
@@ -188,7 +192,20 @@ impl Scene {
         if tris.is_empty() {
             bail!("scene '{}' has no triangles", desc.name);
         }
-        Scene::new(&desc.name, tris, lights)
+        let cameras = desc
+            .lights
+            .iter()
+            .zip(&lights)
+            .map(|(l, (name, _))| match &l.camera {
+                Some(c) => c.direction(name).map(Some),
+                None => Ok(None),
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let mut scene = Scene::new(&desc.name, tris, lights)?;
+        for (l, c) in scene.lights.iter_mut().zip(cameras) {
+            l.camera = c.map(|d| scale(d, 1.0 / norm(d)));
+        }
+        Ok(scene)
     }
 }
 
@@ -217,7 +234,8 @@ pub struct MeshSidecar {
 pub const MIN_ELEVATION_DEG: f64 = 1.0;
 
 /// A light as written in a scene file: `dir` (direction of travel) or `azimuth_deg` +
-/// `elevation_deg` (where it comes from). On the command line: `AZ,EL` or `X,Y,Z`.
+/// `elevation_deg` (where it comes from), and optionally the `camera` of its eye view. On the
+/// command line: `AZ,EL` or `X,Y,Z`.
 #[derive(Deserialize, Clone, Debug, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
@@ -225,48 +243,84 @@ pub struct LightDesc {
     pub dir: Option<V3>,
     pub azimuth_deg: Option<f64>,
     pub elevation_deg: Option<f64>,
+    pub camera: Option<CameraDesc>,
+}
+
+/// The eye-view camera of a view as written in a scene file (orthographic, fitted to the
+/// scene): `dir` (the direction it looks along) or `azimuth_deg` + `elevation_deg` (where it
+/// looks from), with the lights' conventions and limits.
+#[derive(Deserialize, Clone, Debug, Default, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraDesc {
+    pub dir: Option<V3>,
+    pub azimuth_deg: Option<f64>,
+    pub elevation_deg: Option<f64>,
+}
+
+impl CameraDesc {
+    /// The (unnormalized) viewing direction, checked to look down onto the receivers
+    /// (elevation in [[`MIN_ELEVATION_DEG`], 90°]).
+    pub fn direction(&self, light: &str) -> Result<V3> {
+        downward(
+            &format!("light '{light}': camera"),
+            ("looks", "the camera looks along"),
+            (self.dir, self.azimuth_deg, self.elevation_deg),
+        )
+    }
 }
 
 impl LightDesc {
     /// The (unnormalized) direction of travel, checked to point down onto the ground: the
     /// elevation asin(−d_y/|d|) must be in [`MIN_ELEVATION_DEG`], 90°].
     pub fn direction(&self, name: &str) -> Result<V3> {
-        let d = match (self.dir, self.azimuth_deg, self.elevation_deg) {
-            (Some(d), None, None) => d,
-            (None, Some(az), Some(el)) => {
-                if !((MIN_ELEVATION_DEG..=90.0).contains(&el) && az.is_finite()) {
-                    bail!(
-                        "light '{name}': elevation_deg {el} outside [{MIN_ELEVATION_DEG}, 90] \
-                         (a light must shine down onto the receivers)"
-                    );
-                }
-                let (az, el) = (az.to_radians(), el.to_radians());
-                [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
-            }
-            _ => bail!(
-                "light '{name}': give either \"dir\" or both \"azimuth_deg\" and \
-                 \"elevation_deg\""
-            ),
-        };
-        let n = norm(d);
-        if !(n.is_finite() && n > 0.0) {
-            bail!("light '{name}': direction {d:?} is zero or not finite");
-        }
-        let el = (-d[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
-        if el < MIN_ELEVATION_DEG {
-            let how = if d[1] > 0.0 {
-                "travels upward"
-            } else {
-                "is (nearly) horizontal"
-            };
-            bail!(
-                "light '{name}': dir {d:?} {how} (elevation {el:.2}°); dir is the direction the \
-                 light travels and must point down onto the receivers (y < 0, elevation ≥ \
-                 {MIN_ELEVATION_DEG}°)"
-            );
-        }
-        Ok(d)
+        downward(
+            &format!("light '{name}'"),
+            ("travels", "the light travels"),
+            (self.dir, self.azimuth_deg, self.elevation_deg),
+        )
     }
+}
+
+/// A direction given as `dir` or as azimuth + elevation in degrees (where it comes from:
+/// d = (−cos el·cos az, −sin el, −cos el·sin az)), checked to point down: elevation
+/// asin(−d_y/|d|) in [[`MIN_ELEVATION_DEG`], 90°]. `what` names it in errors, `verb` and
+/// `along` say what moves along it.
+fn downward(
+    what: &str,
+    (verb, along): (&str, &str),
+    given: (Option<V3>, Option<f64>, Option<f64>),
+) -> Result<V3> {
+    let d = match given {
+        (Some(d), None, None) => d,
+        (None, Some(az), Some(el)) => {
+            if !((MIN_ELEVATION_DEG..=90.0).contains(&el) && az.is_finite()) {
+                bail!(
+                    "{what}: elevation_deg {el} outside [{MIN_ELEVATION_DEG}, 90] (it must look \
+                     down onto the receivers)"
+                );
+            }
+            let (az, el) = (az.to_radians(), el.to_radians());
+            [-el.cos() * az.cos(), -el.sin(), -el.cos() * az.sin()]
+        }
+        _ => bail!("{what}: give either \"dir\" or both \"azimuth_deg\" and \"elevation_deg\""),
+    };
+    let n = norm(d);
+    if !(n.is_finite() && n > 0.0) {
+        bail!("{what}: direction {d:?} is zero or not finite");
+    }
+    let el = (-d[1] / n).clamp(-1.0, 1.0).asin().to_degrees();
+    if el < MIN_ELEVATION_DEG {
+        let how = if d[1] > 0.0 {
+            format!("{verb} upward")
+        } else {
+            "is (nearly) horizontal".to_string()
+        };
+        bail!(
+            "{what}: dir {d:?} {how} (elevation {el:.2}°); dir is the direction {along} and must \
+             point down onto the receivers (y < 0, elevation ≥ {MIN_ELEVATION_DEG}°)"
+        );
+    }
+    Ok(d)
 }
 
 impl std::str::FromStr for LightDesc {

@@ -1,17 +1,19 @@
-//! Per-view PNG pictures: where does a technique leak light?
+//! PNG pictures of shadows, all in one colour convention:
 //!
-//! One image per view with five panels of the shadow-map resolution side by side (no labels),
-//! separated by 4-pixel mid-grey gaps, always in this order:
+//! * **depth**: grey = 1 − z (near = bright, far = dark) — [`depth_colour`];
+//! * **layer count**: viridis over 1..=8 surfaces (dark purple = 1, yellow ≥ 8) — [`layers_colour`];
+//! * **shadow**: grey = 1 − shadow (lit = white, fully shadowed = black) — [`shadow_colour`];
+//!   eye views shade it: grey = 0.15 + 0.85·(n·l)⁺·(1 − shadow);
+//! * **|error|** = |G − PCF|: inferno on a square-root scale (black = 0, purple ≈ 0.04,
+//!   orange ≈ 0.5, pale yellow = 1) — [`error_colour`], with a colour bar where there is room;
+//! * no surface: dark blue-grey [`BACKGROUND`]; non-finite G: magenta [`INVALID`].
 //!
-//! 1. **front depth**: grey = 1 − z0 (near = bright);
-//! 2. **layer count**: surfaces per texel, viridis over 1..=8 (dark purple = 1, yellow ≥ 8);
-//! 3. **PCF shadow** of the front-layer fragment: grey = 1 − PCF (lit = white, shadow = black);
-//! 4. **technique shadow** of the front-layer fragment: grey = 1 − G (same scale);
-//! 5. **|error|** = |G − PCF| through the inferno colour map on a square-root scale
-//!    (black = 0, purple ≈ 0.04, orange ≈ 0.5, pale yellow = 1), so small leaks are visible.
-//!
-//! Texels without any surface are drawn in a dark blue-grey (`BACKGROUND`) in every panel;
-//! a non-finite G is drawn magenta in panels 4 and 5.
+//! Light-view picture of one view ([`view_picture`]): five panels of the shadow-map resolution
+//! side by side (no labels), separated by 4-pixel mid-grey gaps: front depth | layer count |
+//! PCF shadow of the front-layer fragment | technique shadow | |error|. The front layer is lit
+//! by definition; the shadows fall on the layers behind it ([`layer_picture`]) and are seen in
+//! the eye view ([`eye_picture`]). `render --preview` draws the first two panels
+//! ([`preview_picture`]).
 
 use crate::metrics::FrontShadows;
 use crate::stack::DepthStack;
@@ -117,6 +119,114 @@ fn grey(v: f64) -> [u8; 3] {
     [g, g, g]
 }
 
+/// Depth z ∈ [0,1]: grey 1 − z (near = bright); non-finite (no surface) = [`BACKGROUND`].
+pub fn depth_colour(z: f64) -> [u8; 3] {
+    if z.is_finite() {
+        grey(1.0 - z)
+    } else {
+        BACKGROUND
+    }
+}
+
+/// Surfaces along a texel's ray: viridis over 1..=8 (0 = [`BACKGROUND`]).
+pub fn layers_colour(n: usize) -> [u8; 3] {
+    if n == 0 {
+        BACKGROUND
+    } else {
+        viridis((n as f64 - 1.0) / 7.0)
+    }
+}
+
+/// Shadow intensity s (1 = fully shadowed): grey 1 − s (lit = white).
+pub fn shadow_colour(s: f64) -> [u8; 3] {
+    grey(1.0 - s)
+}
+
+/// |G − PCF| through inferno on a square-root scale.
+pub fn error_colour(e: f64) -> [u8; 3] {
+    inferno(e.abs().sqrt())
+}
+
+/// Width of the colour bar right of a |error| heat map, pixels.
+pub const BAR_PX: usize = 16;
+/// Values of |G − PCF| marked on the colour bar (white ticks): 0, 0.01, 0.04, 0.25, 1.
+pub const BAR_TICKS: [f64; 5] = [0.0, 0.01, 0.04, 0.25, 1.0];
+
+/// The |error| colour bar in columns x0..x0 + [`BAR_PX`] of `img` (bottom = 0, top = 1, white
+/// ticks at [`BAR_TICKS`]).
+fn colour_bar(img: &mut RgbImage, x0: usize) {
+    let n = img.height;
+    for y in 0..n {
+        let v = 1.0 - y as f64 / (n.max(2) - 1) as f64;
+        for x in 0..BAR_PX {
+            img.set(x0 + x, y, error_colour(v));
+        }
+    }
+    for t in BAR_TICKS {
+        let y = ((1.0 - t.sqrt()) * (n.max(2) - 1) as f64).round() as usize;
+        for x in 0..BAR_PX / 2 {
+            img.set(x0 + x, y.min(n - 1), [255, 255, 255]);
+        }
+    }
+}
+
+/// `render --preview`: front depth | layer count (panels 1 and 2 of [`view_picture`]).
+pub fn preview_picture(stack: &DepthStack) -> RgbImage {
+    let (w, h) = (stack.meta.width, stack.meta.height);
+    let mut img = RgbImage::new(2 * w + GAP_PX, h, GAP);
+    for y in 0..h {
+        for x in 0..w {
+            let t = y * w + x;
+            let z0 = stack.depth.first().map_or(f32::INFINITY, |l| l[t]);
+            let layers = stack.depth.iter().filter(|l| l[t].is_finite()).count();
+            img.set(x, y, depth_colour(z0 as f64));
+            img.set(w + GAP_PX + x, y, layers_colour(layers));
+        }
+    }
+    img
+}
+
+/// Where the shadows cast onto layer `layer` fall, in the light view: depth of that layer |
+/// PCF shadow | technique shadow | |error| with its colour bar (`shadows` from
+/// [`crate::metrics::layer_shadows`]); texels with fewer surfaces are [`BACKGROUND`].
+pub fn layer_picture(stack: &DepthStack, layer: usize, shadows: &FrontShadows) -> Result<RgbImage> {
+    let (w, h) = (stack.meta.width, stack.meta.height);
+    let n = w * h;
+    if shadows.pcf.len() != n || shadows.g.len() != n || layer >= stack.depth.len() {
+        bail!(
+            "pictures: {}/{} layer {layer}: {} / {} shadow values for {} layers, expected {n}",
+            stack.meta.scene,
+            stack.meta.view,
+            shadows.pcf.len(),
+            shadows.g.len(),
+            stack.depth.len()
+        );
+    }
+    let mut img = RgbImage::new(4 * w + 4 * GAP_PX + BAR_PX, h, GAP);
+    for y in 0..h {
+        for x in 0..w {
+            let t = y * w + x;
+            let z = stack.depth[layer][t];
+            let cols = if !z.is_finite() {
+                [BACKGROUND; 4]
+            } else {
+                let (pcf, g) = (shadows.pcf[t], shadows.g[t]);
+                let (tech, err) = if g.is_finite() {
+                    (shadow_colour(g), error_colour(g - pcf))
+                } else {
+                    (INVALID, INVALID)
+                };
+                [depth_colour(z as f64), shadow_colour(pcf), tech, err]
+            };
+            for (p, c) in cols.iter().enumerate() {
+                img.set(p * (w + GAP_PX) + x, y, *c);
+            }
+        }
+    }
+    colour_bar(&mut img, 4 * (w + GAP_PX));
+    Ok(img)
+}
+
 /// The five-panel picture of one view (see the module doc for the panel order and colours).
 /// `shadows` holds the front-layer PCF and technique values ([`crate::metrics::front_shadows`]).
 pub fn view_picture(stack: &DepthStack, shadows: &FrontShadows) -> Result<RgbImage> {
@@ -143,14 +253,14 @@ pub fn view_picture(stack: &DepthStack, shadows: &FrontShadows) -> Result<RgbIma
                 let pcf = shadows.pcf[t];
                 let g = shadows.g[t];
                 let (tech, err) = if g.is_finite() {
-                    (grey(1.0 - g), inferno((g - pcf).abs().sqrt()))
+                    (shadow_colour(g), error_colour(g - pcf))
                 } else {
                     (INVALID, INVALID)
                 };
                 [
-                    grey(1.0 - z0 as f64),
-                    viridis((layers as f64 - 1.0) / 7.0),
-                    grey(1.0 - pcf),
+                    depth_colour(z0 as f64),
+                    layers_colour(layers),
+                    shadow_colour(pcf),
                     tech,
                     err,
                 ]
@@ -188,11 +298,6 @@ pub fn write_png_to(out: &crate::artefact::OutDir, name: &str, img: &RgbImage) -
     Ok(())
 }
 
-/// Width of the colour bar right of the eye-view heat map, pixels.
-pub const BAR_PX: usize = 16;
-/// Values of |G − PCF| marked on the colour bar (white ticks): 0, 0.01, 0.04, 0.25, 1.
-pub const BAR_TICKS: [f64; 5] = [0.0, 0.01, 0.04, 0.25, 1.0];
-
 /// The eye-view comparison of one view: PCF-shaded image | technique-shaded image | |G − PCF|
 /// heat map (inferno on a square-root scale, as panel 5 of [`view_picture`]) with its colour
 /// bar (bottom = 0, top = 1, ticks at [`BAR_TICKS`]). Grey = 0.15 + 0.85·(n·l)⁺·(1 − shadow);
@@ -224,7 +329,7 @@ pub fn eye_picture(
                         [
                             a,
                             grey(crate::render::eye::shade(p, light_dir, g[i])),
-                            inferno((g[i] - pcf[i]).abs().sqrt()),
+                            error_colour(g[i] - pcf[i]),
                         ]
                     } else {
                         [a, INVALID, INVALID]
@@ -236,20 +341,20 @@ pub fn eye_picture(
             }
         }
     }
-    let x0 = 3 * (n + GAP_PX);
-    for y in 0..n {
-        let v = 1.0 - y as f64 / (n.max(2) - 1) as f64;
-        for x in 0..BAR_PX {
-            img.set(x0 + x, y, inferno(v.sqrt()));
-        }
-    }
-    for t in BAR_TICKS {
-        let y = ((1.0 - t.sqrt()) * (n.max(2) - 1) as f64).round() as usize;
-        for x in 0..BAR_PX / 2 {
-            img.set(x0 + x, y.min(n - 1), [255, 255, 255]);
-        }
-    }
+    colour_bar(&mut img, 3 * (n + GAP_PX));
     Ok(img)
+}
+
+/// The eye-view picture of `subject` in `cmp` ([`eye_picture`]; for PCF itself the heat map
+/// is 0).
+pub fn eye_comparison(
+    cmp: &crate::render::eye::EyeComparison,
+    stack: &DepthStack,
+    subject: crate::metrics::Subject,
+    bias: &crate::metrics::Bias,
+) -> Result<RgbImage> {
+    let g = cmp.subject(stack, subject, bias)?;
+    eye_picture(&cmp.view, cmp.light_dir, &cmp.pcf, &g)
 }
 
 #[cfg(test)]
