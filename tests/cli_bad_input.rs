@@ -862,6 +862,25 @@ fn stacks_are_checked_for_meaning_and_never_rewritten_in_place() {
     assert!(!s.path("o1").exists());
 }
 
+/// A small exhaustive synthetic sweep (m = 1, 64 grid points) into the results folder `results`.
+fn tiny_sweep(results: &str) -> Vec<String> {
+    args(&[
+        "search",
+        "--synthetic",
+        "40",
+        "--m",
+        "1",
+        "--exhaustive",
+        "--grid",
+        "64",
+        "--no-closed-forms",
+        "--fig3-points",
+        "8",
+        "--results",
+        results,
+    ])
+}
+
 /// Every writing subcommand, pointed at a folder that holds a file it would write: refused
 /// (one line, exit 1) before its work, the file untouched, nothing else written there.
 #[test]
@@ -937,7 +956,47 @@ fn writing_commands_refuse_existing_files_without_force() {
             "stability/heatmap_u16.svg",
             args(&["stability", "--samples", "5", "--out", &s.p("stability")]),
         ),
+        // The sweep's report: a chart, and the Markdown of `--report-only` on finished rows.
+        (
+            "sweep-report/fig4_m1.svg",
+            [
+                tiny_sweep(&s.p("sweep")),
+                args(&["--out", &s.p("sweep-report")]),
+            ]
+            .concat(),
+        ),
+        (
+            "report-only/search_m1.md",
+            [
+                tiny_sweep(&s.p("finished")),
+                args(&["--report-only", "--out", &s.p("report-only")]),
+            ]
+            .concat(),
+        ),
+        (
+            "reproduce/r/index.html",
+            args(&[
+                "reproduce",
+                "--tiny",
+                "--run",
+                "r",
+                "--out",
+                &s.p("reproduce"),
+                "--results",
+                &s.p("reproduce-data"),
+            ]),
+        ),
     ];
+    // Finished rows for `--report-only`.
+    let (code, _, err) = run(
+        &[tiny_sweep(&s.p("finished")), args(&["--no-report"])]
+            .concat()
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+        None,
+    );
+    assert_eq!(code, 0, "{err}");
     for (file, a) in &cases {
         s.write(file, "precious\n");
         let dir = s.path(file).parent().unwrap().to_path_buf();
@@ -964,6 +1023,19 @@ fn writing_commands_refuse_existing_files_without_force() {
         momentlab::stack::load_dir(&s.path("linked")).unwrap().len(),
         4
     );
+    // The sweep never created its results folder; with --force its report replaces the chart.
+    assert!(!s.path("sweep").exists());
+    let mut forced = [
+        tiny_sweep(&s.p("sweep")),
+        args(&["--out", &s.p("sweep-report")]),
+    ]
+    .concat();
+    forced.push("--force".into());
+    let (code, _, err) = run(&forced.iter().map(String::as_str).collect::<Vec<_>>(), None);
+    assert_eq!(code, 0, "{err}");
+    let svg = std::fs::read_to_string(s.path("sweep-report/fig4_m1.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.contains("Candidate errors, m = 1"));
+    assert!(s.path("sweep-report/search_m1.md").exists());
     // --force replaces a stale file.
     let (code, _, err) = run(
         &[

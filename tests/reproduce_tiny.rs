@@ -42,15 +42,33 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     // The default places (relative to the working directory), spelled out for the first run.
     let reports = root.join("results/reports");
     let results = root.join("results");
-    let out = Command::new(bin())
-        .args(["reproduce", "--tiny", "--run", "t"])
-        .arg("--out")
-        .arg(&reports)
-        .arg("--results")
-        .arg(&results)
-        .env("CI", "1")
-        .output()
+    let reproduce = || {
+        let mut c = Command::new(bin());
+        c.args(["reproduce", "--tiny", "--run", "t"])
+            .arg("--out")
+            .arg(&reports)
+            .arg("--results")
+            .arg(&results)
+            .env("CI", "1");
+        c
+    };
+    // A run killed once it has marked its folder: the same command resumes it (its own
+    // unfinished run), without --force.
+    let mut killed = reproduce()
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
         .unwrap();
+    let mark = reports.join("t/.momentlab-run.json");
+    while !mark.exists() && killed.try_wait().unwrap().is_none() {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    killed.kill().ok();
+    assert!(
+        !killed.wait().unwrap().success(),
+        "the first run was not interrupted"
+    );
+    let out = reproduce().output().unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "reproduce failed:\n{stderr}");
     let run = reports.join("t");
@@ -140,23 +158,32 @@ fn tiny_reproduce_writes_a_complete_consistent_report() {
     assert!((err - e2).abs() < 1e-12, "reproduce {err} vs evaluate {e2}");
     assert!(html.contains(&format!("{:.3} %", 100.0 * err)));
 
-    // Resumable: a second run, with the default folders, reuses every artefact and gives the
-    // same numbers; by default nothing goes to the tracked reports/ folder.
+    // The finished run is not resumed: the same run again, with the default folders, is refused
+    // before any work (one line naming a file, --force to replace) and changes nothing; by
+    // default nothing goes to the tracked reports/ folder.
+    assert!(
+        !run.join(".momentlab-run.json").exists(),
+        "finished run still marked"
+    );
+    let index = std::fs::read(run.join("index.html")).unwrap();
     let again = Command::new(bin())
         .args(["reproduce", "--tiny", "--run", "t"])
         .current_dir(&root)
         .env("CI", "1")
         .output()
         .unwrap();
+    let err = String::from_utf8_lossy(&again.stderr);
+    assert_eq!(again.status.code(), Some(1), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
-        again.status.success(),
-        "{}",
-        String::from_utf8_lossy(&again.stderr)
+        err.contains("exists already") && err.contains("--force"),
+        "{err}"
     );
     assert!(
         !root.join("reports").exists(),
         "reproduce wrote to reports/"
     );
+    assert_eq!(std::fs::read(run.join("index.html")).unwrap(), index);
     let h4b = std::fs::read_to_string(run.join("evaluate/hamburger4_f64.json")).unwrap();
     assert_eq!(serde_json::from_str::<serde_json::Value>(&h4b).unwrap(), h4);
     std::fs::remove_dir_all(&root).ok();

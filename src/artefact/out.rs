@@ -249,6 +249,54 @@ impl OutDir {
         Ok(path)
     }
 
+    /// Remove output `name` if it exists (a file of this run, such as a marker); a link is
+    /// removed, never followed.
+    pub fn remove(&self, name: &str) -> Result<()> {
+        let rel = check_name(name)?;
+        self.check_parents(&rel)?;
+        let path = self.root.join(&rel);
+        match fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+                Err(e).with_context(|| format!("removing {}", path.display()))
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// The first file (or link) under the folder in name order, skipping the lock and `skip`;
+    /// None when the folder is missing or holds no file. For commands that write many files into
+    /// one folder and refuse a folder holding outputs already.
+    pub fn first_file(&self, skip: &[&str]) -> Result<Option<PathBuf>> {
+        fn walk(d: &Path, skip: &[&str], top: bool) -> Result<Option<PathBuf>> {
+            let mut entries: Vec<_> = match fs::read_dir(d) {
+                Ok(rd) => rd
+                    .collect::<std::io::Result<Vec<_>>>()
+                    .with_context(|| format!("reading {}", d.display()))?,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+                Err(e) => return Err(e).with_context(|| format!("reading {}", d.display())),
+            };
+            entries.sort_by_key(|e| e.file_name());
+            for e in entries {
+                let name = e.file_name();
+                if top && (name == LOCK_FILE || skip.iter().any(|s| name == *s)) {
+                    continue;
+                }
+                let t = e
+                    .file_type()
+                    .with_context(|| format!("reading {}", e.path().display()))?;
+                if t.is_dir() {
+                    if let Some(f) = walk(&e.path(), skip, false)? {
+                        return Ok(Some(f));
+                    }
+                } else {
+                    return Ok(Some(e.path()));
+                }
+            }
+            Ok(None)
+        }
+        walk(&self.root, skip, true)
+    }
+
     /// Take the advisory lock of the folder (created if needed), held until this `OutDir` is
     /// dropped. A second writer — another process, or another `OutDir` on the same folder — gets
     /// a one-line error naming the holder. Idempotent.

@@ -36,8 +36,9 @@ pub struct Args {
     /// Skip the candidate sweep (the slowest step).
     #[arg(long)]
     pub skip_search: bool,
-    /// Start over: delete the run's previous artefacts and compute every step again (without
-    /// it, steps whose artefacts exist are read back).
+    /// Replace the run's outputs: delete its previous artefacts and compute every step again.
+    /// Without it a folder holding outputs is refused, except the run's own unfinished run,
+    /// which resumes (steps whose artefacts exist are read back).
     #[arg(long, alias = "fresh")]
     pub force: bool,
     /// Print {"report", "seconds", "recommendations"} as JSON on stdout at the end.

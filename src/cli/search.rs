@@ -4,9 +4,11 @@ use super::common::{fraction, resolution, stacks_or_default, usize_in, MAX_GRID}
 use crate::artefact::OutDir;
 use crate::basis::candidates::MAX_M;
 use crate::metrics::Bias;
-use crate::search::run::{load_table, ranking_lines, report_for, sweep_line};
+use crate::report::sweep::{self as sweep_report, ReportOptions};
+use crate::search::reference::{self, Summary};
+use crate::search::run::{load_table, ranking_lines, references_for, sweep_line};
 use crate::search::{
-    read_rows, report, sweep_dataset, Dataset, FunctionTable, Progress, SamplePlan, SweepOptions,
+    read_rows, sweep_dataset, Dataset, FunctionTable, Progress, SamplePlan, SweepOptions,
     SweepResult,
 };
 use crate::stack::DepthStack;
@@ -120,6 +122,10 @@ pub struct Opts {
     /// Do not write the report.
     #[arg(long)]
     pub no_report: bool,
+    /// Replace existing report files in --out. The rows in --results are never replaced: a
+    /// rerun of the same sweep resumes them (docs/files.md).
+    #[arg(long)]
+    pub force: bool,
     /// Only write the report from existing results (e.g. after `merge`).
     #[arg(long)]
     pub report_only: bool,
@@ -161,7 +167,7 @@ fn parse_shard(s: &str) -> Result<[usize; 2]> {
 
 fn table_of(args: &Opts, grid: &Grid) -> Result<FunctionTable> {
     if args.builtin_catalog {
-        return report::paper_bases(grid);
+        return reference::paper_bases(grid);
     }
     load_table(args.catalog.as_deref(), grid)
 }
@@ -195,18 +201,12 @@ fn load_data(
     Ok((data, name, Some(stacks)))
 }
 
-/// Check the racing flags before any expensive work.
-fn check_race_flags(args: &Opts) -> Result<()> {
-    if !(args.confidence > 0.0 && args.confidence < 1.0) {
-        bail!(
-            "--confidence {}: must be in (0, 1), e.g. 0.99",
-            args.confidence
-        );
-    }
-    if !(args.keep > 0.0 && args.keep <= 1.0) {
-        bail!("--keep {}: must be in (0, 1]", args.keep);
-    }
+/// Check the flags that the sweep's parameters do not cover before any expensive work.
+fn check_flags(args: &Opts) -> Result<()> {
     crate::search::race::Bound::parse(&args.bound).context("--bound")?;
+    if args.report_only && args.no_report {
+        bail!("--report-only and --no-report contradict each other");
+    }
     if let Some(v) = &args.validate {
         if !v.join("results.jsonl").exists() {
             bail!("--validate {}: no results.jsonl there", v.display());
@@ -232,15 +232,16 @@ fn validate(args: &Opts, exhaustive: &std::path::Path) -> Result<()> {
 
 pub fn run(args: Args) -> Result<()> {
     let args = *args.opts;
-    check_race_flags(&args)?;
+    check_flags(&args)?;
     if let Some(ex) = &args.validate {
         return validate(&args, ex);
     }
     let grid = Grid::uniform(args.grid)?;
     let bias = Bias::default();
     let table = table_of(&args, &grid)?;
-    // Before any rendering or sampling: m, the candidate selection, the results folder (a
-    // folder, not in use by another run) and, for --report-only, results that are whole.
+    // Before any rendering or sampling: m, the candidate selection, the sweep's parameters, the
+    // results folder (a folder, not in use by another run), for --report-only results that are
+    // whole, and the report's files (refused if they exist, unless --force).
     crate::basis::candidates::check_m(table.len(), args.m)?;
     crate::search::run::resolve_candidates(
         &table,
@@ -248,11 +249,50 @@ pub fn run(args: Args) -> Result<()> {
         args.candidates.as_deref(),
         args.names.as_deref(),
     )?;
+    let shard = match &args.shard {
+        Some(s) => parse_shard(s)?,
+        None => [0, 1],
+    };
+    let mut opts = SweepOptions {
+        m: args.m,
+        catalog: args.catalog.clone(),
+        grid: args.grid,
+        solver: args.solver.clone(),
+        chunk: args.chunk,
+        bias,
+        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
+        seed: args.seed,
+        dataset: String::new(),
+        top: args.top,
+        exhaustive: args.exhaustive,
+        candidates: args.candidates.clone(),
+        names: args.names.clone(),
+        shard,
+        first_sample: args.first_sample,
+        growth: args.growth,
+        keep: args.keep,
+        confidence: args.confidence,
+        bound: crate::search::race::Bound::parse(&args.bound).context("--bound")?,
+        race_seed: args.race_seed,
+        pilot: args.pilot,
+        batch: args.batch,
+        closed_forms: !args.no_closed_forms,
+    };
+    opts.parameters().check()?;
     let results = args
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
+    let report_dir = args.out.clone().unwrap_or_else(|| results.join("report"));
+    let report = OutDir::new(&report_dir, args.force).context("--out")?;
+    let writes_report = !args.no_report && !args.plan && shard[1] == 1;
+    if writes_report {
+        report
+            .reserve(sweep_report::files(args.m))
+            .context("--out")?;
+    }
     let results_dir = OutDir::new(&results, true).context("--results")?;
+    let mut verified = None;
     if args.report_only {
         let v = crate::search::merge::verify_results(&results, false).context("--report-only")?;
         let [i, n] = v.config.shard;
@@ -263,6 +303,7 @@ pub fn run(args: Args) -> Result<()> {
                 results.display()
             );
         }
+        verified = Some(v.rows);
     } else if !args.plan {
         // Refuse a folder another run is writing before building the dataset; held until
         // the sweep (which takes it again, re-entrantly) is done.
@@ -270,39 +311,12 @@ pub fn run(args: Args) -> Result<()> {
     }
     let t_data = std::time::Instant::now();
     let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
-    let report_dir = args.out.clone().unwrap_or_else(|| results.join("report"));
-    let shard = match &args.shard {
-        Some(s) => parse_shard(s)?,
-        None => [0, 1],
-    };
-    let opts = SweepOptions {
-        m: args.m,
-        catalog: args.catalog.clone(),
-        grid: args.grid,
-        solver: args.solver.clone(),
-        chunk: args.chunk,
-        bias,
-        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
-        seed: args.seed,
-        dataset: data_name,
-        top: args.top,
-        exhaustive: args.exhaustive,
-        candidates: args.candidates.clone(),
-        names: args.names.clone(),
-        shard,
-        first_sample: args.first_sample,
-        growth: args.growth,
-        keep: args.keep,
-        confidence: args.confidence,
-        bound: crate::search::race::Bound::parse(&args.bound)
-            .with_context(|| "--bound".to_string())?,
-        race_seed: args.race_seed,
-        pilot: args.pilot,
-        batch: args.batch,
-        report_dir: (!args.no_report).then(|| report_dir.clone()),
-        closed_forms: !args.no_closed_forms,
+    opts.dataset = data_name;
+    // Read when the report is written: a sweep's `complete.json` exists only at its end.
+    let report_opts = || ReportOptions {
         compare: args.compare.clone(),
         fig3_points: args.fig3_points,
+        ..ReportOptions::of(&opts, &results)
     };
     eprintln!(
         "search: m = {}, {} functions, {} fragments ({} non-trivial, {} kept = {:.2} %; dataset built in {:.1} s), results in {}",
@@ -322,12 +336,10 @@ pub fn run(args: Args) -> Result<()> {
         super::plan::print(&plan, &opts, setup);
         return Ok(());
     }
-    if args.report_only {
-        if args.no_report {
-            bail!("--report-only and --no-report contradict each other");
-        }
-        let rows = crate::search::merge::verify_results(&results, false)?.rows;
-        let (summary, _) = report_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
+    if let Some(rows) = verified {
+        let (summary, refs) =
+            references_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
+        sweep_report::write(&report, &rows, &data, &refs, &report_opts())?;
         print_ranking(&summary, args.json)?;
         eprintln!("report: written to {}", report_dir.display());
         return Ok(());
@@ -354,15 +366,18 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     if let Some(summary) = &r.ranking {
+        if writes_report {
+            sweep_report::write(&report, &r.rows, &data, &r.references, &report_opts())?;
+        }
         print_ranking(summary, args.json)?;
-        if !args.no_report {
+        if writes_report {
             eprintln!("report: written to {}", report_dir.display());
         }
     }
     Ok(())
 }
 
-fn print_ranking(s: &report::Summary, json: bool) -> Result<()> {
+fn print_ranking(s: &Summary, json: bool) -> Result<()> {
     for line in ranking_lines(s) {
         eprintln!("{line}");
     }

@@ -1,5 +1,8 @@
 //! The study as library code: a typed [`Config`] and the steps of a run, each resumable by its
 //! artefacts (a step whose files exist is read back instead of recomputed; `fresh` starts over).
+//! A run marks its report folder as its own ([`IN_PROGRESS`]) until it finishes: a run that
+//! finds its own mark resumes; a folder holding anything else (a finished run, other files) is
+//! refused unless `fresh` (`--force`).
 //!
 //! ```text
 //! 1 stacks      render (or read back) the depth stacks          results/<run>/stacks/
@@ -33,7 +36,7 @@ pub mod theta;
 pub use config::{Config, Plan, Preset};
 
 use crate::report::recommend::Recommendation;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use progress::{pct, Steps};
 use std::path::PathBuf;
 
@@ -67,18 +70,44 @@ pub struct Outcome {
     pub seconds: f64,
 }
 
+/// The mark of an unfinished run in its report folder (removed when the run finishes).
+pub const IN_PROGRESS: &str = ".momentlab-run.json";
+
+/// What [`IN_PROGRESS`] records: a run resumes only a run of the same configuration.
+fn mark(cfg: &Config, plan: &Plan) -> serde_json::Value {
+    serde_json::json!({
+        "run": cfg.run,
+        "configuration": cfg.preset.name(),
+        "resolution": plan.resolution,
+        "tolerance": cfg.tolerance,
+        "skip_search": cfg.skip_search,
+    })
+}
+
 /// Run (or resume) the whole study.
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
     let p = Paths::of(cfg);
     // One run per folder pair: a second `reproduce` of the same run waits for no one, it is
     // refused (both folders are locked until this run ends).
-    let locks = [
-        crate::artefact::OutDir::new(&p.out, true)?,
-        crate::artefact::OutDir::new(&p.data, true)?,
-    ];
+    let out = crate::artefact::OutDir::new(&p.out, true)?;
+    let locks = [out, crate::artefact::OutDir::new(&p.data, true)?];
     for l in &locks {
         l.lock()?;
+    }
+    // Before any work: the report folder is empty, or holds this run's own unfinished run, or
+    // `fresh` replaces what is there. (The data folder only grows: stacks are read back, the
+    // sweeps resume their own rows and refuse rows of another configuration.)
+    let out = &locks[0];
+    let own = crate::artefact::read_json::<serde_json::Value>(&p.out.join(IN_PROGRESS))
+        .is_ok_and(|m| m == mark(cfg, &plan));
+    if !cfg.fresh && !own {
+        if let Some(f) = out.first_file(&[])? {
+            bail!(
+                "{} exists already (pass --force to replace the run's outputs)",
+                f.display()
+            );
+        }
     }
     if cfg.fresh {
         // Empty the folders but keep them (and their locks).
@@ -101,6 +130,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     for d in [&p.out, &p.data] {
         std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
     }
+    out.write_json(IN_PROGRESS, &mark(cfg, &plan))?;
     let mut step = Steps::new(9);
 
     step.start(&format!(
@@ -201,6 +231,8 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
             "provenance": crate::report::provenance::Provenance::current(),
         }),
     )?;
+    // Finished: the folder is no longer an unfinished run to resume.
+    out.remove(IN_PROGRESS)?;
     eprintln!("\nSummary ({seconds:.0} s):");
     for r in &recs {
         eprintln!(

@@ -4,8 +4,10 @@
 
 use super::progress::bar;
 use super::Plan;
+use crate::artefact::OutDir;
+use crate::report::sweep::{self as sweep_report, ReportOptions};
 use crate::search::run::{ranking_lines, sweep_line};
-use crate::search::{sweep_stacks, Progress, SweepOptions};
+use crate::search::{stacks_dataset, sweep_dataset, Progress, SweepOptions};
 use crate::stack::DepthStack;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -38,12 +40,10 @@ pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec
             top: plan.search_top,
             candidates,
             first_sample: plan.search_first_sample,
-            report_dir: Some(dirs.report.to_path_buf()),
-            compare: compare.clone(),
             ..SweepOptions::default()
         };
         let t0 = Instant::now();
-        match sweep(stacks, &opts, &results) {
+        match sweep(stacks, &opts, &results, dirs.report, &compare) {
             Ok(()) => {
                 let scope = match (plan.search_subset, m >= 3) {
                     (Some(k), true) => format!(
@@ -67,8 +67,15 @@ pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec
     Ok(notes)
 }
 
-/// One sweep with a progress bar and its summary lines on stderr.
-fn sweep(stacks: &[DepthStack], opts: &SweepOptions, results: &Path) -> Result<()> {
+/// One sweep with a progress bar and its summary lines on stderr; the report of a complete
+/// sweep (the sweeps `compare` side by side) goes to `report`, replacing the run's own files.
+fn sweep(
+    stacks: &[DepthStack],
+    opts: &SweepOptions,
+    results: &Path,
+    report: &Path,
+    compare: &[PathBuf],
+) -> Result<()> {
     eprintln!(
         "search: m = {}, {} views, results in {}",
         opts.m,
@@ -82,18 +89,23 @@ fn sweep(stacks: &[DepthStack], opts: &SweepOptions, results: &Path) -> Result<(
         }
         Progress::Advance(u) => b.inc(u),
     };
-    let r = sweep_stacks(stacks, opts, results, Some(&progress))?;
+    let (data, table) = stacks_dataset(stacks, opts)?;
+    let r = sweep_dataset(&data, &table, Some(stacks), opts, results, Some(&progress))?;
     b.finish();
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");
     }
     if let Some(s) = &r.ranking {
+        let report_opts = ReportOptions {
+            compare: compare.to_vec(),
+            ..ReportOptions::of(opts, results)
+        };
+        let out = OutDir::new(report, true)?;
+        sweep_report::write(&out, &r.rows, &data, &r.references, &report_opts)?;
         for line in ranking_lines(s) {
             eprintln!("{line}");
         }
-        if let Some(d) = &opts.report_dir {
-            eprintln!("report: written to {}", d.display());
-        }
+        eprintln!("report: written to {}", report.display());
     }
     Ok(())
 }

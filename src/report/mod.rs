@@ -8,3 +8,5 @@ pub mod provenance;
 pub mod readme;
 pub mod recommend;
 pub mod stability;
+pub mod sweep;
+pub mod sweep_charts;

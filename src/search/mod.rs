@@ -13,14 +13,16 @@
 //!   against an exhaustive run.
 //! * [`results`]: the results rows, reading/writing them.
 //! * [`merge`]: combining the results of sharded runs.
-//! * [`report`]: Fig. 3 / Fig. 4 analogues, top-20 table (SVG + Markdown), references.
-//! * [`run`]: the whole sweep on depth stacks ([`sweep_stacks`]) for the CLI and `reproduce`.
+//! * [`reference`]: the paper's bases and the closed forms scored as references, the ranking,
+//!   the Fig. 3 curves (the report's charts and text: `crate::report::sweep`).
+//! * [`run`]: the whole sweep on depth stacks ([`stacks_dataset`], [`sweep_dataset`]) for the
+//!   CLI and `reproduce`.
 
 pub mod dataset;
 pub mod merge;
 pub mod plan;
 pub mod race;
-pub mod report;
+pub mod reference;
 pub mod results;
 pub mod run;
 pub mod score;
@@ -32,9 +34,11 @@ pub mod tieset;
 pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
 pub use merge::merge_dirs;
 pub use results::{read_rows, Row};
-pub use run::{sweep_dataset, sweep_stacks, SweepOptions, SweepResult};
+pub use run::{stacks_dataset, sweep_dataset, SweepOptions, SweepResult};
 pub use score::Scorer;
-pub use sweep::{run_sweep, Hooks, Outcome, Progress, RaceSummary, SweepConfig, SweepSummary};
+pub use sweep::{
+    run_sweep, Hooks, Outcome, Parameters, Progress, RaceSummary, SweepConfig, SweepSummary,
+};
 
 use crate::lp::GridTable;
 use crate::Grid;

@@ -52,7 +52,7 @@ pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64, keep: f64) -> Sc
         }
         lp += (cur + 1) * b.len() as u64;
         stages.push((cur, b.len() as u64));
-        cur = ((keep * cur as f64).ceil() as u64).max(top).min(cur);
+        cur = super::race::cap(keep, cur, top).min(cur);
         run += 1;
     }
     let rest: u64 = if run > 0 {

@@ -206,6 +206,12 @@ pub struct Rule {
     pub top: usize,
 }
 
+/// The budget cap of a stage of `candidates`: at most max(⌈keep·candidates⌉, top) stay (the
+/// one formula of the race, its log and the plan).
+pub fn cap(keep: f64, candidates: u64, top: u64) -> u64 {
+    ((keep * candidates as f64).ceil() as u64).max(top)
+}
+
 /// Lower confidence bound of μ_c − μ_R (in per-fragment error units) under `rule`.
 pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
     if rule.paired {
@@ -231,7 +237,7 @@ pub fn decide(stats: &[StageStats], reference: u64, rule: &Rule) -> Vec<Option<E
         })
         .collect();
     let mut alive: Vec<usize> = (0..stats.len()).filter(|&i| out[i].is_none()).collect();
-    let cap = ((rule.keep * stats.len() as f64).ceil() as usize).max(rule.top);
+    let cap = cap(rule.keep, stats.len() as u64, rule.top as u64) as usize;
     if alive.len() > cap {
         alive.sort_by(|&a, &b| {
             stats[a]

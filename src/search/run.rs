@@ -1,9 +1,10 @@
 //! The library entry points of the whole sweep, shared by `momentlab search` and
-//! `momentlab reproduce`: build the dataset from depth stacks, run (or resume) the sweep, score
-//! the references and write the report.
+//! `momentlab reproduce`: build the dataset from depth stacks, run (or resume) the sweep and score
+//! the references (the report files: `crate::report::sweep`).
 
-use super::report::{self, Reference, ReportOptions, Summary};
+use super::reference::{self, Reference, Summary};
 use super::results::{read_rows, Row};
+use super::sweep::Parameters;
 use super::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Progress, SamplePlan, Scorer};
 use super::{SweepConfig, SweepSummary};
 use crate::basis::candidates as bc;
@@ -53,14 +54,8 @@ pub struct SweepOptions {
     pub race_seed: Option<u64>,
     pub pilot: usize,
     pub batch: usize,
-    /// Write the report here after a complete unsharded run (None: no report files; the
-    /// returned [`Summary`] is computed anyway).
-    pub report_dir: Option<PathBuf>,
     /// Mark the closed forms (metrics::evaluate on every fragment of the stacks).
     pub closed_forms: bool,
-    /// Other results directories for the side-by-side distribution plot.
-    pub compare: Vec<PathBuf>,
-    pub fig3_points: usize,
 }
 
 impl Default for SweepOptions {
@@ -88,10 +83,7 @@ impl Default for SweepOptions {
             race_seed: None,
             pilot: 32,
             batch: 64,
-            report_dir: None,
             closed_forms: true,
-            compare: Vec::new(),
-            fig3_points: 96,
         }
     }
 }
@@ -112,6 +104,21 @@ pub struct SweepResult {
     pub ranking: Option<Summary>,
     /// The reference values.
     pub references: Vec<Reference>,
+}
+
+impl SweepOptions {
+    /// The parameters [`Parameters::check`] validates (before any expensive work).
+    pub fn parameters(&self) -> Parameters {
+        Parameters {
+            shard: self.shard,
+            first_sample: self.first_sample,
+            growth: self.growth,
+            batch: self.batch,
+            top: self.top,
+            keep: self.keep,
+            confidence: self.confidence,
+        }
+    }
 }
 
 /// The catalog (file or embedded) tabulated on `grid`.
@@ -168,17 +175,12 @@ pub fn resolve_candidates(
     Ok(Some(out))
 }
 
-/// The whole sweep on depth stacks: [`Dataset::from_stacks`] (grid, bias, capped stratified
-/// sample), the catalog on the grid, [`run_sweep`] into `results` (resumable), then for a
-/// complete unsharded run the references (LP on the same fragments, closed forms via
-/// `metrics::evaluate` on the stacks), the ranking and, if `opts.report_dir` is set, the report.
-pub fn sweep_stacks(
+/// The sweep's dataset on depth stacks ([`Dataset::from_stacks`]: grid, bias, capped
+/// stratified sample) and the catalog tabulated on its grid.
+pub fn stacks_dataset(
     stacks: &[DepthStack],
     opts: &SweepOptions,
-    results: &Path,
-    progress: Option<&(dyn Fn(Progress) + Sync)>,
-) -> Result<SweepResult> {
-    let t0 = Instant::now();
+) -> Result<(Dataset, FunctionTable)> {
     let grid = Grid::uniform(opts.grid)?;
     let plan = SamplePlan {
         max_fragments: opts.max_fragments,
@@ -186,13 +188,13 @@ pub fn sweep_stacks(
     };
     let data = Dataset::from_stacks(stacks, &grid, &opts.bias, &plan)?;
     let table = load_table(opts.catalog.as_deref(), &grid)?;
-    let mut r = sweep_dataset(&data, &table, Some(stacks), opts, results, progress)?;
-    r.seconds = t0.elapsed().as_secs_f64();
-    Ok(r)
+    Ok((data, table))
 }
 
-/// [`sweep_stacks`] on a prepared dataset and table (synthetic data, custom catalogs);
-/// closed-form references need the `stacks`.
+/// The whole sweep on a prepared dataset and table ([`stacks_dataset`], synthetic data, custom
+/// catalogs): [`run_sweep`] into `results` (resumable), then for a complete unsharded run the
+/// references (LP on the same fragments, closed forms via `metrics::evaluate` on the `stacks`)
+/// and the ranking ([`references_for`]).
 pub fn sweep_dataset(
     data: &Dataset,
     table: &FunctionTable,
@@ -224,7 +226,7 @@ pub fn sweep_dataset(
         references: Vec::new(),
     };
     if out.summary.is_some() && opts.shard[1] == 1 {
-        let (ranking, refs) = report_for(data, table, stacks, &out.rows, opts, results)?;
+        let (ranking, refs) = references_for(data, table, stacks, &out.rows, opts, results)?;
         out.ranking = Some(ranking);
         out.references = refs;
     }
@@ -270,8 +272,9 @@ pub fn plan_dataset(
     super::plan::plan(&cfg, &scorer, calibration)
 }
 
-/// References, ranking and (if `opts.report_dir`) the report files for existing `rows`.
-pub fn report_for(
+/// The references (LP, paired with the winner; closed forms with `opts.closed_forms`) and the
+/// ranking of existing `rows` of the results folder `results`.
+pub fn references_for(
     data: &Dataset,
     table: &FunctionTable,
     stacks: Option<&[DepthStack]>,
@@ -290,37 +293,15 @@ pub fn report_for(
             .collect::<Option<Vec<usize>>>()
     });
     let mut refs = match &winner {
-        Some(cols) => report::lp_references_paired(data, table, cols, &opts.solver, opts.chunk)?,
-        None => report::lp_references(data, &opts.solver, opts.chunk)?,
+        Some(cols) => reference::lp_references_paired(data, table, cols, &opts.solver, opts.chunk)?,
+        None => reference::lp_references(data, &opts.solver, opts.chunk)?,
     };
     if opts.closed_forms {
         if let Some(s) = stacks {
-            refs.extend(report::closed_form_references(s, &opts.bias)?);
+            refs.extend(reference::closed_form_references(s, &opts.bias)?);
         }
     }
-    let summary = match &opts.report_dir {
-        Some(dir) => report::write(
-            &crate::artefact::OutDir::new(dir, true)?,
-            rows,
-            data,
-            &refs,
-            &ReportOptions {
-                solver: opts.solver.clone(),
-                chunk: opts.chunk,
-                compare: opts.compare.clone(),
-                fig3_points: opts.fig3_points,
-                results_label: results.display().to_string(),
-                race: super::results::read_json::<SweepSummary>(
-                    &results.join(super::results::COMPLETE_FILE),
-                )
-                .ok()
-                .and_then(|s| s.race),
-                confidence: opts.confidence,
-                keep: opts.keep,
-            },
-        )?,
-        None => report::summarize(rows, &refs),
-    };
+    let summary = reference::summarize(rows, &refs);
     Ok((summary, refs))
 }
 

@@ -102,7 +102,67 @@ pub struct SweepConfig {
     pub batch: usize,
 }
 
+/// The racing and sharding parameters of a sweep, as given (flags or a configuration).
+#[derive(Clone, Copy, Debug)]
+pub struct Parameters {
+    pub shard: [usize; 2],
+    pub first_sample: usize,
+    pub growth: usize,
+    pub batch: usize,
+    pub top: usize,
+    pub keep: f64,
+    pub confidence: f64,
+}
+
+impl Parameters {
+    /// The one validation of a sweep's parameters: shard i/N with i < N, positive sizes, the
+    /// cap's `keep` in (0, 1], `confidence` in (0, 1). [`run_sweep`] calls it, and
+    /// `momentlab search` before any work.
+    pub fn check(&self) -> Result<()> {
+        let [i, n] = self.shard;
+        if n == 0 || i >= n {
+            bail!("shard {i}/{n}: need 0 ≤ i < N");
+        }
+        for (name, v) in [
+            ("first-sample", self.first_sample),
+            ("growth", self.growth),
+            ("batch", self.batch),
+            ("top", self.top),
+        ] {
+            if v == 0 {
+                bail!("{name} 0: must be at least 1");
+            }
+        }
+        if !(self.keep > 0.0 && self.keep <= 1.0) {
+            bail!(
+                "keep {}: the budget cap per stage must be in (0, 1]",
+                self.keep
+            );
+        }
+        if !(self.confidence > 0.0 && self.confidence < 1.0) {
+            bail!(
+                "confidence {}: must be in (0, 1), e.g. 0.99",
+                self.confidence
+            );
+        }
+        Ok(())
+    }
+}
+
 impl SweepConfig {
+    /// The parameters [`Parameters::check`] validates.
+    pub fn parameters(&self) -> Parameters {
+        Parameters {
+            shard: self.shard,
+            first_sample: self.first_sample,
+            growth: self.growth,
+            batch: self.batch,
+            top: self.top,
+            keep: self.keep,
+            confidence: self.confidence,
+        }
+    }
+
     /// Defaults for a sweep of m-subsets of `scorer`'s table on its dataset.
     pub fn new(m: usize, scorer: &Scorer, dataset: &str) -> SweepConfig {
         SweepConfig {
@@ -377,22 +437,8 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     }
     let nf = cfg.functions.len();
     bc::check_m(nf, cfg.m)?;
+    cfg.parameters().check()?;
     let [shard_i, shard_n] = cfg.shard;
-    if shard_n == 0 || shard_i >= shard_n {
-        bail!("invalid shard {shard_i}/{shard_n}");
-    }
-    if cfg.first_sample == 0 || cfg.growth == 0 || cfg.batch == 0 || cfg.top == 0 {
-        bail!("first_sample, growth, batch and top must be positive");
-    }
-    if !(cfg.keep > 0.0 && cfg.keep <= 1.0) {
-        bail!(
-            "keep (the budget cap per stage) must be in (0, 1], got {}",
-            cfg.keep
-        );
-    }
-    if !(cfg.confidence > 0.0 && cfg.confidence < 1.0) {
-        bail!("confidence must be in (0, 1), got {}", cfg.confidence);
-    }
     let data = scorer.data();
     if data.total_count() == 0 {
         bail!("the dataset has no fragments");
@@ -705,7 +751,7 @@ fn race_all(
             reference,
             delta,
             z: race::normal_quantile(1.0 - delta),
-            cap: ((cfg.keep * cur.len() as f64).ceil() as u64).max(cfg.top as u64),
+            cap: race::cap(cfg.keep, cur.len() as u64, cfg.top as u64),
             confidence_eliminated: conf,
             cap_eliminated: cap,
         });
