@@ -345,3 +345,49 @@ fn eye_view_scenes_must_match_the_stacks() {
         );
     }
 }
+
+#[test]
+fn lp_candidate_eye_view_agrees_with_pcf_away_from_the_penumbra() {
+    // An LP candidate (sharp lower bound on a grid) from the eye: no LP where no window depth
+    // lies below the point (G = 0 exactly), and fully shadowed ground inside the disk.
+    let r = 0.5;
+    let segments = 48;
+    let mut tris: Vec<Tri> = Vec::new();
+    sphere(&mut tris, r, segments);
+    for t in &mut tris {
+        for p in t.iter_mut() {
+            p[1] += 1.5;
+        }
+    }
+    quad(
+        &mut tris,
+        [-2.0, 0.0, -2.0],
+        [-2.0, 0.0, 2.0],
+        [2.0, 0.0, 2.0],
+        [2.0, 0.0, -2.0],
+    );
+    let sc = Scene::new("disk", tris.clone(), vec![("l".into(), [0.0, -1.0, 0.0])]).unwrap();
+    let st = render_view(&sc, 0, 128);
+    let view = eye::eye_view(&tris, eye::default_camera([0.3, -1.0, 0.0]), 96).unwrap();
+    let lp = momentlab::technique::lp_candidate::LpCandidate::from_spec_on("z,z^2,z^3,z^4", 256)
+        .unwrap();
+    let g = eye::shadows(&view, &st, Subject::Technique(&lp), &Bias::default()).unwrap();
+    let band = 5.0 * std::f64::consts::SQRT_2 * st.meta.texel_size;
+    let inner = r * (std::f64::consts::PI / segments as f64).cos();
+    let (mut inside, mut outside) = (0, 0);
+    for (p, s) in view.points.iter().zip(&g) {
+        let Some(p) = p else { continue };
+        if p.world[1].abs() > 1e-6 {
+            continue;
+        }
+        let d = p.world[0].hypot(p.world[2]);
+        if d < inner - band {
+            assert!(*s > 0.9, "ground at {d} inside the shadow: {s}");
+            inside += 1;
+        } else if d > r + band {
+            assert_eq!(*s, 0.0, "ground at {d} outside the shadow");
+            outside += 1;
+        }
+    }
+    assert!(inside > 20 && outside > 500, "{inside} {outside}");
+}

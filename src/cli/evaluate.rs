@@ -190,12 +190,6 @@ pub fn run(args: Args) -> Result<()> {
                 ),
             })
             .collect::<Result<_>>()?,
-        (None, Some(_)) => {
-            eprintln!(
-                "evaluate: no eye-view pictures (they need the scenes of the stacks: pass --scenes)"
-            );
-            vec![None; stacks.len()]
-        }
         _ => vec![None; stacks.len()],
     };
     let plan = PicturePlan {
@@ -213,6 +207,12 @@ pub fn run(args: Args) -> Result<()> {
                 }
             }
             od.reserve(names).context("--out")?;
+            if scenes.is_none() {
+                eprintln!(
+                    "evaluate: no eye-view pictures (they need the scenes of the stacks: pass \
+                     --scenes)"
+                );
+            }
             Some(od)
         }
         None => None,

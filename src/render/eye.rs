@@ -212,7 +212,7 @@ pub fn shadows(
     let (w, h) = (stack.meta.width, stack.meta.height);
     let kern = Gaussian::paper();
     let front = FrontMap::of(stack);
-    let (maps, grid) = match subject {
+    let (maps, grid, min) = match subject {
         Subject::Technique(t) => {
             let grid = t.depth_grid();
             let snapped: Vec<f64> = match grid {
@@ -222,9 +222,12 @@ pub fn shadows(
             let maps = kernel::moment_maps_of(&snapped, w, h, t.moment_count(), &kern, |z, o| {
                 t.basis(z, o)
             });
-            (maps, grid)
+            // Grid techniques (sharp bounds): no window depth below z_f ⇒ G = 0 (as
+            // metrics::evaluate's trivial fragments), so no LP is solved there.
+            let min = grid.map(|_| kernel::min_filter(&snapped, w, h, kern.radius()));
+            (maps, grid, min)
         }
-        Subject::Pcf => (Vec::new(), None),
+        Subject::Pcf => (Vec::new(), None, None),
         Subject::Cdf => bail!("eye view: the cdf subject has no shadow map"),
     };
     let out = view
@@ -244,12 +247,20 @@ pub fn shadows(
                         };
                         match ev.as_mut() {
                             Some(e) => {
-                                for (j, m) in maps.iter().enumerate() {
-                                    buf[j] = bilinear(m, w, h, tx, ty);
-                                }
                                 let mut zf = z - bias.technique_offset(du, dv);
                                 if let Some(g) = grid {
                                     zf = metrics::snap(g, zf);
+                                }
+                                if let Some(min) = &min {
+                                    // the bilinear mix of four windows has no depth below
+                                    // zf iff none of the four has
+                                    let (c, _) = bilinear_taps(w, h, tx, ty);
+                                    if c.iter().all(|&(x, y)| min[y * w + x] >= zf) {
+                                        return 0.0;
+                                    }
+                                }
+                                for (j, m) in maps.iter().enumerate() {
+                                    buf[j] = bilinear(m, w, h, tx, ty);
                                 }
                                 e.shadow(buf, zf)
                             }
