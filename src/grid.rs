@@ -3,6 +3,12 @@
 
 use anyhow::{bail, Result};
 
+/// Number of uniform grid points where a command or candidate does not name its grid.
+pub const DEFAULT_POINTS: usize = 1024;
+
+/// Largest accepted grid (an LP's table holds n·m values per solver instance).
+pub const MAX_POINTS: usize = 1 << 20;
+
 /// A sorted set of at least two distinct, finite depths.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
@@ -69,6 +75,11 @@ impl Grid {
         } else {
             i
         }
+    }
+
+    /// The grid point nearest to z ([`Grid::nearest`]; monotone in z): a depth snapped to I.
+    pub fn snap(&self, z: f64) -> f64 {
+        self.points[self.nearest(z)]
     }
 
     pub fn is_empty(&self) -> bool {

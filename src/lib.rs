@@ -19,6 +19,8 @@
 //! * [`quantize`]: optimal affine quantization transforms θ.
 //! * [`search`]: the candidate sweep (racing, shards, resumable).
 //! * [`shader`]: straight-line f32 shader functions printed as GLSL/HLSL and interpreted in f32.
+//! * [`stability`]: the stress harness — every technique on random and adversarial inputs,
+//!   exact and quantized, against the sharp bound of Algorithm 1.
 //! * [`report`]: plots and HTML/Markdown reports, the stability study's files.
 //! * [`pipeline`]: the whole study (typed configuration, resumable steps) behind
 //!   `momentlab reproduce`.
@@ -40,6 +42,7 @@ pub mod render;
 pub mod report;
 pub mod search;
 pub mod shader;
+pub mod stability;
 pub mod stack;
 pub mod technique;
 pub mod tune;

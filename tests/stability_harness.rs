@@ -1,6 +1,6 @@
 //! The stability harness detects what it claims to detect.
 
-use momentlab::technique::stability::{self, Config, Entry, Mode, Scenario};
+use momentlab::stability::{self, Config, Entry, Mode, Scenario};
 use momentlab::technique::tmsm::{self, Tmsm};
 use momentlab::technique::{Evaluator, Technique};
 

@@ -12,7 +12,7 @@ pub const MAX_RESOLUTION: u64 = 4096;
 /// Smallest shadow-map resolution accepted by any command (a view wider than the 9×9 filter).
 pub const MIN_RESOLUTION: u64 = 16;
 /// Largest LP grid size n accepted by any command (the tables hold n·m values per solver).
-pub const MAX_GRID: u64 = super::lp::MAX_GRID_POINTS as u64;
+pub const MAX_GRID: u64 = crate::grid::MAX_POINTS as u64;
 /// Largest number of random inputs of a speed measurement or stress test.
 pub const MAX_INPUTS: u64 = 10_000_000;
 /// Largest input file read into memory (JSON batches), bytes.

@@ -80,24 +80,21 @@ struct Problem {
     zf: f64,
 }
 
-/// Default number of uniform grid points when "grid" is omitted.
-pub const DEFAULT_GRID_POINTS: usize = 1024;
-
-/// Largest accepted grid (the table holds n·m values per solver instance).
-pub const MAX_GRID_POINTS: usize = 1 << 20;
-
 /// Problems solved by one solver instance (consecutive problems share warm-start state).
 const CHUNK: usize = 64;
 
 fn grid_of(spec: Option<GridSpec>) -> Result<Grid> {
     match spec {
-        None => Grid::uniform(DEFAULT_GRID_POINTS),
+        None => Grid::uniform(crate::grid::DEFAULT_POINTS),
         Some(GridSpec {
             points: Some(n),
             values: None,
         }) => {
-            if n > MAX_GRID_POINTS {
-                bail!("grid: {n} points is more than the supported {MAX_GRID_POINTS}");
+            if n > crate::grid::MAX_POINTS {
+                bail!(
+                    "grid: {n} points is more than the supported {}",
+                    crate::grid::MAX_POINTS
+                );
             }
             Grid::uniform(n)
         }

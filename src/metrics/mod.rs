@@ -456,9 +456,9 @@ pub fn snap_index(grid: &Grid, z: f64) -> usize {
     grid.nearest(z)
 }
 
-/// The grid point nearest to z (monotone in z).
+/// The grid point nearest to z ([`Grid::snap`]).
 pub fn snap(grid: &Grid, z: f64) -> f64 {
-    grid.points()[snap_index(grid, z)]
+    grid.snap(z)
 }
 
 /// What is evaluated against PCF.

@@ -1,38 +1,202 @@
-//! Step 6: the quantization study (8/16/32-bit moment shadow maps, canonical and θ storage)
-//! on the run's stacks with the run's θ; artefacts in `quantize/`, kept when they exist.
-//!
-//! The work is done by `momentlab quantize` (src/cli/quantize.rs), called with typed arguments.
+//! The quantization study as artefacts (8/16/32-bit moment shadow maps, canonical and θ
+//! storage): `quantize.json`, `quantize.md`, `quantize_alpha.svg`. Step 6 of the pipeline
+//! ([`run`]) and `momentlab quantize` call these with typed options.
 
 use super::Plan;
-use crate::cli::quantize;
-use anyhow::Result;
-use std::path::Path;
+use crate::artefact::OutDir;
+use crate::metrics::{Bias, Subsample};
+use crate::quantize::study::{self, sweep, Sweep, Tech};
+use crate::report::quantize::{markdown, plot};
+use crate::stack::DepthStack;
+use anyhow::{bail, Context, Result};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
 
-/// Run the study into `out` unless `out/quantize.json` exists.
+/// The files of the study; `quantize.json` is written last, so it marks a finished study.
+pub const FILES: [&str; 3] = ["quantize.json", "quantize.md", "quantize_alpha.svg"];
+
+/// What one study runs on.
+#[derive(Clone, Debug)]
+pub struct Study {
+    /// Directory of depth stacks; None: render the embedded default dataset at `resolution`.
+    pub stacks: Option<PathBuf>,
+    pub resolution: usize,
+    /// Folder with theta{m}.json for every technique.
+    pub theta_dir: PathBuf,
+    pub techniques: Vec<Tech>,
+    /// Evaluate every k-th fragment only.
+    pub stride: usize,
+    /// Bias strengths α in (0, 1).
+    pub alphas: Vec<f64>,
+}
+
+/// The written study: the JSON text and the Markdown.
+pub struct Written {
+    pub json: String,
+    pub markdown: String,
+}
+
+fn load_stacks(s: &Study) -> Result<Vec<DepthStack>> {
+    match &s.stacks {
+        Some(dir) => crate::stack::load_dir(dir)
+            .with_context(|| format!("loading stacks from {}", dir.display())),
+        None => {
+            eprintln!("rendering the default dataset at {0}×{0} …", s.resolution);
+            crate::render::default_dataset(s.resolution)
+        }
+    }
+}
+
+/// Write the Markdown, the plot and then the JSON (the marker of a finished study) into `od`.
+fn write(od: &OutDir, json: &serde_json::Value, md: String, all: &[Sweep]) -> Result<Written> {
+    od.write_text(FILES[1], &md)?;
+    od.write_text(FILES[2], &plot(all)?)?;
+    let text = serde_json::to_string_pretty(json)? + "\n";
+    od.write_text(FILES[0], &text)?;
+    Ok(Written {
+        json: text,
+        markdown: md,
+    })
+}
+
+/// Run the study and write [`FILES`] into `od`. Every θ is read and verified before the stacks
+/// are loaded or rendered.
+pub fn study(s: &Study, od: &OutDir) -> Result<Written> {
+    if s.techniques.is_empty() {
+        bail!("--technique: empty list");
+    }
+    let thetas: Vec<_> = s
+        .techniques
+        .iter()
+        .map(|t| study::load_theta(&s.theta_dir, t.m()))
+        .collect::<Result<_>>()?;
+    let stacks = load_stacks(s)?;
+    if stacks.is_empty() {
+        bail!("no depth stacks to evaluate");
+    }
+    crate::metrics::require_fragments(&stacks)?;
+    let sub = if s.stride > 1 {
+        Subsample::Stride(s.stride)
+    } else {
+        Subsample::All
+    };
+    let t0 = Instant::now();
+    let mut all: Vec<Sweep> = Vec::new();
+    for (tech, ours) in s.techniques.iter().zip(&thetas) {
+        let configs = study::configs(*tech, ours);
+        eprintln!(
+            "quantize: {} ({} configurations)...",
+            tech.name(),
+            configs.len()
+        );
+        all.extend(sweep(
+            &stacks,
+            *tech,
+            &configs,
+            &s.alphas,
+            &Bias::default(),
+            &sub,
+        )?);
+    }
+    if all.first().is_none_or(|s| s.fragments == 0) {
+        bail!("the depth stacks have no fragments to evaluate (empty or all background)");
+    }
+    let seconds = t0.elapsed().as_secs_f64();
+    let stacks_label = s.stacks.as_ref().map_or_else(
+        || format!("default dataset rendered at {0}×{0}", s.resolution),
+        |p| p.display().to_string(),
+    );
+    let usable = study::usability(&all);
+    let json = serde_json::json!({
+        "stacks": stacks_label, "views": stacks.len(), "stride": s.stride,
+        "theta_dir": s.theta_dir,
+        "b_star": "1/2 in every moment", "precision": "f64 reconstruction",
+        "seconds": seconds, "sweeps": all, "usable_16bit": usable,
+    });
+    let md = markdown(
+        &all,
+        &usable,
+        &stacks_label,
+        stacks.len(),
+        s.stride,
+        &s.alphas,
+    );
+    let w = write(od, &json, md, &all)?;
+    eprintln!("quantize: {seconds:.1} s, wrote {}", od.root().display());
+    Ok(w)
+}
+
+/// Combine the sweeps of existing quantize.json files (same stacks, views and stride) and
+/// write [`FILES`] into `od`.
+pub fn merge(files: &[&Path], od: &OutDir) -> Result<Written> {
+    let mut all: Vec<Sweep> = Vec::new();
+    let mut head: Option<(serde_json::Value, serde_json::Value, serde_json::Value)> = None;
+    let mut seconds = 0.0;
+    for f in files {
+        let text =
+            crate::artefact::read_text(f, crate::artefact::Limit::ARTEFACT).context("--merge")?;
+        let v: serde_json::Value = serde_json::from_str(&text)
+            .with_context(|| format!("--merge: parsing {}", f.display()))?;
+        let h = (v["stacks"].clone(), v["views"].clone(), v["stride"].clone());
+        if head.as_ref().is_some_and(|x| *x != h) {
+            bail!(
+                "--merge: {} has other stacks, views or stride than the first file",
+                f.display()
+            );
+        }
+        head = Some(h);
+        seconds += v["seconds"].as_f64().unwrap_or(0.0);
+        let sw: Vec<Sweep> = serde_json::from_value(v["sweeps"].clone())
+            .with_context(|| format!("--merge: {}: sweeps", f.display()))?;
+        all.extend(sw);
+    }
+    let (stacks, views, stride) = head.context("--merge: no files")?;
+    let alphas = all.first().map(|s| s.alphas.clone()).unwrap_or_default();
+    let usable = study::usability(&all);
+    let list = files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect::<Vec<_>>()
+        .join(",");
+    let json = serde_json::json!({
+        "stacks": stacks, "views": views, "stride": stride, "merged_from": list,
+        "b_star": "1/2 in every moment", "precision": "f64 reconstruction",
+        "seconds": seconds, "sweeps": all, "usable_16bit": usable,
+    });
+    let label = stacks.as_str().unwrap_or("?").to_string();
+    let md = markdown(
+        &all,
+        &usable,
+        &label,
+        views.as_u64().unwrap_or(0) as usize,
+        stride.as_u64().unwrap_or(1) as usize,
+        &alphas,
+    );
+    write(od, &json, md, &all)
+}
+
+/// Step 6: the study on the run's stacks with every θ the run computed, into `out`, unless
+/// `out/quantize.json` exists.
 pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<()> {
-    if out.join("quantize.json").exists() {
+    if out.join(FILES[0]).exists() {
         return Ok(());
     }
-    // every technique whose θ the run computed
-    let techniques: Vec<String> = crate::quantize::study::Tech::ALL
+    let techniques: Vec<Tech> = Tech::ALL
         .into_iter()
-        .map(|t| (t.m(), t.name().to_string()))
-        .filter(|(m, _)| theta_dir.join(format!("theta{m}.json")).is_file())
-        .map(|(_, t)| t)
+        .filter(|t| theta_dir.join(format!("theta{}.json", t.m())).is_file())
         .collect();
     if techniques.is_empty() {
         return Ok(());
     }
-    quantize::run(quantize::Args {
+    let od = OutDir::new(out, true)?;
+    let s = Study {
         stacks: Some(stacks.to_path_buf()),
         resolution: plan.resolution,
         theta_dir: theta_dir.to_path_buf(),
-        technique: techniques,
-        out: out.to_path_buf(),
-        force: true,
+        techniques,
         stride: plan.quantize_stride,
-        alphas: quantize::DEFAULT_ALPHAS.to_string(),
-        json: false,
-        merge: None,
-    })
+        alphas: study::DEFAULT_ALPHAS.to_vec(),
+    };
+    print!("{}", study(&s, &od)?.markdown);
+    Ok(())
 }

@@ -233,6 +233,16 @@ pub fn published(m: usize) -> Option<Theta> {
     }
 }
 
+/// Gains quoted in the papers' text, in bits, as printed: θ₂ 2, θ₃ 6.2, θ₄ 12.2783 (Peters &
+/// Klein 2015, Section 4.3) and θ₆ 30.511 (supplementary of Peters et al. 2016, Section 3).
+pub const QUOTED_GAIN_BITS: [(usize, &str); 4] =
+    [(2, "2"), (3, "6.2"), (4, "12.2783"), (6, "30.511")];
+
+/// The quoted gain of θ_m as printed in the papers ([`QUOTED_GAIN_BITS`]), if any.
+pub fn quoted_gain(m: usize) -> Option<&'static str> {
+    QUOTED_GAIN_BITS.iter().find(|q| q.0 == m).map(|q| q.1)
+}
+
 /// θ₂ / θ₄ in the channel order of the 2015 paper (Section 4.3; the order MJP's Shadows sample
 /// and Unity HDRP ship): each published row is matched to the row of `theta` (or its
 /// reflection s ↦ 1 − s, i.e. row −a and offset 1 − t) nearest to it, relative to the published

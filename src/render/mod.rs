@@ -16,20 +16,21 @@ pub mod mesh;
 pub mod scene;
 
 pub use embedded::{embedded_scenes, EMBEDDED_SCENE_NAMES};
-pub use scene::{Light, Scene, Tri, V3};
+pub use scene::{Light, Scene};
 
 use crate::stack::{DepthStack, StackMeta};
+
+/// A point / vector in world space.
+pub type V3 = [f64; 3];
+/// A triangle (three world-space vertices).
+pub type Tri = [V3; 3];
 use anyhow::{bail, Context, Result};
 use bvh::{Bvh, LTri};
 use rayon::prelude::*;
 use scene::{cross, dot, norm, scale, sub};
 use std::path::Path;
 
-/// Relative widening of the fitted depth range and (u, v) window on each side.
-pub const MARGIN: f64 = 0.01;
-/// Hits closer than this in depth z are one surface (shared edges, coincident faces); it also
-/// guarantees strictly increasing f32 depths.
-pub const DEDUP_EPS: f64 = 1e-6;
+pub use crate::stack::{DEDUP_EPS, MARGIN};
 
 /// The orthographic light frame of one view.
 #[derive(Clone, Copy, Debug, PartialEq)]

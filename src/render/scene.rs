@@ -10,10 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use serde::Deserialize;
 use std::path::Path;
 
-/// A point / vector in world space.
-pub type V3 = [f64; 3];
-/// A triangle (three world-space vertices).
-pub type Tri = [V3; 3];
+pub use super::{Tri, V3};
 
 /// One view of a scene: a directional light.
 #[derive(Clone, Debug, PartialEq)]

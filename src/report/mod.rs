@@ -5,6 +5,7 @@ pub mod document;
 pub mod pareto;
 pub mod pictures;
 pub mod provenance;
+pub mod quantize;
 pub mod readme;
 pub mod recommend;
 pub mod stability;

@@ -1,10 +1,10 @@
 //! The stability study on disk: stress every technique where it fails (harness in
-//! [`crate::technique::stability`], docs/stability.md) and write `stability.json`,
+//! [`crate::stability`], docs/stability.md) and write `stability.json`,
 //! `stability.md` and the SVG heat maps of mean |G − sharp bound| into a folder.
 
+use crate::stability::{self, Config, Entry, Mode, Report, Scenario};
 use crate::technique::by_name;
 use crate::technique::registry::{build, Params};
-use crate::technique::stability::{self, Config, Entry, Mode, Report, Scenario};
 use anyhow::{anyhow, bail, Context, Result};
 use plotters::prelude::*;
 use std::fmt::Write as _;

@@ -12,8 +12,7 @@
 
 use anyhow::{anyhow, bail, Context, Result};
 
-/// Largest width or height accepted.
-pub const MAX_SIDE: usize = 16384;
+pub use super::MAX_SIDE;
 /// Largest number of samples in one pixel.
 pub const MAX_SAMPLES_PER_PIXEL: usize = 1 << 16;
 
@@ -518,7 +517,7 @@ pub struct DeepStats {
 /// Converts a deep image to a depth stack. Per pixel, the samples (Z, ZBack and A if present)
 /// become opaque surfaces at depth z = (Z − near)/(far − near): samples with A = 0 are dropped,
 /// a sample's ZBack must not be less than its Z, the samples must be sorted by Z (unless `sort`,
-/// which sorts them), and samples closer than [`crate::render::DEDUP_EPS`] in z to the kept one
+/// which sorts them), and samples closer than [`super::DEDUP_EPS`] in z to the kept one
 /// in front of them are merged into it. Slopes per texel step ([`neighbour_slopes`]).
 pub fn deep_to_stack(
     img: &DeepImage,
@@ -604,10 +603,7 @@ pub fn deep_to_stack(
                 bail!("deep image has no opaque samples; give near and far in the sidecar");
             }
             let r = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
-            (
-                lo - crate::render::MARGIN * r,
-                hi + crate::render::MARGIN * r,
-            )
+            (lo - super::MARGIN * r, hi + super::MARGIN * r)
         }
         _ => bail!("the sidecar gives only one of near and far"),
     };
@@ -628,7 +624,7 @@ pub fn deep_to_stack(
                     "pixel (x={x}, y={y}): Z = {z} outside the sidecar's near..far = {near}..{far}"
                 );
             }
-            if d - last <= crate::render::DEDUP_EPS {
+            if d - last <= super::DEDUP_EPS {
                 stats.merged += 1;
                 continue;
             }
@@ -652,7 +648,7 @@ pub fn deep_to_stack(
         uv_origin: side.uv_origin,
         texel_size: side.texel_size,
     };
-    super::io::check_size(&meta)?;
+    super::check_size(&meta)?;
     let n = w * h;
     let mut depth = vec![vec![f32::INFINITY; n]; layers];
     for (t, v) in layers_of.iter().enumerate() {

@@ -2,7 +2,7 @@
 //! and quantity: `layerNNN.Z`, `layerNNN.dzdu`, `layerNNN.dzdv`, row-major, y = row) plus the
 //! JSON sidecar `<name>.json` (= [`StackMeta`]). Layout: docs/stacks.md.
 
-use super::{validate, DepthStack, StackMeta};
+use super::{check_size, sidecar_path, validate, DepthStack, StackMeta};
 use crate::artefact::{input, Limit, OutDir};
 use anyhow::{anyhow, bail, Context, Result};
 use exr::prelude::*;
@@ -11,11 +11,6 @@ use std::path::{Path, PathBuf};
 /// Channel name of `quantity` ("Z", "dzdu" or "dzdv") of layer `l`: `layer000.Z` etc.
 pub fn channel_name(l: usize, quantity: &str) -> String {
     format!("layer{l:03}.{quantity}")
-}
-
-/// The sidecar of `path`: same name with extension `.json`.
-pub fn sidecar_path(path: &Path) -> PathBuf {
-    path.with_extension("json")
 }
 
 /// Writes `stack` to `path` (the `.exr`) and its sidecar (`.json` next to it), replacing
@@ -183,39 +178,6 @@ pub fn is_deep_file(path: &Path) -> Result<bool> {
         .and_then(|f| f.take(8).read_to_end(&mut head))
         .with_context(|| format!("reading {}", path.display()))?;
     Ok(super::deep::is_deep_exr(&head))
-}
-
-/// Largest width or height of a stack.
-pub const MAX_SIDE: usize = 16384;
-/// Largest layer count of a stack.
-pub const MAX_LAYERS: usize = 4096;
-/// Largest in-memory size of one stack (3 f32 channels per layer and texel).
-pub const MAX_STACK_BYTES: u64 = 4 << 30;
-
-/// The sidecar's size fields within the limits, checked before anything is allocated.
-pub(super) fn check_size(m: &StackMeta) -> Result<()> {
-    if m.width == 0 || m.height == 0 || m.width > MAX_SIDE || m.height > MAX_SIDE {
-        bail!(
-            "{}x{} texels: width and height must be in 1..={MAX_SIDE}",
-            m.width,
-            m.height
-        );
-    }
-    if m.layers == 0 || m.layers > MAX_LAYERS {
-        bail!("layers = {}: must be in 1..={MAX_LAYERS}", m.layers);
-    }
-    let bytes = (m.width * m.height) as u64 * m.layers as u64 * 12;
-    if bytes > MAX_STACK_BYTES {
-        bail!(
-            "{}x{} texels × {} layers need {:.1} GiB, more than the {} GiB limit per stack",
-            m.width,
-            m.height,
-            m.layers,
-            bytes as f64 / (1u64 << 30) as f64,
-            MAX_STACK_BYTES >> 30
-        );
-    }
-    Ok(())
 }
 
 /// From the EXR header alone (before decoding pixels): a single part of the sidecar's size,

@@ -8,13 +8,54 @@
 pub mod deep;
 mod io;
 
-pub use io::{
-    channel_name, exr_files, file_names, is_deep_file, load_dir, read, sidecar_path, write,
-    write_to,
-};
+pub use io::{channel_name, exr_files, file_names, is_deep_file, load_dir, read, write, write_to};
 
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
+
+/// Relative widening of the fitted depth range and (u, v) window on each side.
+pub const MARGIN: f64 = 0.01;
+/// Hits closer than this in depth z are one surface (shared edges, coincident faces); it also
+/// guarantees strictly increasing f32 depths.
+pub const DEDUP_EPS: f64 = 1e-6;
+
+/// Largest width or height of a stack.
+pub const MAX_SIDE: usize = 16384;
+/// Largest layer count of a stack.
+pub const MAX_LAYERS: usize = 4096;
+/// Largest in-memory size of one stack (3 f32 channels per layer and texel).
+pub const MAX_STACK_BYTES: u64 = 4 << 30;
+
+/// The sidecar's size fields within the limits, checked before anything is allocated.
+pub(crate) fn check_size(m: &StackMeta) -> Result<()> {
+    if m.width == 0 || m.height == 0 || m.width > MAX_SIDE || m.height > MAX_SIDE {
+        bail!(
+            "{}x{} texels: width and height must be in 1..={MAX_SIDE}",
+            m.width,
+            m.height
+        );
+    }
+    if m.layers == 0 || m.layers > MAX_LAYERS {
+        bail!("layers = {}: must be in 1..={MAX_LAYERS}", m.layers);
+    }
+    let bytes = (m.width * m.height) as u64 * m.layers as u64 * 12;
+    if bytes > MAX_STACK_BYTES {
+        bail!(
+            "{}x{} texels × {} layers need {:.1} GiB, more than the {} GiB limit per stack",
+            m.width,
+            m.height,
+            m.layers,
+            bytes as f64 / (1u64 << 30) as f64,
+            MAX_STACK_BYTES >> 30
+        );
+    }
+    Ok(())
+}
+
+/// The sidecar of `path`: same name with extension `.json`.
+pub fn sidecar_path(path: &std::path::Path) -> std::path::PathBuf {
+    path.with_extension("json")
+}
 
 /// The JSON sidecar of a depth-stack file. Unknown fields are refused (a copy would drop them).
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]

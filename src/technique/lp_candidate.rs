@@ -9,7 +9,7 @@ use crate::Grid;
 use anyhow::{bail, Context, Result};
 
 /// Default grid size of "lp:…" techniques (uniform points on [0,1]).
-pub const DEFAULT_GRID_POINTS: usize = 1024;
+pub const DEFAULT_GRID_POINTS: usize = crate::grid::DEFAULT_POINTS;
 
 /// Algorithm 1 with a given basis, grid and LP solver ("fast" or "reference").
 pub struct LpCandidate {

@@ -103,6 +103,5 @@ pub mod registry;
 pub mod vsm;
 pub use registry::by_name;
 pub mod sparse;
-pub mod stability;
 pub mod timing;
 pub mod tmsm;

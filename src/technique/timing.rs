@@ -41,7 +41,7 @@ pub fn random_corpus(n: usize, seed: u64) -> Corpus {
 pub fn moments_of(t: &dyn Technique, corpus: &Corpus) -> (Vec<f64>, Vec<f64>) {
     let m = t.moment_count();
     let snap = |z: f64| match t.depth_grid() {
-        Some(g) => crate::metrics::snap(g, z),
+        Some(g) => g.snap(z),
         None => z,
     };
     let mut moments = vec![0.0; corpus.dists.len() * m];

@@ -6,9 +6,9 @@
 //! Pure library code (no IO): [`generate`] draws the inputs, [`run`] evaluates and summarises;
 //! the CLI writes tables and plots. Documented in docs/stability.md.
 
-use super::Technique;
 use crate::lp::{make_solver, GridTable, Status};
 use crate::quantize::theta::{self, Theta};
+use crate::technique::Technique;
 use crate::Grid;
 use anyhow::Result;
 use rand::{Rng, SeedableRng};
