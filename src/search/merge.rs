@@ -1,9 +1,10 @@
 //! `merge` of sharded runs: the results directories of the shards of one sweep into one.
 
+use super::config::SweepConfig;
 use super::results::{
     read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE, FAILED_FILE, RESULTS_FILE,
 };
-use super::sweep::{SweepConfig, SweepSummary};
+use super::sweep::SweepSummary;
 use crate::artefact::{read_bytes, Limit, OutDir};
 use anyhow::{bail, Context, Result};
 use std::collections::BTreeSet;

@@ -18,6 +18,7 @@
 //! * [`run`]: the whole sweep on depth stacks ([`stacks_dataset`], [`sweep_dataset`]) for the
 //!   CLI and `reproduce`.
 
+pub mod config;
 pub mod dataset;
 pub mod merge;
 pub mod plan;
@@ -31,14 +32,13 @@ pub mod span;
 pub mod sweep;
 pub mod tieset;
 
+pub use config::{Parameters, SweepConfig};
 pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
 pub use merge::merge_dirs;
 pub use results::{read_rows, Row};
 pub use run::{stacks_dataset, sweep_dataset, SweepOptions, SweepResult};
 pub use score::Scorer;
-pub use sweep::{
-    run_sweep, Hooks, Outcome, Parameters, Progress, RaceSummary, SweepConfig, SweepSummary,
-};
+pub use sweep::{run_sweep, Hooks, Outcome, Progress, RaceSummary, SweepSummary};
 
 use crate::lp::GridTable;
 use crate::Grid;

@@ -11,8 +11,8 @@
 //! The racing schedule is therefore an upper bound, reached when no candidate is eliminated by
 //! confidence. Exhaustive: |C|·F, exact.
 
+use super::config::SweepConfig;
 use super::select;
-use super::sweep::SweepConfig;
 use super::Scorer;
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;

@@ -2,9 +2,9 @@
 //! `momentlab reproduce`: build the dataset from depth stacks, run (or resume) the sweep and score
 //! the references (the report files: `crate::report::sweep`).
 
+use super::config::Parameters;
 use super::reference::{self, Reference, Summary};
 use super::results::{read_rows, Row};
-use super::sweep::Parameters;
 use super::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Progress, SamplePlan, Scorer};
 use super::{SweepConfig, SweepSummary};
 use crate::basis::candidates as bc;

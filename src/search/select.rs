@@ -2,8 +2,8 @@
 //! flags that exclude some from solving (degenerate on the grid, or a duplicate span whose
 //! representative is part of the run). Shared by the sweep and its plan (`search --plan`).
 
+use super::config::SweepConfig;
 use super::span::{Flag, SpanAnalyzer};
-use super::sweep::{all_subsets, SweepConfig};
 use super::Scorer;
 use crate::basis::candidates as bc;
 use anyhow::Result;
@@ -55,4 +55,22 @@ pub fn flags(
             })
         })
         .collect()
+}
+
+/// All `(index, subset)` pairs of m-subsets of 0..n in the catalog's colex order
+/// ([`bc::next_subset`]: the index is the position in this enumeration).
+pub fn all_subsets(n: usize, m: usize) -> Vec<(u64, Vec<usize>)> {
+    let mut out = Vec::with_capacity(bc::count(n, m).min(1 << 24) as usize);
+    if m == 0 || m > n {
+        return out;
+    }
+    let mut c: Vec<usize> = (0..m).collect();
+    let mut idx = 0u64;
+    loop {
+        out.push((idx, c.clone()));
+        idx += 1;
+        if !bc::next_subset(&mut c, n) {
+            return out;
+        }
+    }
 }

@@ -222,7 +222,7 @@ mod tests {
             q.len()
         };
         for m in 1..=4 {
-            for (_, c) in crate::search::sweep::all_subsets(t.len(), m) {
+            for (_, c) in crate::search::select::all_subsets(t.len(), m) {
                 let full = rank(&c) == m + 1;
                 match s.flag(&c) {
                     Flag::Degenerate => assert!(!full, "{c:?}"),

@@ -46,6 +46,7 @@ use super::results::{
 
 /// Statistics of the survivors on the fragments they had not seen (completion block).
 const FINAL_FILE: &str = "final.jsonl";
+use super::config::SweepConfig;
 use super::race::{self, Bound, Elimination, Moments, StageStats};
 use super::Scorer;
 use crate::basis::candidates as bc;
@@ -53,152 +54,6 @@ use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
-
-/// Everything that determines the rows of a run (stored as `config.json`).
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct SweepConfig {
-    /// Functions per candidate.
-    pub m: usize,
-    /// Catalog function names, in catalog order.
-    pub functions: Vec<String>,
-    /// Fingerprint of the catalog tabulated on the grid.
-    pub table_fingerprint: String,
-    /// Grid size n.
-    pub grid: usize,
-    /// Description of the dataset (e.g. "stacks:data/stacks").
-    pub dataset: String,
-    /// Fingerprint of the dataset's fragments.
-    pub dataset_fingerprint: String,
-    pub seed: u64,
-    /// Candidates scored on every fragment at the end of racing.
-    pub top: usize,
-    /// Every candidate on every fragment, no racing.
-    pub exhaustive: bool,
-    /// Restrict to these candidate indices (None: all C(N, m)).
-    pub candidates: Option<Vec<u64>>,
-    /// [i, N]: this run scores the candidates with index % N == i.
-    pub shard: [usize; 2],
-    /// LP solver ("fast" or "reference").
-    pub solver: String,
-    /// Fragments in racing stage 0.
-    pub first_sample: usize,
-    /// Sample growth factor per stage.
-    pub growth: usize,
-    /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage.
-    pub keep: f64,
-    /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
-    pub confidence: f64,
-    /// One-sided bound of the tests (normal approximation or empirical Bernstein).
-    pub bound: Bound,
-    /// Paired differences to the reference (true) or independent intervals (comparison only).
-    pub paired: bool,
-    /// Candidates tried to pick the stage-0 reference.
-    pub pilot: usize,
-    /// Relative tolerance of the rank / span decisions.
-    pub tol: f64,
-    /// Fragments per solver instance (warm-start chain).
-    pub chunk: usize,
-    /// Candidates per flushed batch.
-    pub batch: usize,
-}
-
-/// The racing and sharding parameters of a sweep, as given (flags or a configuration).
-#[derive(Clone, Copy, Debug)]
-pub struct Parameters {
-    pub shard: [usize; 2],
-    pub first_sample: usize,
-    pub growth: usize,
-    pub batch: usize,
-    pub top: usize,
-    pub keep: f64,
-    pub confidence: f64,
-}
-
-impl Parameters {
-    /// The one validation of a sweep's parameters: shard i/N with i < N, positive sizes, the
-    /// cap's `keep` in (0, 1], `confidence` in (0, 1). [`run_sweep`] calls it, and
-    /// `momentlab search` before any work.
-    pub fn check(&self) -> Result<()> {
-        let [i, n] = self.shard;
-        if n == 0 || i >= n {
-            bail!("shard {i}/{n}: need 0 ≤ i < N");
-        }
-        for (name, v) in [
-            ("first-sample", self.first_sample),
-            ("growth", self.growth),
-            ("batch", self.batch),
-            ("top", self.top),
-        ] {
-            if v == 0 {
-                bail!("{name} 0: must be at least 1");
-            }
-        }
-        if !(self.keep > 0.0 && self.keep <= 1.0) {
-            bail!(
-                "keep {}: the budget cap per stage must be in (0, 1]",
-                self.keep
-            );
-        }
-        if !(self.confidence > 0.0 && self.confidence < 1.0) {
-            bail!(
-                "confidence {}: must be in (0, 1), e.g. 0.99",
-                self.confidence
-            );
-        }
-        Ok(())
-    }
-}
-
-impl SweepConfig {
-    /// The parameters [`Parameters::check`] validates.
-    pub fn parameters(&self) -> Parameters {
-        Parameters {
-            shard: self.shard,
-            first_sample: self.first_sample,
-            growth: self.growth,
-            batch: self.batch,
-            top: self.top,
-            keep: self.keep,
-            confidence: self.confidence,
-        }
-    }
-
-    /// Defaults for a sweep of m-subsets of `scorer`'s table on its dataset.
-    pub fn new(m: usize, scorer: &Scorer, dataset: &str) -> SweepConfig {
-        SweepConfig {
-            m,
-            functions: scorer.table().names().to_vec(),
-            table_fingerprint: format!("{:016x}", scorer.table().fingerprint()),
-            grid: scorer.table().grid().len(),
-            dataset: dataset.to_string(),
-            dataset_fingerprint: format!("{:016x}", scorer.data().fingerprint()),
-            seed: 1,
-            top: 50,
-            exhaustive: false,
-            candidates: None,
-            shard: [0, 1],
-            solver: scorer.solver().to_string(),
-            first_sample: 1024,
-            growth: 4,
-            keep: 0.25,
-            confidence: 0.99,
-            bound: Bound::Normal,
-            paired: true,
-            pilot: 32,
-            tol: 1e-9,
-            chunk: scorer.chunk(),
-            batch: 64,
-        }
-    }
-
-    /// Name of the first field that differs, if any.
-    pub fn first_difference(&self, other: &SweepConfig) -> Option<String> {
-        let a = serde_json::to_value(self).ok()?;
-        let b = serde_json::to_value(other).ok()?;
-        let (a, b) = (a.as_object()?, b.as_object()?);
-        a.keys().find(|k| a.get(*k) != b.get(*k)).cloned()
-    }
-}
 
 /// Deterministic description of a finished run (`complete.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -926,23 +781,5 @@ fn pooled_row(
         full: p.n == nontrivial,
         lp_failures: p.failures,
         ..Row::plain(p.index, names(p.index))
-    }
-}
-
-/// All `(index, subset)` pairs of m-subsets of 0..n in the catalog's colex order
-/// ([`bc::next_subset`]: the index is the position in this enumeration).
-pub fn all_subsets(n: usize, m: usize) -> Vec<(u64, Vec<usize>)> {
-    let mut out = Vec::with_capacity(bc::count(n, m).min(1 << 24) as usize);
-    if m == 0 || m > n {
-        return out;
-    }
-    let mut c: Vec<usize> = (0..m).collect();
-    let mut idx = 0u64;
-    loop {
-        out.push((idx, c.clone()));
-        idx += 1;
-        if !bc::next_subset(&mut c, n) {
-            return out;
-        }
     }
 }
