@@ -97,7 +97,7 @@ fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
     assert!(cells.iter().flatten().flatten().all(|&v| v == 1.0));
 }
 
-/// Issue 12: the certified LP settles the oracle on every stress input — boundary
+/// The certified LP settles the oracle on every stress input — boundary
 /// moment vectors of ≤ m/2 Diracs, clusters within 1e-4, z_f at and next to a support point —
 /// for power, exponential and trigonometric bases; Markov's bound (the `esm` closed form) never
 /// lies above the sharp bound of its own basis exp(80(z−1)) on [0,1]; and where the moments

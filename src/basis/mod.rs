@@ -2,7 +2,7 @@
 //! functions), their catalog file `basis_functions/catalog.json`, formula parsing, and
 //! candidates (m-subsets of the catalog, indexed by the combinatorial number system).
 //!
-//! OWNER: basis helper. Public API used by other modules (keep these signatures):
+//! Public API used by other modules:
 //! * [`Function::eval`], [`Function::name`], [`Function::formula`]
 //! * [`Catalog::embedded`], [`Catalog::load`], [`Catalog::resolve`], [`Catalog::functions`]
 //! * [`Basis::new`], [`Basis::len`], [`Basis::eval`], [`Basis::names`]

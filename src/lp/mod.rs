@@ -5,7 +5,7 @@
 //! G(b, z_f) = min Σ_{z_i < z_f} w_i  s.t.  w ≥ 0, Σ w_i = 1, Σ w_i b(z_i) = b.
 //!
 //! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
-//! exactly as stated) and the fast solver (OWNER: lp helper).
+//! exactly as stated) and the fast solver.
 
 pub mod bench;
 pub mod bench_corpus;
@@ -170,9 +170,9 @@ pub const MAX_FUNCTIONS: usize = 31;
 /// Largest grid table n·m (f64 values, 512 MiB), checked before it is allocated.
 pub const MAX_TABLE_VALUES: usize = 1 << 26;
 
-/// The solver of the given name on `table`: "reference" or "fast" ("fast-strict", the name
-/// from before the certificates, is the same solver: problems nothing certifies come back
-/// `Failed`, never from a reference fallback).
+/// The solver of the given name on `table`: "reference" or "fast" ("fast-strict" is accepted
+/// as the same solver: problems nothing certifies come back `Failed`, never from a reference
+/// fallback).
 pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
     match kind {
         "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),

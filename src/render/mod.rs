@@ -8,7 +8,7 @@
 //! projected bounds widened by 1 %. Texel (x, y) casts one ray through its centre
 //! (u0 + (x+½)·s, v0 + (y+½)·s). Per surface the receiver-plane slopes are analytic from the
 //! triangle's geometric normal n in light space: ∂z/∂x = −(n_u/n_w)·s/(far−near),
-//! ∂z/∂y = −(n_v/n_w)·s/(far−near) (per texel step). OWNER: render/stack helper.
+//! ∂z/∂y = −(n_v/n_w)·s/(far−near) (per texel step).
 
 pub mod bvh;
 mod embedded;

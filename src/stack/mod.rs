@@ -2,7 +2,7 @@
 //! with receiver-plane depth slopes for biasing. Stored as one OpenEXR file per view plus a JSON
 //! sidecar; also the import format for stacks from other renderers (layout: docs/stacks.md).
 //!
-//! OWNER: render/stack helper. Other modules rely on [`DepthStack`] and [`StackMeta`] as below
+//! Other modules rely on [`DepthStack`] and [`StackMeta`] as below
 //! and on `stack::read(path)` / `stack::write(path, &stack)` / `stack::load_dir(dir)`.
 
 pub mod deep;

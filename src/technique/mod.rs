@@ -2,8 +2,7 @@
 //! shadow intensity G ∈ [0,1] (0 = lit, 1 = fully shadowed). LP candidates (Algorithm 1 with any
 //! basis) and closed-form solvers (Hamburger/Hausdorff MSM, TMSM, VSM, ESM, EVSM, CSM) implement
 //! the same [`Technique`] trait, so evaluation, benchmarks and stability code are written once.
-//!
-//! OWNERS: closed-form helpers (one file per technique).
+//! One file per technique.
 
 /// A filterable shadow-map technique.
 ///

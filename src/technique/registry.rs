@@ -1,8 +1,7 @@
 //! Techniques by name, as used on the command line and in reports.
 //!
-//! Closed-form names: vsm, esm, evsm, csm, hamburger, hamburger4, hausdorff4, hamburger6, tmsm
-//! (OWNERS: closed-form helpers). LP candidates: "lp:f1,f2,…" with catalog names or formulas
-//! (OWNER: basis helper).
+//! Closed-form names: vsm, esm, evsm, csm, hamburger, hamburger4, hausdorff4, hamburger6, tmsm.
+//! LP candidates: "lp:f1,f2,…" with catalog names or formulas.
 //!
 //! [`build`] takes the technique parameters ([`Params`], all optional with documented
 //! defaults); [`by_name`] uses the defaults.
