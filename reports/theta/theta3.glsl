@@ -17,28 +17,28 @@ void encodeMoments3(float z, out float s[3])
     MOMENTLAB_PRECISE float t_5 = t_4 - 1e0; // x = 2z - 1
     MOMENTLAB_PRECISE float t_6 = t_5 + t_5;
     MOMENTLAB_PRECISE float t_8 = t_6 * 5e-1;
-    MOMENTLAB_PRECISE float t_10 = t_8 + 6.001796282184557e-12;
+    MOMENTLAB_PRECISE float t_10 = t_8 + 5.075151410238732e-11;
     MOMENTLAB_PRECISE float t_11 = t_6 * t_10;
     MOMENTLAB_PRECISE float t_12 = t_11 - 5e-1;
-    MOMENTLAB_PRECISE float t_14 = t_12 + 6.001948937850443e-12;
+    MOMENTLAB_PRECISE float t_14 = t_12 + 5.075082021299693e-11;
     MOMENTLAB_PRECISE float t_15 = t_5 * t_14;
     MOMENTLAB_PRECISE float t_16 = t_15 - t_10;
     MOMENTLAB_PRECISE float t_18 = t_16 + 5e-1;
     MOMENTLAB_PRECISE float t_19 = clamp(t_18, 0e0, 1e0); // stored channel 0
-    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622011333703995e-2;
-    MOMENTLAB_PRECISE float t_23 = t_21 + 4.782349606102798e-6;
+    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622305631637573e-2;
+    MOMENTLAB_PRECISE float t_23 = t_21 + 1.363330284220865e-7;
     MOMENTLAB_PRECISE float t_24 = t_6 * t_23;
-    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622305631637573e-2;
     MOMENTLAB_PRECISE float t_27 = t_25 + (-5.773502588272095e-1);
     MOMENTLAB_PRECISE float t_28 = t_5 * t_27;
     MOMENTLAB_PRECISE float t_29 = t_28 - t_23;
-    MOMENTLAB_PRECISE float t_31 = t_29 + 4.99997615814209e-1;
+    MOMENTLAB_PRECISE float t_31 = t_29 + 4.999999403953552e-1;
     MOMENTLAB_PRECISE float t_32 = clamp(t_31, 0e0, 1e0); // stored channel 1
-    MOMENTLAB_PRECISE float t_34 = t_6 * (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_34 = t_6 * 5.394103936851025e-7;
     MOMENTLAB_PRECISE float t_36 = t_34 + (-5e-1);
     MOMENTLAB_PRECISE float t_37 = t_6 * t_36;
-    MOMENTLAB_PRECISE float t_38 = t_37 - (-5.644911311719625e-7);
-    MOMENTLAB_PRECISE float t_40 = t_38 + 5.644911311719625e-7;
+    MOMENTLAB_PRECISE float t_38 = t_37 - 5.394103936851025e-7;
+    MOMENTLAB_PRECISE float t_40 = t_38 + (-5.396432243287563e-7);
     MOMENTLAB_PRECISE float t_41 = t_5 * t_40;
     MOMENTLAB_PRECISE float t_42 = t_41 - t_36;
     MOMENTLAB_PRECISE float t_44 = t_42 + 5e-1;
@@ -50,23 +50,23 @@ void encodeMoments3(float z, out float s[3])
 
 void decodeMoments3(float s[3], out float b[3])
 {
-    MOMENTLAB_PRECISE float t_4 = s[0] - 5.00000874037454e-10;
-    MOMENTLAB_PRECISE float t_6 = s[1] - 9.811325669288635e-1;
-    MOMENTLAB_PRECISE float t_8 = s[2] - 4.999999858590343e-10;
-    MOMENTLAB_PRECISE float t_10 = 1.6665811836719513e-1 * t_4;
+    MOMENTLAB_PRECISE float t_4 = s[0] - 4.999999858590343e-10;
+    MOMENTLAB_PRECISE float t_6 = s[1] - 9.811272621154785e-1;
+    MOMENTLAB_PRECISE float t_8 = s[2] - 9.656611066333198e-10;
+    MOMENTLAB_PRECISE float t_10 = 1.6666321456432343e-1 * t_4;
     MOMENTLAB_PRECISE float t_12 = (-8.660253882408142e-1) * t_6;
     MOMENTLAB_PRECISE float t_13 = t_10 + t_12;
-    MOMENTLAB_PRECISE float t_15 = (-8.283270290121436e-6) * t_8;
+    MOMENTLAB_PRECISE float t_15 = (-2.3611882227214664e-7) * t_8;
     MOMENTLAB_PRECISE float t_16 = t_13 + t_15;
-    MOMENTLAB_PRECISE float t_18 = 1.6665789484977722e-1 * t_4;
-    MOMENTLAB_PRECISE float t_20 = (-8.660256266593933e-1) * t_6;
+    MOMENTLAB_PRECISE float t_18 = 1.6666343808174133e-1 * t_4;
+    MOMENTLAB_PRECISE float t_20 = (-8.660251498222351e-1) * t_6;
     MOMENTLAB_PRECISE float t_21 = t_18 + t_20;
-    MOMENTLAB_PRECISE float t_23 = (-2.500082850456238e-1) * t_8;
+    MOMENTLAB_PRECISE float t_23 = (-2.500002384185791e-1) * t_8;
     MOMENTLAB_PRECISE float t_24 = t_21 + t_23;
-    MOMENTLAB_PRECISE float t_26 = 2.1874164044857025e-1 * t_4;
-    MOMENTLAB_PRECISE float t_28 = (-8.118991851806641e-1) * t_6;
+    MOMENTLAB_PRECISE float t_26 = 2.187471091747284e-1 * t_4;
+    MOMENTLAB_PRECISE float t_28 = (-8.118984699249268e-1) * t_6;
     MOMENTLAB_PRECISE float t_29 = t_26 + t_28;
-    MOMENTLAB_PRECISE float t_31 = (-3.750077784061432e-1) * t_8;
+    MOMENTLAB_PRECISE float t_31 = (-3.750002086162567e-1) * t_8;
     MOMENTLAB_PRECISE float t_32 = t_29 + t_31;
     b[0] = t_16;
     b[1] = t_24;
@@ -79,28 +79,28 @@ vec3 encodeMoments3Vec(float z)
     MOMENTLAB_PRECISE float t_5 = t_4 - 1e0; // x = 2z - 1
     MOMENTLAB_PRECISE float t_6 = t_5 + t_5;
     MOMENTLAB_PRECISE float t_8 = t_6 * 5e-1;
-    MOMENTLAB_PRECISE float t_10 = t_8 + 6.001796282184557e-12;
+    MOMENTLAB_PRECISE float t_10 = t_8 + 5.075151410238732e-11;
     MOMENTLAB_PRECISE float t_11 = t_6 * t_10;
     MOMENTLAB_PRECISE float t_12 = t_11 - 5e-1;
-    MOMENTLAB_PRECISE float t_14 = t_12 + 6.001948937850443e-12;
+    MOMENTLAB_PRECISE float t_14 = t_12 + 5.075082021299693e-11;
     MOMENTLAB_PRECISE float t_15 = t_5 * t_14;
     MOMENTLAB_PRECISE float t_16 = t_15 - t_10;
     MOMENTLAB_PRECISE float t_18 = t_16 + 5e-1;
     MOMENTLAB_PRECISE float t_19 = clamp(t_18, 0e0, 1e0); // stored channel 0
-    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622011333703995e-2;
-    MOMENTLAB_PRECISE float t_23 = t_21 + 4.782349606102798e-6;
+    MOMENTLAB_PRECISE float t_21 = t_6 * 9.622305631637573e-2;
+    MOMENTLAB_PRECISE float t_23 = t_21 + 1.363330284220865e-7;
     MOMENTLAB_PRECISE float t_24 = t_6 * t_23;
-    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622011333703995e-2;
+    MOMENTLAB_PRECISE float t_25 = t_24 - 9.622305631637573e-2;
     MOMENTLAB_PRECISE float t_27 = t_25 + (-5.773502588272095e-1);
     MOMENTLAB_PRECISE float t_28 = t_5 * t_27;
     MOMENTLAB_PRECISE float t_29 = t_28 - t_23;
-    MOMENTLAB_PRECISE float t_31 = t_29 + 4.99997615814209e-1;
+    MOMENTLAB_PRECISE float t_31 = t_29 + 4.999999403953552e-1;
     MOMENTLAB_PRECISE float t_32 = clamp(t_31, 0e0, 1e0); // stored channel 1
-    MOMENTLAB_PRECISE float t_34 = t_6 * (-5.644911311719625e-7);
+    MOMENTLAB_PRECISE float t_34 = t_6 * 5.394103936851025e-7;
     MOMENTLAB_PRECISE float t_36 = t_34 + (-5e-1);
     MOMENTLAB_PRECISE float t_37 = t_6 * t_36;
-    MOMENTLAB_PRECISE float t_38 = t_37 - (-5.644911311719625e-7);
-    MOMENTLAB_PRECISE float t_40 = t_38 + 5.644911311719625e-7;
+    MOMENTLAB_PRECISE float t_38 = t_37 - 5.394103936851025e-7;
+    MOMENTLAB_PRECISE float t_40 = t_38 + (-5.396432243287563e-7);
     MOMENTLAB_PRECISE float t_41 = t_5 * t_40;
     MOMENTLAB_PRECISE float t_42 = t_41 - t_36;
     MOMENTLAB_PRECISE float t_44 = t_42 + 5e-1;
@@ -110,23 +110,23 @@ vec3 encodeMoments3Vec(float z)
 
 vec3 decodeMoments3Vec(vec3 s012)
 {
-    MOMENTLAB_PRECISE float t_4 = s012.x - 5.00000874037454e-10;
-    MOMENTLAB_PRECISE float t_6 = s012.y - 9.811325669288635e-1;
-    MOMENTLAB_PRECISE float t_8 = s012.z - 4.999999858590343e-10;
-    MOMENTLAB_PRECISE float t_10 = 1.6665811836719513e-1 * t_4;
+    MOMENTLAB_PRECISE float t_4 = s012.x - 4.999999858590343e-10;
+    MOMENTLAB_PRECISE float t_6 = s012.y - 9.811272621154785e-1;
+    MOMENTLAB_PRECISE float t_8 = s012.z - 9.656611066333198e-10;
+    MOMENTLAB_PRECISE float t_10 = 1.6666321456432343e-1 * t_4;
     MOMENTLAB_PRECISE float t_12 = (-8.660253882408142e-1) * t_6;
     MOMENTLAB_PRECISE float t_13 = t_10 + t_12;
-    MOMENTLAB_PRECISE float t_15 = (-8.283270290121436e-6) * t_8;
+    MOMENTLAB_PRECISE float t_15 = (-2.3611882227214664e-7) * t_8;
     MOMENTLAB_PRECISE float t_16 = t_13 + t_15;
-    MOMENTLAB_PRECISE float t_18 = 1.6665789484977722e-1 * t_4;
-    MOMENTLAB_PRECISE float t_20 = (-8.660256266593933e-1) * t_6;
+    MOMENTLAB_PRECISE float t_18 = 1.6666343808174133e-1 * t_4;
+    MOMENTLAB_PRECISE float t_20 = (-8.660251498222351e-1) * t_6;
     MOMENTLAB_PRECISE float t_21 = t_18 + t_20;
-    MOMENTLAB_PRECISE float t_23 = (-2.500082850456238e-1) * t_8;
+    MOMENTLAB_PRECISE float t_23 = (-2.500002384185791e-1) * t_8;
     MOMENTLAB_PRECISE float t_24 = t_21 + t_23;
-    MOMENTLAB_PRECISE float t_26 = 2.1874164044857025e-1 * t_4;
-    MOMENTLAB_PRECISE float t_28 = (-8.118991851806641e-1) * t_6;
+    MOMENTLAB_PRECISE float t_26 = 2.187471091747284e-1 * t_4;
+    MOMENTLAB_PRECISE float t_28 = (-8.118984699249268e-1) * t_6;
     MOMENTLAB_PRECISE float t_29 = t_26 + t_28;
-    MOMENTLAB_PRECISE float t_31 = (-3.750077784061432e-1) * t_8;
+    MOMENTLAB_PRECISE float t_31 = (-3.750002086162567e-1) * t_8;
     MOMENTLAB_PRECISE float t_32 = t_29 + t_31;
     return vec3(t_16, t_24, t_32);
 }
