@@ -105,9 +105,10 @@ fn exported_reconstructions_equal_the_f32_implementation_on_real_windows() {
             }
         }
         eprintln!(
-            "{:<48} max |IR − f32| = {worst:.2e}, bit-equal {exact}/{}",
+            "{:<48} max |IR − f32| = {worst:.2e}, bit-equal {exact}/{}, tunedShadow {} ops",
             s.label(),
-            zfs.len()
+            zfs.len(),
+            module.func("tunedShadow").unwrap().n_ops()
         );
         assert!(worst <= 1e-5, "{}: {worst}", s.label());
         // The module's own tunedShadow on stored values: encode → (filter) → shadow agrees with
