@@ -15,7 +15,14 @@ const OPEN: &str = "<!-- generated:";
 const CLOSE: &str = "<!-- end -->";
 
 /// The names of the blocks [`render`] knows, in README order.
-pub const NAMES: [&str; 5] = ["quickstart", "techniques", "paper", "sweeps", "theta"];
+pub const NAMES: [&str; 6] = [
+    "quickstart",
+    "techniques",
+    "paper",
+    "sweeps",
+    "tune",
+    "theta",
+];
 
 /// Nanoseconds at a sensible precision: integers from 100 ns, three significant digits below.
 pub fn fmt_ns(x: f64) -> String {
@@ -52,6 +59,7 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "techniques" => techniques(reports),
         "paper" => paper(reports),
         "sweeps" => sweeps(reports),
+        "tune" => tune(reports),
         "theta" => theta(reports),
         _ => bail!("unknown README block '{name}'"),
     }
@@ -67,7 +75,7 @@ fn quickstart(reports: &Path) -> Result<String> {
         let p = v.get("provenance").cloned().unwrap_or(Value::Null);
         let _ = writeln!(
             s,
-            "`reproduce` took {:.0} s wall on {} threads of a {} (reports/default/run.json).",
+            "`reproduce` took {:.0} s wall on {} threads ({}; reports/default/run.json).",
             f(&v, "seconds", &run)?,
             p.get("threads").and_then(Value::as_u64).unwrap_or(0),
             p.get("cpu")
@@ -84,7 +92,7 @@ fn quickstart(reports: &Path) -> Result<String> {
         let v = read_json(&tests)?;
         let _ = writeln!(
             s,
-            "`cargo test --release` ran in {:.0} s wall after its build, on {} threads of a {} (reports/tests_wall_time.json, `scripts/time-tests.sh`).",
+            "`cargo test --release` ran in {:.0} s wall after its build, on {} threads ({}; reports/tests_wall_time.json, `scripts/time-tests.sh`).",
             f(&v, "seconds", &tests)?,
             v.get("threads").and_then(Value::as_u64).unwrap_or(0),
             v.get("cpu").and_then(Value::as_str).unwrap_or("unknown CPU")
@@ -135,9 +143,18 @@ fn techniques(reports: &Path) -> Result<String> {
             continue;
         }
         let frags = f(&v, "fragments", file)?;
+        let scaled = match v.get("error_scaled").and_then(Value::as_array) {
+            Some(a) if a.len() == 2 => format!(
+                "{:.2} / {:.2} %",
+                100.0 * a[0].as_f64().unwrap_or(f64::NAN),
+                100.0 * a[1].as_f64().unwrap_or(f64::NAN)
+            ),
+            _ => "–".into(),
+        };
         rows.push((
             f(&v, "error", file)?,
             display(name),
+            scaled,
             f(&v, "ns_per_fragment", file)?,
             f(&v, "bits_per_texel", file)?,
             frags,
@@ -145,12 +162,12 @@ fn techniques(reports: &Path) -> Result<String> {
     }
     rows.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut s = String::from(
-        "| technique | error | ns / fragment | bits / texel | fragments |\n| --- | ---: | ---: | ---: | ---: |\n",
+        "| technique | error | at PCF ε/3, 3ε | ns / fragment | bits / texel | fragments |\n| --- | ---: | ---: | ---: | ---: | ---: |\n",
     );
-    for (e, n, ns, bits, frags) in rows {
+    for (e, n, scaled, ns, bits, frags) in rows {
         let _ = writeln!(
             s,
-            "| {n} | {:.2} % | {} | {bits:.0} | {frags:.0} |",
+            "| {n} | {:.2} % | {scaled} | {} | {bits:.0} | {frags:.0} |",
             100.0 * e,
             fmt_ns(ns)
         );
@@ -225,6 +242,64 @@ fn sweeps(reports: &Path) -> Result<String> {
     for n in notes {
         let _ = writeln!(s, "\n{n}.");
     }
+    Ok(s)
+}
+
+/// The tuned setting per scene and over all scenes (`reports/default/tune/tune.json`): bits per
+/// texel, error with its leak/darkening split, and the paired gain over each of the paper's
+/// defaults (the references named "paper …").
+fn tune(reports: &Path) -> Result<String> {
+    let file = reports.join("default/tune/tune.json");
+    let v = read_json(&file)?;
+    let targets = v
+        .get("scenes")
+        .and_then(Value::as_array)
+        .cloned()
+        .unwrap_or_default()
+        .into_iter()
+        .chain(v.get("overall").cloned());
+    let pct = |x: f64| format!("{:.2}", 100.0 * x);
+    let mut s = String::from(
+        "| scene | tuned setting | bits / texel | error (leak + darkening) | gain over the paper's defaults |\n| --- | --- | ---: | ---: | --- |\n",
+    );
+    for t in targets {
+        let chosen = t
+            .get("chosen")
+            .ok_or_else(|| anyhow!("{}: a target without 'chosen'", file.display()))?;
+        let gains: Vec<String> = t
+            .get("references")
+            .and_then(Value::as_array)
+            .map(Vec::as_slice)
+            .unwrap_or_default()
+            .iter()
+            .filter_map(|r| {
+                let name = r.get("name")?.as_str()?.strip_prefix("paper ")?;
+                let g = r.get("gain")?;
+                Some(format!(
+                    "{} ± {} pp vs {name}",
+                    pct(g.get("mean")?.as_f64()?),
+                    pct(g.get("half_width")?.as_f64()?)
+                ))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.0} | {} % ({} + {}) | {} |",
+            t.get("scene").and_then(Value::as_str).unwrap_or("?"),
+            chosen.get("label").and_then(Value::as_str).unwrap_or("?"),
+            f(chosen, "bits_per_texel", &file)?,
+            pct(f(chosen, "error", &file)?),
+            pct(f(chosen, "leak", &file)?),
+            pct(f(chosen, "darkening", &file)?),
+            gains.join("; ")
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nTolerance {} percentage points of the best, {:.0} fragments per scene, 95 % paired intervals.",
+        pct(f(&v, "tolerance", &file)?),
+        f(&v, "fragments_per_scene", &file)?
+    );
     Ok(s)
 }
 
