@@ -94,6 +94,12 @@ fn flags_dead(args: &[String]) -> Option<String> {
     None
 }
 
+/// A momentlab command line (another tool's, such as `cargo test`, is not checked here).
+fn is_command(s: &str) -> bool {
+    let first = s.split_whitespace().next().unwrap_or("");
+    first == "momentlab" || first.ends_with("/momentlab")
+}
+
 /// Command lines in an artefact's text: (command, recorded as run).
 fn commands(path: &Path, text: &str) -> Vec<(String, bool)> {
     let mut out = Vec::new();
@@ -104,9 +110,10 @@ fn commands(path: &Path, text: &str) -> Vec<(String, bool)> {
                 serde_json::Value::Object(m) => {
                     for (k, x) in m {
                         match (k.as_str(), x) {
-                            ("command", serde_json::Value::String(s)) => {
+                            ("command", serde_json::Value::String(s)) if is_command(s) => {
                                 out.push((s.clone(), true))
                             }
+                            ("command", serde_json::Value::String(_)) => {}
                             _ => walk(x, out),
                         }
                     }
@@ -120,10 +127,6 @@ fn commands(path: &Path, text: &str) -> Vec<(String, bool)> {
         }
         return out;
     }
-    let is_command = |s: &str| {
-        let first = s.split_whitespace().next().unwrap_or("");
-        first == "momentlab" || first.ends_with("/momentlab")
-    };
     for (open, close) in [("`", "`"), ("<code>", "</code>")] {
         let mut rest = text;
         while let Some(p) = rest.find(open) {
@@ -221,6 +224,11 @@ fn the_scanner_finds_planted_dead_flags_and_tmp_paths() {
     w(
         "ok.md",
         "Run `momentlab candidates count --m 4` here; see `momentlab recommend --tolerance`.\n",
+    );
+    // Another tool's command (scripts/time-tests.sh records `cargo test --release`).
+    w(
+        "wall.json",
+        r#"{"command": "cargo test --release", "seconds": 1}"#,
     );
     assert_eq!(scan(&dir), Vec::<String>::new());
     // Planted: a removed flag, a /tmp path, an unknown subcommand.
