@@ -4,7 +4,7 @@
 
 use super::common::{resolution, usize_in};
 use crate::lp::bench::{run_one, BenchConfig, BenchRow};
-use crate::lp::bench_corpus::{self, CorpusRow};
+use crate::lp::bench_corpus::{self, CorpusRow, Start};
 use crate::lp::corpus::{self, Group};
 use crate::progress::Bar;
 use anyhow::{bail, Result};
@@ -22,6 +22,9 @@ pub enum CorpusKind {
     /// The adversarial corpus (lp::corpus: flat receivers, adjacent points, tight clusters,
     /// boundary moments, steep exponentials, power bases up to m = 12).
     Adversarial,
+    /// Given as moments only (the path of `momentlab lp`): mixed 1–4 Diracs on grid points and
+    /// flat-receiver windows, one row each per grid size, power basis z…z^m or `--basis`.
+    Moments,
 }
 
 #[derive(clap::Args, Debug)]
@@ -39,7 +42,7 @@ pub struct Args {
     /// `--corpus adversarial`: also the n = 4096 and 8192 tables.
     #[arg(long)]
     pub large: bool,
-    /// `--corpus stacks`: the basis (comma-separated catalog names or formulas, e.g.
+    /// `--corpus stacks|moments`: the basis (comma-separated catalog names or formulas, e.g.
     /// "exp(40z),tanh(10(z-0.5))") instead of the power basis z…z^m.
     #[arg(long)]
     pub basis: Option<String>,
@@ -167,32 +170,47 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-/// The problem groups of `--corpus stacks` (one table per grid size, power basis z…z^m) or
-/// `--corpus adversarial`.
+/// The problem groups of `--corpus stacks` (one table per grid size, power basis z…z^m or
+/// `--basis`), `--corpus moments` (two groups per grid size) or `--corpus adversarial`.
 fn groups(args: &Args) -> Result<Vec<Group>> {
     if args.corpus == CorpusKind::Adversarial {
         return corpus::adversarial(6, args.large, args.seed);
+    }
+    let basis: Vec<String> = match &args.basis {
+        Some(list) => crate::basis::split_list(list),
+        None => (1..=args.m).map(|k| format!("z^{k}")).collect(),
+    };
+    let catalog = crate::basis::Catalog::embedded();
+    let table = |n: usize| {
+        let grid = crate::Grid::uniform(n)?;
+        match &args.basis {
+            Some(_) => corpus::table_for(&catalog, &grid, &basis),
+            None => crate::lp::instances::power_table(&grid, args.m),
+        }
+    };
+    if args.corpus == CorpusKind::Moments {
+        let mut out = Vec::new();
+        for &n in &args.n {
+            let label = format!("[{}]", basis.join(", "));
+            out.extend(corpus::moments_groups(
+                &table(n)?,
+                &label,
+                args.inputs,
+                args.seed,
+            ));
+        }
+        return Ok(out);
     }
     let stacks = match &args.stacks {
         Some(d) => crate::stack::load_dir(d)?,
         None => crate::render::default_dataset(args.resolution)?,
     };
     let windows = crate::metrics::windows::stacks_corpus(&stacks, args.inputs, args.seed)?;
-    let basis: Vec<String> = match &args.basis {
-        Some(list) => crate::basis::split_list(list),
-        None => (1..=args.m).map(|k| format!("z^{k}")).collect(),
-    };
-    let catalog = crate::basis::Catalog::embedded();
     args.n
         .iter()
         .map(|&n| {
-            let grid = crate::Grid::uniform(n)?;
-            let table = match &args.basis {
-                Some(_) => corpus::table_for(&catalog, &grid, &basis)?,
-                None => crate::lp::instances::power_table(&grid, args.m)?,
-            };
             let name = format!("stacks, basis {} @ {n}", basis.join(", "));
-            corpus::from_windows(&name, &basis, &table, &windows.dists, &windows.zfs)
+            corpus::from_windows(&name, &basis, &table(n)?, &windows.dists, &windows.zfs)
         })
         .collect()
 }
@@ -234,7 +252,8 @@ fn print_top_groups(r: &CorpusRow, top: usize) {
     }
 }
 
-/// `--corpus stacks|adversarial`: one row per grid size (stacks) or one for the corpus.
+/// `--corpus stacks|moments|adversarial`: one row per group (stacks: per grid size; moments:
+/// per kind and grid size) or one for the corpus (adversarial).
 fn run_corpus(args: &Args) -> Result<()> {
     let groups = groups(args)?;
     let total: u64 = groups
@@ -242,16 +261,27 @@ fn run_corpus(args: &Args) -> Result<()> {
         .map(|g| g.problems.iter().map(|p| p.zf.len() as u64).sum::<u64>())
         .sum();
     let bar = Bar::new("bench lp: fast solves", total);
-    let rows: Vec<CorpusRow> = if args.corpus == CorpusKind::Stacks {
+    let start = match args.corpus {
+        CorpusKind::Moments => Start::Moments,
+        _ => Start::Distribution,
+    };
+    let rows: Vec<CorpusRow> = if args.corpus != CorpusKind::Adversarial {
         groups
             .iter()
             .map(|g| {
-                let name = format!("stacks n = {}", g.table.n());
+                let name = match args.corpus {
+                    CorpusKind::Moments => {
+                        let kind = g.name.split(' ').next().unwrap_or("");
+                        format!("{kind} n = {}", g.table.n())
+                    }
+                    _ => format!("stacks n = {}", g.table.n()),
+                };
                 bench_corpus::run(
                     &name,
                     std::slice::from_ref(g),
                     args.reference_inputs,
                     args.repeats,
+                    start,
                     |k| bar.inc(k),
                 )
             })
@@ -264,6 +294,7 @@ fn run_corpus(args: &Args) -> Result<()> {
             &groups,
             per,
             args.repeats,
+            start,
             |k| bar.inc(k),
         )?]
     };
@@ -272,8 +303,12 @@ fn run_corpus(args: &Args) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(&rows)?);
         return Ok(());
     }
+    let given = match start {
+        Start::Moments => "the moments only",
+        Start::Distribution => "each window's depth distribution",
+    };
     println!(
-        "Algorithm 1, fast solver given each window's depth distribution (one solver per table, warm), µs per LP: per-problem minimum of {} passes; reference = good_lp + microlp on a prefix, same run; pricing kernel {}",
+        "Algorithm 1, fast solver given {given} (one solver per table, warm), µs per LP: per-problem minimum of {} passes; reference = good_lp + microlp on a prefix, same run; pricing kernel {}",
         args.repeats,
         crate::lp::pricing_kernel()
     );
@@ -310,6 +345,19 @@ fn run_corpus(args: &Args) -> Result<()> {
         }
         if r.groups.len() > 1 {
             print_top_groups(r, args.top_groups);
+        }
+    }
+    if start == Start::Moments {
+        for pair in rows.chunks(2) {
+            if let [d, f] = pair {
+                println!(
+                    "  {} / {}: mean {:.2}× (median {:.2}×)",
+                    f.corpus,
+                    d.corpus,
+                    f.fast_us.mean / d.fast_us.mean,
+                    f.fast_us.median / d.fast_us.median
+                );
+            }
         }
     }
     println!("(× mean = reference mean / fast mean on the same problems; failed = no certificate for either verdict)");

@@ -2,9 +2,10 @@
 //! `--corpus adversarial`): µs per LP as mean, median, p99, p99.9 and max, per-problem status
 //! counts, and the microlp reference timed on a prefix of the same problems in the same run.
 //!
-//! Every problem is solved the way the pipeline solves it: given its depth distribution
-//! ([`MomentSolver::solve_distribution`]), one solver per table, warm state carried from one
-//! problem to the next.
+//! Every problem is solved the way the pipeline solves it — given its depth distribution
+//! ([`MomentSolver::solve_distribution`]) — or, with [`Start::Moments`], from its moments alone
+//! ([`MomentSolver::solve`], the path of `momentlab lp`); one solver per table, warm state
+//! carried from one problem to the next.
 
 use super::corpus::{Group, Problem};
 use super::fast::FastSolver;
@@ -104,6 +105,15 @@ pub struct GroupRow {
     pub first_reason: Option<String>,
 }
 
+/// What the fast solver is given.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Start {
+    /// The problem's depth distribution (the pipeline's path: crossover start).
+    Distribution,
+    /// Only its moments b = Σ w_i b(z_i), formed before the clock starts.
+    Moments,
+}
+
 /// Time the fast solver on every problem of `groups` (`repeats` passes, minimum per problem)
 /// and the reference on the first `reference_per_group` problems of each group, interleaved
 /// (see [`time_group`]);
@@ -113,6 +123,7 @@ pub fn run(
     groups: &[Group],
     reference_per_group: usize,
     repeats: usize,
+    start: Start,
     mut progress: impl FnMut(u64),
 ) -> Result<CorpusRow> {
     let mut fast_us = Vec::new();
@@ -146,7 +157,7 @@ pub fn run(
             sols,
             stats,
             reference,
-        } = time_group(g, repeats, reference_per_group)?;
+        } = time_group(g, repeats, reference_per_group, start)?;
         row.escalations += stats.escalations;
         row.exact += stats.exact;
         row.fallbacks += stats.fallbacks;
@@ -216,7 +227,12 @@ struct Timed {
 /// first `reference_per_group` problems. Both run stretch by stretch ([`STRETCH`] problems:
 /// the fast passes, then the reference on the same problems), so that the speed-up is a ratio
 /// of times taken in the same phase of a machine whose speed drifts by 10–40 % over seconds.
-fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<Timed> {
+fn time_group(
+    g: &Group,
+    repeats: usize,
+    reference_per_group: usize,
+    start: Start,
+) -> Result<Timed> {
     let mut solver = FastSolver::new(g.table.clone());
     solver.set_reference_fallback(false);
     let mut reference = ReferenceSolver::new(g.table.clone());
@@ -228,7 +244,14 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
     };
     for (s, stretch) in g.problems.chunks(STRETCH).enumerate() {
         let k0 = out.fast_us.len();
-        time_stretch(&mut solver, stretch, repeats, &mut out)?;
+        let moments = match start {
+            Start::Distribution => Vec::new(),
+            Start::Moments => stretch
+                .iter()
+                .map(|p| distribution_moments(&g.table, &p.dist))
+                .collect::<Result<_>>()?,
+        };
+        time_stretch(&mut solver, stretch, &moments, repeats, &mut out)?;
         // The reference on the first fragment depth of the stretch's problems in the prefix.
         let mut k = k0;
         for (i, p) in stretch.iter().enumerate() {
@@ -247,9 +270,12 @@ fn time_group(g: &Group, repeats: usize, reference_per_group: usize) -> Result<T
 
 /// `repeats` passes of the fast solver over one stretch, each from the warm state the stretch
 /// started with: appends the minimum µs and the last pass's answers and counters to `out`.
+/// Given `moments` (one vector per problem) the solver gets those instead of the
+/// distributions.
 fn time_stretch(
     solver: &mut FastSolver,
     stretch: &[Problem],
+    moments: &[Vec<f64>],
     repeats: usize,
     out: &mut Timed,
 ) -> Result<()> {
@@ -260,10 +286,13 @@ fn time_stretch(
         out.sols.truncate(k0);
         let before = solver.stats();
         let mut k = k0;
-        for p in stretch {
+        for (j, p) in stretch.iter().enumerate() {
             for &zf in &p.zf {
                 let t0 = Instant::now();
-                let s = solver.solve_distribution(&p.dist, zf)?;
+                let s = match moments.get(j) {
+                    Some(b) => solver.solve(b, zf)?,
+                    None => solver.solve_distribution(&p.dist, zf)?,
+                };
                 let us = t0.elapsed().as_secs_f64() * 1e6;
                 if rep == 0 {
                     out.fast_us.push(us);
@@ -289,7 +318,7 @@ fn time_stretch(
 
 #[cfg(test)]
 mod tests {
-    use super::{time_group, Spread, STRETCH};
+    use super::{time_group, Spread, Start, STRETCH};
     use crate::lp::corpus::{problem, Group, Kind};
     use crate::lp::fast::FastSolver;
     use crate::lp::instances::power_table;
@@ -327,7 +356,7 @@ mod tests {
             table: table.clone(),
             problems,
         };
-        let timed = time_group(&g, 3, STRETCH + 5).unwrap();
+        let timed = time_group(&g, 3, STRETCH + 5, Start::Distribution).unwrap();
         let mut fast = FastSolver::new(table);
         fast.set_reference_fallback(false);
         let mut k = 0;
@@ -346,6 +375,27 @@ mod tests {
         assert!(timed.fast_us.iter().all(|t| t.is_finite() && *t >= 0.0));
         let at: Vec<usize> = timed.reference.iter().map(|r| r.0).collect();
         assert_eq!(at, firsts[..STRETCH + 5].to_vec());
+    }
+
+    /// Given [`Start::Moments`] the timed passes answer as `solve` on the moments, one problem
+    /// after the other on one solver.
+    #[test]
+    fn moments_start_answers_as_sequential_solves() {
+        let grid = Grid::uniform(512).unwrap();
+        let table = power_table(&grid, 4).unwrap();
+        let mut groups = crate::lp::corpus::moments_groups(&table, "z..z^4", STRETCH + 7, 3);
+        assert_eq!(groups.len(), 2);
+        for g in &mut groups {
+            let timed = time_group(g, 2, 3, Start::Moments).unwrap();
+            let mut fast = FastSolver::new(table.clone());
+            for (k, p) in g.problems.iter().enumerate() {
+                assert_eq!(p.zf.len(), 1);
+                let b = crate::lp::distribution_moments(&table, &p.dist).unwrap();
+                let s = fast.solve(&b, p.zf[0]).unwrap();
+                assert_eq!(s, timed.sols[k], "{} problem {k}", g.name);
+            }
+            assert_eq!(timed.reference.len(), 3);
+        }
     }
 
     #[test]

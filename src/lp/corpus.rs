@@ -117,6 +117,63 @@ pub fn adversarial(per_kind: usize, large: bool, seed: u64) -> Result<Vec<Group>
     Ok(out)
 }
 
+/// The moments-only corpus at one grid size (`momentlab bench lp --corpus moments`): two
+/// groups of `count` problems each on `table`, one fragment depth per problem, to be solved
+/// from the moments alone as `momentlab lp` and other programs call the solver:
+/// * "diracs": 1–4 Diracs (uniformly many) at random grid points with weights in [0.05, 1),
+///   z_f uniform on [0, 1];
+/// * "flat": flat-receiver windows ([`Kind::Flat`]) with one of that kind's fragment depths
+///   (below, at, inside, above the support or uniform) drawn at random.
+pub fn moments_groups(table: &GridTable, label: &str, count: usize, seed: u64) -> Vec<Group> {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let (n, m) = (table.n(), table.m());
+    let diracs = (0..count)
+        .map(|_| {
+            let k = rng.gen_range(1..=4usize);
+            let atoms: Vec<(u32, f64)> = (0..k)
+                .map(|_| (rng.gen_range(0..n) as u32, rng.gen_range(0.05..1.0)))
+                .collect();
+            Problem {
+                dist: normalised(atoms),
+                zf: vec![rng.gen_range(0.0..=1.0)],
+            }
+        })
+        .collect();
+    let flat = (0..count)
+        .map(|_| {
+            let p = problem(&mut rng, n, m, Kind::Flat);
+            let zf = p.zf[rng.gen_range(0..p.zf.len())];
+            Problem {
+                dist: p.dist,
+                zf: vec![zf],
+            }
+        })
+        .collect();
+    let group = |kind: &str, problems| Group {
+        name: format!("{kind} {label} @ {n}"),
+        basis: Vec::new(),
+        table: table.clone(),
+        problems,
+    };
+    vec![group("diracs", diracs), group("flat", flat)]
+}
+
+/// Atoms sorted by grid index, duplicates merged, weights normalised to sum 1.
+fn normalised(mut dist: Vec<(u32, f64)>) -> Vec<(u32, f64)> {
+    dist.sort_by_key(|e| e.0);
+    dist.dedup_by(|a, b| {
+        if a.0 == b.0 {
+            b.1 += a.1;
+            true
+        } else {
+            false
+        }
+    });
+    let total: f64 = dist.iter().map(|e| e.1).sum();
+    dist.iter_mut().for_each(|e| e.1 /= total);
+    dist
+}
+
 /// Tabulate formulas (catalog names or formulas) on `grid`.
 pub fn table_for(catalog: &Catalog, grid: &Grid, basis: &[String]) -> Result<GridTable> {
     let fns = basis
@@ -135,7 +192,7 @@ pub fn table_for(catalog: &Catalog, grid: &Grid, basis: &[String]) -> Result<Gri
 pub fn problem(rng: &mut impl Rng, n: usize, m: usize, kind: Kind) -> Problem {
     let h = 1.0 / (n - 1) as f64;
     let z = |i: usize| i as f64 * h;
-    let mut dist: Vec<(u32, f64)> = match kind {
+    let dist: Vec<(u32, f64)> = match kind {
         Kind::Flat => flat_window(rng, n),
         Kind::Adjacent => {
             let k = rng.gen_range(1..=3usize);
@@ -171,17 +228,7 @@ pub fn problem(rng: &mut impl Rng, n: usize, m: usize, kind: Kind) -> Problem {
                 .collect()
         }
     };
-    dist.sort_by_key(|e| e.0);
-    dist.dedup_by(|a, b| {
-        if a.0 == b.0 {
-            b.1 += a.1;
-            true
-        } else {
-            false
-        }
-    });
-    let total: f64 = dist.iter().map(|e| e.1).sum();
-    dist.iter_mut().for_each(|e| e.1 /= total);
+    let dist = normalised(dist);
     // z_f: below, at, inside and above the support, and one uniform point.
     let lo = dist[0].0 as usize;
     let hi = dist[dist.len() - 1].0 as usize;
