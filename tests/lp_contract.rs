@@ -130,7 +130,6 @@ fn adversarial_corpus_is_certified() {
     let (mut above, mut ill_posed) = (0u64, 0u64);
     for g in &groups {
         let mut s = FastSolver::new(g.table.clone());
-        s.set_reference_fallback(false);
         let (n, m) = (g.table.n(), g.table.m());
         let fmax: Vec<f64> = (0..m)
             .map(|j| (0..n).map(|i| g.table.row(i)[j].abs()).fold(0.0, f64::max))

@@ -27,7 +27,6 @@ fn steep_exponential_lp_lies_between_markov_and_the_cdf() {
     let grid = Grid::uniform(1024).unwrap();
     let table = table_for(&Catalog::embedded(), &grid, &["exp(80*(z-1))".to_string()]).unwrap();
     let mut solver = FastSolver::new(table.clone());
-    solver.set_reference_fallback(false);
     let (mut below_markov, mut above_cdf, mut strict) = (0, 0, 0);
     for (w, &zf) in windows.dists.iter().zip(&windows.zfs) {
         // The window's distribution snapped to the grid (as the pipeline does for LP candidates).

@@ -73,9 +73,10 @@ pub struct Opts {
     /// LP grid size n (uniform on [0,1]; 2..=1048576).
     #[arg(long, default_value_t = 1024, value_parser = usize_in(2, MAX_GRID))]
     pub grid: usize,
-    /// LP solver: fast-strict (default: unsettled LPs count as failures, G = 0, reported per
-    /// candidate), fast (unsettled LPs go to the reference solver, slow) or reference.
-    #[arg(long, default_value = "fast-strict")]
+    /// LP solver: fast (default: every answer certified; unsettled LPs count as failures,
+    /// G = 0, reported per candidate) or reference (microlp, uncertified, slow). "fast-strict"
+    /// is accepted as fast.
+    #[arg(long, default_value = "fast")]
     pub solver: String,
     /// Fragments in racing stage 0 (each next stage: × growth; ≥ 1).
     #[arg(long, default_value_t = 1024, value_parser = usize_in(1, u32::MAX as u64))]

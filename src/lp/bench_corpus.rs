@@ -69,8 +69,6 @@ pub struct CorpusRow {
     pub escalations: u64,
     /// Of which settled only by the exact simplex (`lp::exact`).
     pub exact: u64,
-    /// Fallbacks to the reference (the fast solver runs with the fallback off: must be 0).
-    pub fallbacks: u64,
     /// The reference (good_lp + microlp) on a prefix of the problems, µs per LP.
     pub reference_problems: usize,
     pub reference_us: Spread,
@@ -139,7 +137,6 @@ pub fn run(
         failed: 0,
         escalations: 0,
         exact: 0,
-        fallbacks: 0,
         reference_problems: 0,
         reference_us: Spread::default(),
         fast_prefix_mean_us: f64::NAN,
@@ -160,7 +157,6 @@ pub fn run(
         } = time_group(g, repeats, reference_per_group, start)?;
         row.escalations += stats.escalations;
         row.exact += stats.exact;
-        row.fallbacks += stats.fallbacks;
         row.groups.push(GroupRow {
             name: g.name.clone(),
             problems: times.len(),
@@ -215,7 +211,7 @@ struct Timed {
     fast_us: Vec<f64>,
     /// Its answers (of the last pass).
     sols: Vec<Solution>,
-    /// Its counters over one pass (escalations, exact, fallbacks, same_moments, pivots).
+    /// Its counters over one pass (escalations, exact, same_moments, pivots).
     stats: super::fast::FastStats,
     /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
     /// of the first problems.
@@ -234,7 +230,6 @@ fn time_group(
     start: Start,
 ) -> Result<Timed> {
     let mut solver = FastSolver::new(g.table.clone());
-    solver.set_reference_fallback(false);
     let mut reference = ReferenceSolver::new(g.table.clone());
     let mut out = Timed {
         fast_us: Vec::new(),
@@ -308,7 +303,6 @@ fn time_stretch(
             let after = solver.stats();
             out.stats.escalations += after.escalations - before.escalations;
             out.stats.exact += after.exact - before.exact;
-            out.stats.fallbacks += after.fallbacks - before.fallbacks;
             out.stats.same_moments += after.same_moments - before.same_moments;
             out.stats.pivots += after.pivots - before.pivots;
         }
@@ -358,7 +352,6 @@ mod tests {
         };
         let timed = time_group(&g, 3, STRETCH + 5, Start::Distribution).unwrap();
         let mut fast = FastSolver::new(table);
-        fast.set_reference_fallback(false);
         let mut k = 0;
         let mut firsts = Vec::new();
         for p in &g.problems {

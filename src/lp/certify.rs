@@ -149,6 +149,27 @@ pub struct Certifier {
     rm: Vec<f64>,
 }
 
+/// Whether f_j does not change sign on the grid.
+fn sign_definite(col: &[f64]) -> bool {
+    col.iter().all(|&v| v >= 0.0) || col.iter().all(|&v| v <= 0.0)
+}
+
+/// The floor of the scale σ_j = max(|b̄_j|, floor) on which moment j is judged, from the
+/// function's grid values `col`: min([`SCALE_FLOOR`] · max_i |f_j(z_i)|, min_i |f_j(z_i)| ≠ 0)
+/// for a sign-definite function, [`CANCEL`] · max_i |f_j(z_i)| for one that changes sign.
+pub fn scale_floor(col: &[f64]) -> f64 {
+    let fmax = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    if sign_definite(col) {
+        let fmin = col
+            .iter()
+            .filter(|v| **v != 0.0)
+            .fold(f64::INFINITY, |a, v| a.min(v.abs()));
+        (SCALE_FLOOR * fmax).min(fmin)
+    } else {
+        CANCEL * fmax
+    }
+}
+
 impl Certifier {
     /// A certifier for `table` whose square bases use the function rows `rows` (0 = the
     /// constant, must be first; all of 0..=m when the functions are independent).
@@ -164,16 +185,8 @@ impl Certifier {
                 *v = table.row(i)[j - 1];
             }
             fmax[j] = col.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let fmin = col
-                .iter()
-                .filter(|v| **v != 0.0)
-                .fold(f64::INFINITY, |a, v| a.min(v.abs()));
-            definite[j] = col.iter().all(|&v| v >= 0.0) || col.iter().all(|&v| v <= 0.0);
-            floor[j] = if definite[j] {
-                (SCALE_FLOOR * fmax[j]).min(fmin)
-            } else {
-                CANCEL * fmax[j]
-            };
+            definite[j] = sign_definite(col);
+            floor[j] = scale_floor(col);
         }
         let r = rows.len();
         let offs = rows[1..].iter().map(|&j| (j - 1) * n).collect();

@@ -170,21 +170,13 @@ pub const MAX_FUNCTIONS: usize = 31;
 /// Largest grid table n·m (f64 values, 512 MiB), checked before it is allocated.
 pub const MAX_TABLE_VALUES: usize = 1 << 26;
 
-/// The solver of the given name on `table`: "reference" or "fast" ("fast-strict" is accepted
-/// as the same solver: problems nothing certifies come back `Failed`, never from a reference
-/// fallback).
+/// The solver of the given name on `table`: "reference" or "fast" (also accepted as
+/// "fast-strict", its earlier name). Problems nothing certifies come back `Failed`.
 pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
     match kind {
         "reference" => Ok(Box::new(reference::ReferenceSolver::new(table))),
-        "fast" => Ok(Box::new(fast::FastSolver::new(table))),
-        "fast-strict" => {
-            let mut s = fast::FastSolver::new(table);
-            s.set_reference_fallback(false);
-            Ok(Box::new(s))
-        }
-        other => {
-            bail!("unknown LP solver '{other}' (expected 'reference', 'fast' or 'fast-strict')")
-        }
+        "fast" | "fast-strict" => Ok(Box::new(fast::FastSolver::new(table))),
+        other => bail!("unknown LP solver '{other}' (expected 'fast' or 'reference')"),
     }
 }
 
@@ -205,8 +197,9 @@ pub fn settled_g(sol: &Result<Solution>) -> Option<f64> {
 }
 
 /// Whether `sol`'s support lies on the grid and reproduces every moment to `tol` of that
-/// moment's own scale max(|b_j|, 1e-10 · max_i |f_j(z_i)|): how an answer that did not come
-/// with a certificate (the reference's) is judged before it is compared.
+/// moment's own scale σ_j = max(|b_j|, [`certify::scale_floor`]), the scale the certificates
+/// use: how an answer that did not come with a certificate (the reference's) is judged before
+/// it is compared.
 pub fn support_reproduces(table: &GridTable, b: &[f64], sol: &Solution, tol: f64) -> bool {
     let z = table.grid().points();
     let mut mom = vec![0.0; table.m()];
@@ -220,10 +213,8 @@ pub fn support_reproduces(table: &GridTable, b: &[f64], sol: &Solution, tol: f64
         }
     }
     (0..table.m()).all(|j| {
-        let fmax = (0..table.n())
-            .map(|i| table.row(i)[j].abs())
-            .fold(0.0, f64::max);
-        (mom[j] - b[j]).abs() <= tol * b[j].abs().max(1e-10 * fmax)
+        let col: Vec<f64> = (0..table.n()).map(|i| table.row(i)[j]).collect();
+        (mom[j] - b[j]).abs() <= tol * b[j].abs().max(certify::scale_floor(&col))
     })
 }
 

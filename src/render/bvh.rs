@@ -193,10 +193,6 @@ impl Bvh {
         Bvh { nodes, tris }
     }
 
-    pub fn triangle_count(&self) -> usize {
-        self.tris.len()
-    }
-
     /// Calls `f(triangle, w)` for every triangle hit by the ray at (u, v).
     #[inline]
     pub fn for_each_hit(&self, u: f64, v: f64, mut f: impl FnMut(&LTri, f64)) {

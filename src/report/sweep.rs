@@ -40,7 +40,7 @@ pub struct ReportOptions {
 impl Default for ReportOptions {
     fn default() -> Self {
         ReportOptions {
-            solver: "fast-strict".into(),
+            solver: "fast".into(),
             chunk: 4096,
             compare: Vec::new(),
             fig3_points: 96,

@@ -25,7 +25,7 @@ pub struct SweepOptions {
     pub catalog: Option<PathBuf>,
     /// LP grid size n (uniform on [0,1]).
     pub grid: usize,
-    /// "fast-strict" (default), "fast" or "reference" ([`crate::lp::make_solver`]).
+    /// "fast" (default) or "reference" ([`crate::lp::make_solver`]).
     pub solver: String,
     /// Fragments per solver instance (warm-start chain).
     pub chunk: usize,
@@ -64,7 +64,7 @@ impl Default for SweepOptions {
             m: 4,
             catalog: None,
             grid: 1024,
-            solver: "fast-strict".into(),
+            solver: "fast".into(),
             chunk: 4096,
             bias: Bias::default(),
             max_fragments: Some(super::DEFAULT_MAX_FRAGMENTS),

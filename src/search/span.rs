@@ -96,11 +96,6 @@ impl SpanAnalyzer {
         Some(q)
     }
 
-    /// True when (1, b) is numerically rank-deficient on the grid.
-    pub fn is_degenerate(&self, cols: &[usize]) -> bool {
-        self.basis(cols).is_none()
-    }
-
     /// The flag of the candidate `cols` (sorted, distinct function indices).
     pub fn flag(&self, cols: &[usize]) -> Flag {
         let Some(v) = self.basis(cols) else {

@@ -40,8 +40,9 @@
 //! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
 //!   original system in double-double arithmetic); weights that turn out infeasible trigger a
 //!   rerun in accurate mode (see `finish_optimal`).
-//! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), and as the
-//!   last resort the reference solver (counted in [`FastStats::fallbacks`]); never an endless loop.
+//! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), then the
+//!   scaled double-double simplex ([`super::scaled`]) and the exact simplex ([`super::exact`]);
+//!   what none of them certifies is `Failed` with the reason. Never an endless loop.
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
@@ -55,7 +56,6 @@ mod starts;
 use super::certify::{Certified, Certifier};
 use super::exact::{ExactAnswer, ExactSimplex};
 use super::pricing::ColumnTable;
-use super::reference::ReferenceSolver;
 use super::scaled::{Found, ScaledSimplex};
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
@@ -113,12 +113,10 @@ pub struct FastStats {
     pub loose: u64,
     /// Cold restarts after an iteration cap, a singular basis or a failed verification.
     pub restarts: u64,
-    /// Problems handed to the reference solver after everything else failed.
-    pub fallbacks: u64,
     /// Problems escalated to the scaled simplex ([`super::scaled`]): the fast answer was not
     /// certified, or the fast runs did not converge, or phase 1 called them infeasible.
     pub escalations: u64,
-    /// Problems returned as `Failed` (nothing settled them and the reference fallback is off).
+    /// Problems returned as `Failed` (nothing certified either verdict).
     pub failed: u64,
     /// Problems handed to the exact simplex ([`super::exact`]) after the scaled simplex.
     pub exact: u64,
@@ -203,10 +201,6 @@ pub struct FastSolver {
     /// The exactly optimal basis of the last answer from the exact simplex, if the last
     /// answer came from it.
     last_exact: Option<Vec<usize>>,
-    fallback: Option<ReferenceSolver>,
-    /// Hand problems nothing else settles to the reference solver (default) or report them
-    /// `Failed`.
-    use_fallback: bool,
     // Workspace (no allocation per solve).
     c: Vec<f64>,
     u: Vec<f64>,
@@ -310,8 +304,6 @@ impl FastSolver {
             cert: Certifier::new(&table, cert_rows),
             scaled: ScaledSimplex::default(),
             last_exact: None,
-            fallback: None,
-            use_fallback: false,
             c: vec![0.0; r],
             u: vec![0.0; r],
             basis: vec![0; r],
@@ -360,14 +352,6 @@ impl FastSolver {
         };
         solver.set_partial_pricing(true);
         solver
-    }
-
-    /// Whether problems that neither the fast runs nor the scaled simplex settle are also given
-    /// to the reference solver, whose support is then certified like any other basis (off by
-    /// default: the reference is an oracle for the tests, not a rescue). Without a certificate
-    /// the answer is `Failed` either way.
-    pub fn set_reference_fallback(&mut self, on: bool) {
-        self.use_fallback = on;
     }
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
@@ -603,17 +587,9 @@ impl FastSolver {
         if sol.status != Status::Failed {
             return Ok(sol);
         }
-        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`). The
-        // reference, when enabled, is one more source of a basis to certify, not a rescue.
+        // Nothing certified: `Failed` with the reason (never an uncertified `optimal`).
         self.stats.failed += 1;
         let escalation = sol.reason.unwrap_or_default();
-        if self.use_fallback {
-            if let Some(c) = self.reference_certified(moments, zf, kf) {
-                self.stats.failed -= 1;
-                self.stats.fallbacks += 1;
-                return Ok(c);
-            }
-        }
         Ok(Solution::failed(format!(
             "{}; {escalation}",
             legacy.reason()
@@ -679,30 +655,6 @@ impl FastSolver {
             }
         }
         Err(legacy)
-    }
-
-    /// The reference's answer, if its support (completed to a basis) certifies.
-    fn reference_certified(&mut self, moments: &[f64], zf: f64, kf: usize) -> Option<Solution> {
-        let table = &self.table;
-        let fb = self
-            .fallback
-            .get_or_insert_with(|| ReferenceSolver::new(table.clone()));
-        let sol = fb.solve(moments, zf).ok()?;
-        if sol.status == Status::Infeasible {
-            return None;
-        }
-        let grid = self.table.grid();
-        let dist: Vec<(u32, f64)> = sol
-            .support
-            .iter()
-            .map(|&(z, w)| (grid.nearest(z) as u32, w))
-            .collect();
-        let mut basis = self.support_basis(&dist)?;
-        let c = self
-            .cert
-            .improve(moments, kf, &mut basis, IMPROVE_STEPS)
-            .ok()?;
-        Some(certified(c))
     }
 
     /// The scaled simplex on the problem, from `start` if given; its answer certified. What
