@@ -70,6 +70,46 @@ impl GridTable {
         })
     }
 
+    /// A table of any number of functions (a catalog tabulated once, from which LP tables are
+    /// gathered by [`GridTable::columns`]); `values` row-major n × m, finite, checked by the
+    /// caller. Only the size limit applies.
+    pub(crate) fn wide(grid: &Grid, m: usize, values: Vec<f64>) -> Result<GridTable> {
+        let n = grid.len();
+        if m == 0 || values.len() != n * m {
+            bail!(
+                "function table: {} values for {n} points × {m} functions",
+                values.len()
+            );
+        }
+        if values.len() > MAX_TABLE_VALUES {
+            bail!(
+                "grid × functions: {n} points × {m} functions is more than the limit of \
+                 {MAX_TABLE_VALUES} table values"
+            );
+        }
+        Ok(GridTable {
+            grid: grid.clone(),
+            m,
+            values,
+        })
+    }
+
+    /// The LP table of the functions `cols` (indices into this table's functions): a gather of
+    /// columns, with the limits of [`GridTable::from_fn`].
+    pub fn columns(&self, cols: &[usize]) -> Result<GridTable> {
+        if let Some(&c) = cols.iter().find(|&&c| c >= self.m) {
+            bail!("function index {c} out of range (table has {})", self.m);
+        }
+        let mut i = 0;
+        GridTable::from_fn(&self.grid, cols.len(), |_, out| {
+            let row = self.row(i);
+            for (o, &c) in out.iter_mut().zip(cols) {
+                *o = row[c];
+            }
+            i += 1;
+        })
+    }
+
     pub fn grid(&self) -> &Grid {
         &self.grid
     }

@@ -44,12 +44,12 @@ use crate::lp::GridTable;
 use crate::Grid;
 use anyhow::{bail, Result};
 
-/// N functions tabulated on a grid: `value(i, j) = f_j(z_i)`, row-major n × N.
+/// N functions tabulated on a grid with their names: an [`lp::GridTable`] of any width (a
+/// catalog), from which each candidate's LP table is gathered.
 #[derive(Clone, Debug)]
 pub struct FunctionTable {
-    grid: Grid,
+    table: GridTable,
     names: Vec<String>,
-    values: Vec<f64>,
 }
 
 impl FunctionTable {
@@ -71,9 +71,8 @@ impl FunctionTable {
             }
         }
         Ok(FunctionTable {
-            grid: grid.clone(),
+            table: GridTable::wide(grid, nf, values)?,
             names,
-            values,
         })
     }
 
@@ -84,7 +83,7 @@ impl FunctionTable {
     }
 
     pub fn grid(&self) -> &Grid {
-        &self.grid
+        self.table.grid()
     }
     /// Number of functions N.
     pub fn len(&self) -> usize {
@@ -98,26 +97,15 @@ impl FunctionTable {
     }
     /// f_j(z_i).
     pub fn value(&self, i: usize, j: usize) -> f64 {
-        self.values[i * self.names.len() + j]
+        self.table.row(i)[j]
     }
     /// Row i: all N function values at z_i.
     pub fn row(&self, i: usize) -> &[f64] {
-        let nf = self.names.len();
-        &self.values[i * nf..(i + 1) * nf]
+        self.table.row(i)
     }
     /// The Algorithm 1 constraint table of the candidate `cols` (a gather of m columns).
     pub fn grid_table(&self, cols: &[usize]) -> Result<GridTable> {
-        if let Some(&c) = cols.iter().find(|&&c| c >= self.len()) {
-            bail!("function index {c} out of range (table has {})", self.len());
-        }
-        let mut i = 0;
-        GridTable::from_fn(&self.grid, cols.len(), |_, out| {
-            let row = self.row(i);
-            for (o, &c) in out.iter_mut().zip(cols) {
-                *o = row[c];
-            }
-            i += 1;
-        })
+        self.table.columns(cols)
     }
     /// The names of the functions `cols`.
     pub fn names_of(&self, cols: &[usize]) -> Vec<String> {
@@ -131,10 +119,10 @@ impl FunctionTable {
             h.bytes(n.as_bytes());
             h.bytes(&[0]);
         }
-        for z in self.grid.points() {
+        for z in self.table.grid().points() {
             h.u64(z.to_bits());
         }
-        for v in &self.values {
+        for v in self.table.values() {
             h.u64(v.to_bits());
         }
         h.finish()
