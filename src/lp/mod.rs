@@ -16,6 +16,7 @@ pub mod exact;
 pub mod fast;
 mod gi_pricing;
 pub mod instances;
+mod ortho;
 mod pricing;
 pub mod reference;
 mod row_kernels;

@@ -152,36 +152,15 @@ fn microlp_solve(t: &GridTable, moments: &[f64], zf: f64, tm: &[f64]) -> Result<
 }
 
 /// T = √n R^{-T} for the QR factorisation M = Q R of M = [1, b_1(z), …, b_m(z)] on the grid
-/// (modified Gram–Schmidt, twice), so that T [1; b(z_i)] = √n Q_i: orthonormal rows. None if
+/// ([`super::ortho::gram_schmidt`]), so that T [1; b(z_i)] = √n Q_i: orthonormal rows. None if
 /// M is numerically rank-deficient.
 fn orthonormalising_transform(t: &GridTable) -> Option<Vec<f64>> {
-    let (n, m) = (t.n(), t.m());
-    let mm = m + 1;
-    let mut q: Vec<Vec<f64>> = Vec::with_capacity(mm);
-    let mut r = vec![0.0; mm * mm]; // r[k*mm + j] = R[k][j]
-    for j in 0..mm {
-        let mut v: Vec<f64> = (0..n)
-            .map(|i| if j == 0 { 1.0 } else { t.row(i)[j - 1] })
-            .collect();
-        let n0 = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        for _ in 0..2 {
-            for (k, qk) in q.iter().enumerate() {
-                let h: f64 = qk.iter().zip(&v).map(|(a, b)| a * b).sum();
-                r[k * mm + j] += h;
-                for (a, b) in v.iter_mut().zip(qk) {
-                    *a -= h * b;
-                }
-            }
-        }
-        let nv = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-        if nv.is_nan() || nv <= 1e-10 * n0 {
-            return None;
-        }
-        r[j * mm + j] = nv;
-        v.iter_mut().for_each(|a| *a /= nv);
-        q.push(v);
+    let (n, mm) = (t.n(), t.m() + 1);
+    let (_, rc, kept, _) = super::ortho::gram_schmidt(t);
+    if kept.iter().any(|k| k.is_none()) {
+        return None;
     }
-    // Solve Rᵀ X = √n I column by column (Rᵀ lower triangular): X = √n R^{-T}.
+    // R[k][j] = rc[j*mm + k]. Solve Rᵀ X = √n I column by column (Rᵀ lower triangular).
     let sn = (n as f64).sqrt();
     let mut tm = vec![0.0; mm * mm];
     for col in 0..mm {
@@ -189,9 +168,9 @@ fn orthonormalising_transform(t: &GridTable) -> Option<Vec<f64>> {
             // (Rᵀ)[row][k] = R[k][row]
             let mut acc = if row == col { sn } else { 0.0 };
             for k in 0..row {
-                acc -= r[k * mm + row] * tm[k * mm + col];
+                acc -= rc[row * mm + k] * tm[k * mm + col];
             }
-            tm[row * mm + col] = acc / r[row * mm + row];
+            tm[row * mm + col] = acc / rc[row * mm + row];
         }
     }
     Some(tm)

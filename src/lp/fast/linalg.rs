@@ -1,15 +1,7 @@
 //! Dense linear algebra on the r ≤ 9 rows of the transformed LP: dot products, the explicit
 //! inverse (Gauss–Jordan), least squares by Gram–Schmidt, and greedy maximal-volume bases.
 
-/// a·b.
-pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// ‖a‖₂.
-pub(super) fn norm(a: &[f64]) -> f64 {
-    dot(a, a).sqrt()
-}
+pub(super) use crate::lp::ortho::{dot, norm};
 
 /// `f::<R>(args)` for the row count r = R ≤ 9 (loops unrolled at compile time), else
 /// `f::<0>(args)` (any r).

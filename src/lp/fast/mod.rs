@@ -72,8 +72,6 @@ const TOL_D: f64 = 1e-10;
 const TOL_PIV: f64 = 1e-9;
 /// Residual of the phase-1 optimum above which the moments are declared infeasible.
 const TOL_INF: f64 = 1e-9;
-/// Relative residual below which a basis function counts as dependent on the previous ones.
-const TOL_RANK: f64 = 1e-10;
 /// Relative tolerance of the consistency check of a dependent function's moment.
 const TOL_DEP: f64 = 1e-8;
 /// Largest condition number (Frobenius) of a basis accepted at refactorisation.

@@ -2,8 +2,9 @@
 //! Gram–Schmidt with reorthogonalisation, dependent functions dropped), the transformed columns
 //! a_i = √n Q_{i,·}, cond_F(R), and the transformed moments c = √n R^{-T} b̄.
 
-use super::linalg::{dot, invert, norm};
-use super::{FastSolver, TOL_DEP, TOL_RANK};
+use super::linalg::{invert, norm};
+use super::{FastSolver, TOL_DEP};
+use crate::lp::ortho::gram_schmidt;
 use crate::lp::GridTable;
 
 /// The orthonormalised table.
@@ -21,11 +22,6 @@ pub(super) struct Ortho {
     /// For function j: max |M_j| over the grid.
     pub(super) fscale: Vec<f64>,
 }
-
-/// The Gram–Schmidt factors of M: the orthonormal columns q of the kept functions, R (all
-/// m+1 functions, (m+1)² entries, column j at j*(m+1)), which functions were kept, and their
-/// scales max_i |M_j(z_i)|.
-type Factors = (Vec<Vec<f64>>, Vec<f64>, Vec<Option<usize>>, Vec<f64>);
 
 /// M = Q R for the table; Q scaled to the transformed columns (see [`Ortho`]).
 pub(super) fn orthonormalise(table: &GridTable) -> Ortho {
@@ -54,50 +50,6 @@ pub(super) fn orthonormalise(table: &GridTable) -> Ortho {
         kept,
         fscale,
     }
-}
-
-/// Modified Gram–Schmidt with reorthogonalisation over the functions 1, b_1, …, b_m on the
-/// grid; a function whose relative residual is below TOL_RANK is dropped (dependent).
-fn gram_schmidt(table: &GridTable) -> Factors {
-    let (n, mm) = (table.n(), table.m() + 1);
-    let mut q: Vec<Vec<f64>> = Vec::with_capacity(mm);
-    let mut rcoef_full = vec![0.0; mm * mm];
-    let mut kept = vec![None; mm];
-    let mut fscale = vec![0.0; mm];
-    for j in 0..mm {
-        let mut v: Vec<f64> = if j == 0 {
-            vec![1.0; n]
-        } else {
-            (0..n).map(|i| table.row(i)[j - 1]).collect()
-        };
-        fscale[j] = v.iter().fold(0.0f64, |a, &b| a.max(b.abs()));
-        // Work on v·2^-e (exact) so that ‖v‖² cannot overflow (exp(400z) reaches 1e173).
-        let unit = crate::lp::dense::inv_pow2(fscale[j]);
-        v.iter_mut().for_each(|x| *x *= unit);
-        let norm0 = norm(&v);
-        let coef = &mut rcoef_full[j * mm..(j + 1) * mm];
-        for _pass in 0..2 {
-            for (k, qk) in q.iter().enumerate() {
-                let h = dot(qk, &v);
-                coef[k] += h;
-                for (vi, qi) in v.iter_mut().zip(qk) {
-                    *vi -= h * qi;
-                }
-            }
-        }
-        let nv = norm(&v);
-        if norm0 > 0.0 && nv > TOL_RANK * norm0 {
-            coef[q.len()] = nv;
-            kept[j] = Some(q.len());
-            for vi in v.iter_mut() {
-                *vi /= nv;
-            }
-            q.push(v);
-        }
-        // R's column of the unscaled function.
-        coef.iter_mut().for_each(|c| *c /= unit);
-    }
-    (q, rcoef_full, kept, fscale)
 }
 
 /// cond_F(R) over the kept functions (= condition of M on the grid); ∞ if R is singular.
