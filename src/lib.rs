@@ -33,6 +33,7 @@ pub mod basis;
 pub mod cli;
 pub mod grid;
 pub mod kernel;
+pub mod linalg;
 pub mod lp;
 pub mod metrics;
 pub mod pipeline;

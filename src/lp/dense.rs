@@ -1,8 +1,10 @@
 //! Small dense kernels shared by the certificates and the scaled simplex: error-free
 //! transformations (exact products and sums), a compensated dot product, exact power-of-two
-//! scales, and an LU factorisation with partial pivoting for r ≤ ~16 rows.
+//! scales, and the double-double LU (the f64 one is [`crate::linalg::Lu`]).
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on tiny matrices
+
+pub use crate::linalg::Lu;
 
 /// Exact product a·b = p + e (Dekker's splitting; no FMA needed).
 #[inline]
@@ -77,139 +79,6 @@ pub fn inv_pow2(v: f64) -> f64 {
 /// 2^e for |e| ≤ 1022, exactly.
 pub fn pow2(e: i32) -> f64 {
     f64::from_bits(((1023 + e) as u64) << 52)
-}
-
-/// `f::<R>(r, args)` with R = r for r ≤ 9 (loops unrolled at compile time), else `f::<0>`
-/// (any r): the same operations in the same order either way.
-macro_rules! by_size {
-    ($r:expr, $f:ident, $($arg:expr),*) => {
-        match $r {
-            1 => $f::<1>(1, $($arg),*),
-            2 => $f::<2>(2, $($arg),*),
-            3 => $f::<3>(3, $($arg),*),
-            4 => $f::<4>(4, $($arg),*),
-            5 => $f::<5>(5, $($arg),*),
-            6 => $f::<6>(6, $($arg),*),
-            7 => $f::<7>(7, $($arg),*),
-            8 => $f::<8>(8, $($arg),*),
-            9 => $f::<9>(9, $($arg),*),
-            r => $f::<0>(r, $($arg),*),
-        }
-    };
-}
-
-/// LU factorisation P A = L U of a row-major r × r matrix with partial pivoting.
-#[derive(Clone, Debug, Default)]
-pub struct Lu {
-    r: usize,
-    lu: Vec<f64>,
-    perm: Vec<usize>,
-}
-
-impl Lu {
-    /// Factorise `a` (row-major r × r); false if a pivot is exactly zero or not finite.
-    pub fn factor(&mut self, a: &[f64], r: usize) -> bool {
-        self.r = r;
-        self.lu.clear();
-        self.lu.extend_from_slice(&a[..r * r]);
-        self.perm.clear();
-        self.perm.extend(0..r);
-        let lu = &mut self.lu;
-        for k in 0..r {
-            let p = (k..r)
-                .max_by(|&i, &j| lu[i * r + k].abs().total_cmp(&lu[j * r + k].abs()))
-                .unwrap_or(k);
-            let piv = lu[p * r + k];
-            if piv == 0.0 || !piv.is_finite() {
-                return false;
-            }
-            if p != k {
-                for c in 0..r {
-                    lu.swap(p * r + c, k * r + c);
-                }
-                self.perm.swap(p, k);
-            }
-            for i in k + 1..r {
-                let l = lu[i * r + k] / piv;
-                lu[i * r + k] = l;
-                for c in k + 1..r {
-                    lu[i * r + c] -= l * lu[k * r + c];
-                }
-            }
-        }
-        true
-    }
-
-    /// max |u_kk| / min |u_kk| over the pivots of the last factorisation: a lower bound on
-    /// the condition of A (∞ before any factorisation).
-    pub fn pivot_ratio(&self) -> f64 {
-        let r = self.r;
-        let d = (0..r).map(|k| self.lu[k * r + k].abs());
-        let (lo, hi) = d.fold((f64::INFINITY, 0.0f64), |(lo, hi), v| {
-            (lo.min(v), hi.max(v))
-        });
-        if r == 0 || lo == 0.0 {
-            f64::INFINITY
-        } else {
-            hi / lo
-        }
-    }
-
-    /// Solve A x = b in place (x holds b on entry).
-    pub fn solve(&self, x: &mut [f64]) {
-        by_size!(self.r, lu_solve, &self.lu, &self.perm, x)
-    }
-
-    /// Solve Aᵀ x = b in place (x holds b on entry).
-    pub fn solve_t(&self, x: &mut [f64]) {
-        by_size!(self.r, lu_solve_t, &self.lu, &self.perm, x)
-    }
-}
-
-/// L U y = P b by forward then back substitution, in place in x (R = r, or 0 for any r).
-#[inline(always)]
-fn lu_solve<const R: usize>(r: usize, lu: &[f64], perm: &[usize], x: &mut [f64]) {
-    let r = if R > 0 { R } else { r };
-    let (lu, perm) = (&lu[..r * r], &perm[..r]);
-    let mut y = [0.0f64; 32];
-    for i in 0..r {
-        y[i] = x[perm[i]];
-    }
-    for i in 0..r {
-        for c in 0..i {
-            y[i] -= lu[i * r + c] * y[c];
-        }
-    }
-    for i in (0..r).rev() {
-        for c in i + 1..r {
-            y[i] -= lu[i * r + c] * y[c];
-        }
-        y[i] /= lu[i * r + i];
-    }
-    x[..r].copy_from_slice(&y[..r]);
-}
-
-/// (P⁻¹ L U)ᵀ x = b: Uᵀ z = b, Lᵀ w = z, x = Pᵀ w, in place (R = r, or 0 for any r).
-#[inline(always)]
-fn lu_solve_t<const R: usize>(r: usize, lu: &[f64], perm: &[usize], x: &mut [f64]) {
-    let r = if R > 0 { R } else { r };
-    let (lu, perm) = (&lu[..r * r], &perm[..r]);
-    let mut y = [0.0f64; 32];
-    y[..r].copy_from_slice(&x[..r]);
-    for i in 0..r {
-        for c in 0..i {
-            y[i] -= lu[c * r + i] * y[c];
-        }
-        y[i] /= lu[i * r + i];
-    }
-    for i in (0..r).rev() {
-        for c in i + 1..r {
-            y[i] -= lu[c * r + i] * y[c];
-        }
-    }
-    for i in 0..r {
-        x[perm[i]] = y[i];
-    }
 }
 
 /// A double-double number hi + lo (about 32 significant digits).
@@ -486,27 +355,6 @@ mod tests {
     }
 
     use super::*;
-
-    #[test]
-    fn lu_solves_both_systems() {
-        let a = [4.0, 1.0, 2.0, 0.5, 3.0, 1.0, 2.0, -1.0, 5.0];
-        let mut lu = Lu::default();
-        assert!(lu.factor(&a, 3));
-        let b = [1.0, 2.0, 3.0];
-        let mut x = b;
-        lu.solve(&mut x);
-        for i in 0..3 {
-            let ax: f64 = (0..3).map(|c| a[i * 3 + c] * x[c]).sum();
-            assert!((ax - b[i]).abs() < 1e-14, "row {i}: {ax}");
-        }
-        let mut y = b;
-        lu.solve_t(&mut y);
-        for c in 0..3 {
-            let aty: f64 = (0..3).map(|i| a[i * 3 + c] * y[i]).sum();
-            assert!((aty - b[c]).abs() < 1e-14, "col {c}: {aty}");
-        }
-        assert!(!lu.factor(&[1.0, 2.0, 2.0, 4.0], 2));
-    }
 
     #[test]
     fn dd_lu_solves_a_vandermonde_beyond_f64() {

@@ -1,57 +1,29 @@
-//! Small dense linear algebra for m×m transforms (m ≤ ~12): LU with partial pivoting,
-//! determinants, inverses. Row-major `Vec<Vec<f64>>` matrices.
+//! Small dense linear algebra for m×m transforms (m ≤ ~12) on row-major `Vec<Vec<f64>>`
+//! matrices: the crate's LU ([`crate::linalg::Lu`]) behind that shape, products.
 
-/// LU factorisation P·A = L·U of a square matrix (partial pivoting).
+/// LU factorisation P·A = L·U of a square matrix given as rows ([`crate::linalg::Lu`]).
 #[derive(Clone, Debug)]
 pub struct Lu {
-    lu: Vec<Vec<f64>>,
-    perm: Vec<usize>,
-    sign: f64,
+    lu: crate::linalg::Lu,
+    n: usize,
 }
 
 impl Lu {
-    /// Factorise `a` (n×n). Returns `None` if a pivot is exactly zero or not finite.
+    /// Factorise `a` (n×n). Returns `None` if a pivot is exactly zero or not finite, or n is
+    /// beyond [`crate::linalg::MAX_ROWS`].
     pub fn new(a: &[Vec<f64>]) -> Option<Lu> {
         let n = a.len();
-        let mut lu: Vec<Vec<f64>> = a.to_vec();
-        let mut perm: Vec<usize> = (0..n).collect();
-        let mut sign = 1.0;
-        for k in 0..n {
-            if lu[k].len() != n {
-                return None;
-            }
-            let p = (k..n).max_by(|&i, &j| lu[i][k].abs().total_cmp(&lu[j][k].abs()))?;
-            let piv = lu[p][k];
-            if piv == 0.0 || !piv.is_finite() {
-                return None;
-            }
-            if p != k {
-                lu.swap(p, k);
-                perm.swap(p, k);
-                sign = -sign;
-            }
-            for i in k + 1..n {
-                let f = lu[i][k] / lu[k][k];
-                lu[i][k] = f;
-                for j in k + 1..n {
-                    lu[i][j] -= f * lu[k][j];
-                }
-            }
+        if a.iter().any(|row| row.len() != n) {
+            return None;
         }
-        Some(Lu { lu, perm, sign })
+        let flat: Vec<f64> = a.iter().flatten().copied().collect();
+        let mut lu = crate::linalg::Lu::default();
+        lu.factor(&flat, n).then_some(Lu { lu, n })
     }
 
     /// log₂|det A| and the sign of det A.
     pub fn log2_abs_det(&self) -> (f64, f64) {
-        let mut l = 0.0;
-        let mut s = self.sign;
-        for (k, row) in self.lu.iter().enumerate() {
-            l += row[k].abs().log2();
-            if row[k] < 0.0 {
-                s = -s;
-            }
-        }
-        (l, s)
+        self.lu.log2_abs_det()
     }
 
     pub fn det(&self) -> f64 {
@@ -61,59 +33,24 @@ impl Lu {
 
     /// Solve A x = b.
     pub fn solve(&self, b: &[f64]) -> Vec<f64> {
-        let n = self.lu.len();
-        let mut x: Vec<f64> = self.perm.iter().map(|&p| b[p]).collect();
-        for i in 0..n {
-            for j in 0..i {
-                x[i] -= self.lu[i][j] * x[j];
-            }
-        }
-        for i in (0..n).rev() {
-            for j in i + 1..n {
-                x[i] -= self.lu[i][j] * x[j];
-            }
-            x[i] /= self.lu[i][i];
-        }
+        let mut x = b[..self.n].to_vec();
+        self.lu.solve(&mut x);
         x
     }
 
     /// Solve Aᵀ x = b.
     pub fn solve_transposed(&self, b: &[f64]) -> Vec<f64> {
-        let n = self.lu.len();
-        // Aᵀ = Uᵀ Lᵀ P, so solve Uᵀ y = b, Lᵀ w = y, x = Pᵀ w.
-        let mut y = b.to_vec();
-        for i in 0..n {
-            for j in 0..i {
-                y[i] -= self.lu[j][i] * y[j];
-            }
-            y[i] /= self.lu[i][i];
-        }
-        for i in (0..n).rev() {
-            for j in i + 1..n {
-                y[i] -= self.lu[j][i] * y[j];
-            }
-        }
-        let mut x = vec![0.0; n];
-        for (i, &p) in self.perm.iter().enumerate() {
-            x[p] = y[i];
-        }
+        let mut x = b[..self.n].to_vec();
+        self.lu.solve_t(&mut x);
         x
     }
 
     /// A⁻¹ (row-major).
     pub fn inverse(&self) -> Vec<Vec<f64>> {
-        let n = self.lu.len();
-        let mut inv = vec![vec![0.0; n]; n];
-        let mut e = vec![0.0; n];
-        for j in 0..n {
-            e.iter_mut().for_each(|v| *v = 0.0);
-            e[j] = 1.0;
-            let col = self.solve(&e);
-            for i in 0..n {
-                inv[i][j] = col[i];
-            }
-        }
-        inv
+        let n = self.n;
+        let mut inv = vec![0.0; n * n];
+        self.lu.inverse(&mut inv);
+        inv.chunks(n.max(1)).map(|r| r.to_vec()).collect()
     }
 }
 

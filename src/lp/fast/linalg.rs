@@ -1,5 +1,5 @@
 //! Dense linear algebra on the r ≤ 9 rows of the transformed LP: dot products, the explicit
-//! inverse (Gauss–Jordan), least squares by Gram–Schmidt, and greedy maximal-volume bases.
+//! inverse, least squares by Gram–Schmidt, and greedy maximal-volume bases.
 
 pub(super) use crate::lp::ortho::{dot, norm};
 
@@ -85,56 +85,15 @@ fn pivot_rows_wide(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
     }
 }
 
-/// Invert the r × r row-major matrix `a` (destroyed) into `inv`; false if singular.
-pub(super) fn invert(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
-    by_rows!(r, invert_r, a, inv, r)
-}
-
-/// Gauss–Jordan with partial pivoting for r = R (R = 0: any r).
-#[inline(always)]
-fn invert_r<const R: usize>(a: &mut [f64], inv: &mut [f64], r: usize) -> bool {
-    let r = if R > 0 { R } else { r };
-    let (a, inv) = (&mut a[..r * r], &mut inv[..r * r]);
-    inv.iter_mut().for_each(|v| *v = 0.0);
-    for t in 0..r {
-        inv[t * r + t] = 1.0;
+/// Invert the r × r row-major matrix `a` into `inv` ([`crate::linalg::Lu`]); false if a
+/// pivot is below 1e-12 in magnitude (numerically singular at the transformed columns' unit
+/// scale) or not finite.
+/// `lu` is the workspace (no allocation once it has held an r × r factorisation).
+pub(super) fn invert(lu: &mut crate::linalg::Lu, a: &[f64], inv: &mut [f64], r: usize) -> bool {
+    if !lu.factor(a, r) || !(lu.min_pivot() >= 1e-12) {
+        return false;
     }
-    for col in 0..r {
-        let mut p = col;
-        let mut pv = a[col * r + col].abs();
-        for row in col + 1..r {
-            let v = a[row * r + col].abs();
-            if v > pv {
-                pv = v;
-                p = row;
-            }
-        }
-        if pv < 1e-12 || !pv.is_finite() {
-            return false;
-        }
-        if p != col {
-            for k in 0..r {
-                a.swap(p * r + k, col * r + k);
-                inv.swap(p * r + k, col * r + k);
-            }
-        }
-        let d = a[col * r + col];
-        for k in 0..r {
-            a[col * r + k] /= d;
-            inv[col * r + k] /= d;
-        }
-        for row in 0..r {
-            if row != col {
-                let f = a[row * r + col];
-                if f != 0.0 {
-                    for k in 0..r {
-                        a[row * r + k] -= f * a[col * r + k];
-                        inv[row * r + k] -= f * inv[col * r + k];
-                    }
-                }
-            }
-        }
-    }
+    lu.inverse(inv);
     true
 }
 

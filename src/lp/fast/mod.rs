@@ -205,6 +205,8 @@ pub struct FastSolver {
     basis: Vec<usize>,
     binv: Vec<f64>,
     bmat: Vec<f64>,
+    /// Factorisation workspace of the basis inverse.
+    lu: crate::linalg::Lu,
     x: Vec<f64>,
     y: Vec<f64>,
     alpha: Vec<f64>,
@@ -307,6 +309,7 @@ impl FastSolver {
             basis: vec![0; r],
             binv: vec![0.0; r * r],
             bmat: vec![0.0; r * r],
+            lu: Default::default(),
             x: vec![0.0; r],
             y: vec![0.0; r],
             alpha: vec![0.0; r],

@@ -67,7 +67,7 @@ pub(super) fn r_condition(rcoef: &[f64], kept: &[Option<usize>], r: usize) -> f6
     debug_assert_eq!(t, r);
     let nr = norm(&rk);
     let mut inv = vec![0.0; r * r];
-    if invert(&mut rk, &mut inv, r) {
+    if invert(&mut Default::default(), &rk, &mut inv, r) {
         nr * norm(&inv)
     } else {
         f64::INFINITY

@@ -83,7 +83,8 @@ impl FastSolver {
         let bnorm = norm(&self.bmat);
         // Numerically singular for our purposes: weights from such a basis carry errors of
         // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
-        let ok = invert(&mut self.bmat, &mut self.binv, r) && bnorm * norm(&self.binv) < MAX_COND;
+        let ok = invert(&mut self.lu, &self.bmat, &mut self.binv, r)
+            && bnorm * norm(&self.binv) < MAX_COND;
         self.factored.copy_from_slice(&self.basis);
         self.factored_ok = ok && !self.basis.contains(&ART);
         ok
