@@ -148,18 +148,7 @@ impl ExactProduct for Fused {
     }
 }
 
-/// Whether the CPU has fused multiply-add (cached by the standard library).
-#[inline]
-fn has_fma() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("fma")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
+use super::cpu::has_fma;
 
 /// LU factorisation with partial pivoting in double-double arithmetic: solves systems whose
 /// condition is far beyond 1/ε (clusters of neighbouring grid points under a power basis).

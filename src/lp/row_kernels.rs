@@ -7,17 +7,7 @@
 /// Grid points per block of [`any_below`] scans.
 pub const BLOCK: usize = 16;
 
-/// Whether the AVX-512 versions may run on this CPU.
-pub fn has_avx512() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    {
-        std::arch::is_x86_feature_detected!("avx512f")
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    {
-        false
-    }
-}
+pub(crate) use super::cpu::has_avx512;
 
 /// d_i −= y·f_i and e_i += |y·f_i| (one row of d = p − Σ_j y_j f_j(z_i) and of its magnitude).
 pub fn sub_scaled_abs(d: &mut [f64], e: &mut [f64], y: f64, f: &[f64], avx512: bool) {

@@ -14,7 +14,7 @@
 //! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
 //!   subgrid, the neighbours of z_f and of the support, the fine window around the best) with
 //!   the blocked SIMD kernels of [`super::pricing`] (greatest improvement on the coarse
-//!   subgrid when the column found has a reduced cost below −1, see [`super::gi_pricing`]), a
+//!   subgrid when the column found has a reduced cost below −1, see [`super::pricing::greatest`]), a
 //!   Harris-style ratio test, Bland's rule
 //!   after repeated degenerate pivots, a refactorisation every 16 pivots. When partial pricing
 //!   finds no entering column in phase 2, the certificate ([`super::certify`]) prices every

@@ -3,11 +3,12 @@
 //! perturbation, and the bounded "refactorise, else rescue, else fail" recovery.
 
 use super::linalg::{invert, mat_vec, norm, pivot_rows};
-use super::price::{price, price_bland};
+use super::price::price_bland;
 use super::{
     FastSolver, Outcome, ART, DEGENERATE_LIMIT, MAX_COND, REFACTOR_EVERY, TOL_D, TOL_INF, TOL_P,
     TOL_PIV, TOL_P_LOOSE,
 };
+use crate::lp::pricing::dantzig::price;
 
 /// Phase-2 cost (mass below z_f) taken as zero: the run ends there.
 const ZERO_COST: f64 = 1e-13;

@@ -15,7 +15,7 @@
 
 #![allow(clippy::needless_range_loop)] // lane and row loops over fixed-size arrays
 
-use super::pricing::{ColumnTable, Kernel, LANES};
+use super::{ColumnTable, Kernel, LANES};
 
 /// A column found by [`scan`]: its index in the table, reduced cost and gain −d θ.
 #[derive(Clone, Copy, Debug, PartialEq)]

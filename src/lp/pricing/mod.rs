@@ -1,4 +1,5 @@
-//! Pricing kernels of the fast solver: the entering column of a simplex pivot is the column
+//! Pricing kernels of the fast solver (this file: the column table and the blocked scans;
+//! [`dantzig`]: the dense pass; [`greatest`]: greatest improvement on the coarse subgrid): the entering column of a simplex pivot is the column
 //! with the most negative reduced cost d_j = cost_j − yᵀa_j (Dantzig's rule). For Algorithm 1
 //! the costs are a step, cost_j = [j < split], so one kernel serves every pass.
 //!
@@ -8,6 +9,9 @@
 //! Padding columns are zero and permanently excluded.
 
 #![allow(clippy::needless_range_loop)] // lane and row loops over fixed-size register arrays
+
+pub(crate) mod dantzig;
+pub(crate) mod greatest;
 
 /// Columns per block (two AVX2 registers of f64).
 pub(crate) const LANES: usize = 8;
@@ -37,15 +41,9 @@ impl Kernel {
         match self {
             Kernel::Scalar => true,
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => {
-                std::arch::is_x86_feature_detected!("avx2")
-                    && std::arch::is_x86_feature_detected!("fma")
-            }
+            Kernel::Avx2 => super::cpu::has_avx2_fma(),
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => {
-                std::arch::is_x86_feature_detected!("avx512f")
-                    && std::arch::is_x86_feature_detected!("fma")
-            }
+            Kernel::Avx512 => super::cpu::has_avx512() && super::cpu::has_fma(),
         }
     }
 
