@@ -23,6 +23,7 @@ pub struct BenchConfig {
     pub reference_problems: usize,
     /// Number of basis functions: the power basis z, …, z^m (m = 4 is MSM).
     pub m: usize,
+    /// Seed of the random depth maps.
     pub seed: u64,
     /// Timed repeats of the fast solvers' sequence (per-problem minimum is kept).
     pub repeats: usize,
@@ -33,27 +34,38 @@ pub struct BenchConfig {
 pub struct BenchRow {
     /// Pricing kernel of the fast solver ("avx512", "avx2", "scalar").
     pub pricing_kernel: &'static str,
+    /// Grid size.
     pub n: usize,
+    /// Basis size (power basis z…z^m).
     pub m: usize,
+    /// LPs timed for the fast solver.
     pub problems: usize,
+    /// LPs timed for the reference (a prefix).
     pub reference_problems: usize,
     /// Median µs per LP.
     pub reference_us: f64,
+    /// Median µs, from the moments with the warm start.
     pub fast_warm_us: f64,
+    /// Median µs, from the moments, every solve cold.
     pub fast_cold_us: f64,
     /// Mean µs per LP (fast), to show the tail.
     pub fast_warm_mean_us: f64,
+    /// Mean µs, cold.
     pub fast_cold_mean_us: f64,
     /// reference median / fast median.
     pub speedup_warm: f64,
+    /// Reference median / cold median.
     pub speedup_cold: f64,
     /// Mean simplex pivots per LP.
     pub pivots_warm: f64,
+    /// Mean pivots per LP, cold.
     pub pivots_cold: f64,
     /// Median / mean µs per LP given the kernel's distribution (`solve_distribution`:
     /// crossover start, no phase 1), and reference median / its median.
     pub fast_dist_us: f64,
+    /// Mean µs, given the distribution.
     pub fast_dist_mean_us: f64,
+    /// Reference median / distribution-start median.
     pub speedup_dist: f64,
     /// Mean phase-2 pivots per LP after the crossover.
     pub pivots_dist: f64,
@@ -110,8 +122,11 @@ pub fn problems(grid: &Grid, m: usize, count: usize, seed: u64) -> Result<Vec<Pr
 /// distribution (for [`MomentSolver::solve_distribution`]).
 #[derive(Clone, Debug)]
 pub struct Problem {
+    /// The kernel's moments b.
     pub moments: Vec<f64>,
+    /// Fragment depth z_f.
     pub zf: f64,
+    /// The kernel's depth distribution [(grid index, weight)].
     pub dist: Vec<(u32, f64)>,
 }
 

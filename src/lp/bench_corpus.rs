@@ -17,10 +17,15 @@ use std::time::Instant;
 /// Summary of a set of per-LP times (µs).
 #[derive(Clone, Copy, Debug, Default, serde::Serialize)]
 pub struct Spread {
+    /// Mean.
     pub mean: f64,
+    /// Median (nearest rank).
     pub median: f64,
+    /// 99th percentile.
     pub p99: f64,
+    /// 99.9th percentile.
     pub p999: f64,
+    /// Largest.
     pub max: f64,
 }
 
@@ -53,15 +58,19 @@ impl Spread {
 /// One corpus's figures.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct CorpusRow {
+    /// Row label.
     pub corpus: String,
     /// Grid sizes of the corpus's tables.
     pub ns: Vec<usize>,
+    /// Number of tables (groups).
     pub tables: usize,
     /// LPs solved by the fast solver.
     pub problems: usize,
     /// Fast solver, µs per LP (per-problem minimum over the repeats).
     pub fast_us: Spread,
+    /// Answers certified optimal.
     pub optimal: usize,
+    /// Answers certified infeasible.
     pub infeasible: usize,
     /// `Failed` answers (no certificate for either verdict).
     pub failed: usize,
@@ -71,6 +80,7 @@ pub struct CorpusRow {
     pub exact: u64,
     /// The reference (good_lp + microlp) on a prefix of the problems, µs per LP.
     pub reference_problems: usize,
+    /// The reference, µs per LP.
     pub reference_us: Spread,
     /// The fast solver's mean µs on the same prefix.
     pub fast_prefix_mean_us: f64,
@@ -91,11 +101,15 @@ pub struct CorpusRow {
 pub struct GroupRow {
     /// "basis @ n: kind".
     pub name: String,
+    /// LPs in the group.
     pub problems: usize,
     /// Sum of the fast solver's µs over the group's problems.
     pub total_us: f64,
+    /// Slowest LP, µs.
     pub max_us: f64,
+    /// `Failed` answers.
     pub failed: usize,
+    /// Solves escalated to the scaled simplex.
     pub escalations: u64,
     /// Solves handed to the exact simplex.
     pub exact: u64,

@@ -24,7 +24,9 @@ use rand_chacha::ChaCha8Rng;
 /// depths to solve for (consecutive solves share the moments, as in the pipeline).
 #[derive(Clone, Debug)]
 pub struct Problem {
+    /// The distribution [(grid index, weight)], weights summing to 1.
     pub dist: Vec<(u32, f64)>,
+    /// Fragment depths to solve for.
     pub zf: Vec<f64>,
 }
 
@@ -35,17 +37,24 @@ pub struct Group {
     pub name: String,
     /// The basis formulas.
     pub basis: Vec<String>,
+    /// The constraint table.
     pub table: GridTable,
+    /// The problems on it.
     pub problems: Vec<Problem>,
 }
 
 /// Kinds of problem.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kind {
+    /// Flat-receiver 9×9 Gaussian windows.
     Flat,
+    /// 1–3 adjacent grid points.
     Adjacent,
+    /// Two points 1–3 grid steps apart with most of the mass on one.
     Cluster,
+    /// At most m/2 Diracs (the boundary of the moment space).
     Boundary,
+    /// 1–6 random Diracs.
     Mixture,
 }
 

@@ -38,7 +38,9 @@ const MAX_ROWS: usize = 24;
 pub enum ExactAnswer {
     /// An exactly optimal basis: `g` and the weights are the exact values rounded to f64.
     Optimal {
+        /// The basis (grid indices).
         basis: Vec<usize>,
+        /// G rounded to f64.
         g: f64,
         /// (grid index, weight) of the positive weights.
         weights: Vec<(usize, f64)>,
@@ -170,6 +172,7 @@ pub struct ExactSimplex<'a> {
     /// 1 for the grid points below z_f (phase 2), or for the artificial (phase 1).
     kf: usize,
     phase1: bool,
+    /// Pivots over the solver's lifetime.
     pub pivots: usize,
 }
 

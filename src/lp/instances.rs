@@ -92,7 +92,9 @@ pub fn random_mixture(rng: &mut impl Rng, n: usize, k: usize) -> Vec<(usize, f64
 /// the depths z_f of the fragments to shade with it.
 #[derive(Clone, Debug)]
 pub struct KernelPatch {
+    /// The kernel's depth distribution [(grid index, weight)].
     pub mixture: Vec<(usize, f64)>,
+    /// Fragment depths shaded with it.
     pub zf: Vec<f64>,
 }
 

@@ -7,6 +7,8 @@
 //! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
 //! exactly as stated) and the fast solver.
 
+#![warn(missing_docs)]
+
 pub mod bench;
 pub mod bench_corpus;
 pub mod certify;
@@ -111,6 +113,7 @@ impl GridTable {
         })
     }
 
+    /// The grid I.
     pub fn grid(&self) -> &Grid {
         &self.grid
     }
@@ -126,6 +129,7 @@ impl GridTable {
     pub fn row(&self, i: usize) -> &[f64] {
         &self.values[i * self.m..(i + 1) * self.m]
     }
+    /// All values, row-major n × m.
     pub fn values(&self) -> &[f64] {
         &self.values
     }
@@ -148,6 +152,7 @@ pub enum Status {
 /// Result of Algorithm 1 for one (b, z_f).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Solution {
+    /// Optimal, infeasible or failed.
     pub status: Status,
     /// The sharp lower bound G(b, z_f) (NaN when infeasible).
     pub g: f64,
@@ -158,6 +163,7 @@ pub struct Solution {
 }
 
 impl Solution {
+    /// The answer for moments no distribution on the grid has.
     pub fn infeasible() -> Solution {
         Solution {
             status: Status::Infeasible,

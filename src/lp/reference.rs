@@ -23,6 +23,7 @@ pub struct ReferenceSolver {
 }
 
 impl ReferenceSolver {
+    /// The reference solver on `table`.
     pub fn new(table: GridTable) -> ReferenceSolver {
         ReferenceSolver { table }
     }

@@ -70,6 +70,7 @@ pub struct ScaledSimplex {
     /// Row-major basis matrix.
     bm: Vec<f64>,
     lu: DdLu,
+    /// Pivots over the solver's lifetime.
     pub pivots: u64,
 }
 

@@ -453,10 +453,12 @@ impl FastSolver {
         self.last_bound
     }
 
+    /// Counters over the solver's lifetime.
     pub fn stats(&self) -> FastStats {
         self.stats
     }
 
+    /// The table the solver works on.
     pub fn table(&self) -> &GridTable {
         &self.table
     }
