@@ -215,6 +215,27 @@ pub fn run(
     Ok(row)
 }
 
+/// The Markdown table of corpus rows as docs/lp.md shows it: label, mean, median and p99 µs,
+/// the speed-up over microlp on the mean, failed answers. Reads the JSON of `bench lp --json`.
+pub fn markdown_rows(rows: &serde_json::Value) -> Option<String> {
+    let mut out = String::from(
+        "| row | mean µs | median | p99 | × microlp (mean) | failed |\n|---|---|---|---|---|---|",
+    );
+    for r in rows.as_array()? {
+        let f = &r["fast_us"];
+        out += &format!(
+            "\n| {} | {:.1} | {:.1} | {:.1} | {:.0} | {} |",
+            r["corpus"].as_str()?,
+            f["mean"].as_f64()?,
+            f["median"].as_f64()?,
+            f["p99"].as_f64()?,
+            r["speedup_mean"].as_f64()?,
+            r["failed"].as_u64()?
+        );
+    }
+    Some(out)
+}
+
 /// Problems per stretch of [`time_group`]: the fast passes over a stretch and the reference on
 /// its problems run within about a millisecond of each other.
 const STRETCH: usize = 64;
@@ -403,6 +424,21 @@ mod tests {
             }
             assert_eq!(timed.reference.len(), 3);
         }
+    }
+
+    /// docs/lp.md's moments-only table is the rendering of reports/bench/lp_moments.json.
+    #[test]
+    fn docs_table_renders_the_artefact() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let json = std::fs::read_to_string(root.join("reports/bench/lp_moments.json")).unwrap();
+        let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
+        let table = super::markdown_rows(&rows).expect("bench lp --json rows");
+        let doc = std::fs::read_to_string(root.join("docs/lp.md")).unwrap();
+        assert!(doc.contains(&table), "docs/lp.md does not show:\n{table}");
+        // A changed figure fails the check.
+        let mut changed = rows.clone();
+        changed[0]["fast_us"]["mean"] = serde_json::json!(1234.5);
+        assert!(!doc.contains(&super::markdown_rows(&changed).unwrap()));
     }
 
     #[test]
