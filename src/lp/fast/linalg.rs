@@ -90,7 +90,7 @@ fn pivot_rows_wide(binv: &mut [f64], alpha: &[f64], l: usize, r: usize) {
 /// scale) or not finite.
 /// `lu` is the workspace (no allocation once it has held an r × r factorisation).
 pub(super) fn invert(lu: &mut crate::linalg::Lu, a: &[f64], inv: &mut [f64], r: usize) -> bool {
-    if !lu.factor(a, r) || !(lu.min_pivot() >= 1e-12) {
+    if !lu.factor(a, r) || lu.min_pivot().is_nan() || lu.min_pivot() < 1e-12 {
         return false;
     }
     lu.inverse(inv);
