@@ -437,3 +437,58 @@ impl ScaledSimplex {
             .collect()
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lp::GridTable;
+    use crate::Grid;
+
+    fn certifier(n: usize, f: impl FnMut(f64, &mut [f64]), m: usize) -> Certifier {
+        let t = GridTable::from_fn(&Grid::uniform(n).unwrap(), m, f).unwrap();
+        Certifier::new(&t, (0..=m).collect())
+    }
+
+    /// (z, z²) on {0, 1/4, 1/2, 3/4, 1}, b = (1/2, 5/16), z_f = 0.6: the optimum G = 1/2
+    /// (½δ(1/4) + ½δ(3/4)); from a cold start and from a feasible suboptimal basis.
+    #[test]
+    fn finds_the_known_optimum() {
+        let mut c = certifier(5, |z, o| (o[0], o[1]) = (z, z * z), 2);
+        let b = [0.5, 0.3125];
+        for start in [None, Some(&[0usize, 2, 4][..])] {
+            c.set_moments(&b);
+            let mut s = ScaledSimplex::default();
+            let Found::Optimal(basis) = s.solve(&c, 3, start) else {
+                panic!("not optimal from {start:?}")
+            };
+            assert!(s.pivots > 0);
+            assert_eq!(c.optimal(&b, 3, &basis).unwrap().g, 0.5, "{basis:?}");
+        }
+    }
+
+    /// (1/2, 1/5) has negative variance: phase 1 ends with a Farkas ray the certifier accepts.
+    #[test]
+    fn infeasible_moments_give_a_farkas_ray() {
+        let mut c = certifier(5, |z, o| (o[0], o[1]) = (z, z * z), 2);
+        let b = [0.5, 0.2];
+        c.set_moments(&b);
+        let Found::Infeasible(y) = ScaledSimplex::default().solve(&c, 3, None) else {
+            panic!("expected a Farkas ray")
+        };
+        assert!(c.infeasible(&b, &y).unwrap() > 0.0);
+    }
+
+    /// exp(40z) spans e⁴⁰ ≈ 2.4·10¹⁷ on [0, 1]: with z, the moments of ½δ(0) + ½δ(1) on 65
+    /// points leave only that distribution (the end points are the extreme values of both
+    /// functions' convex hull), so G at z_f = 1/2 is exactly 1/2.
+    #[test]
+    fn steep_exponential_rows_are_solved_in_scaled_coordinates() {
+        let mut c = certifier(65, |z, o| (o[0], o[1]) = (z, (40.0 * z).exp()), 2);
+        let b = [0.5, 0.5 * (1.0 + 40f64.exp())];
+        c.set_moments(&b);
+        let Found::Optimal(basis) = ScaledSimplex::default().solve(&c, 32, None) else {
+            panic!("not optimal")
+        };
+        assert_eq!(c.optimal(&b, 32, &basis).unwrap().g, 0.5);
+    }
+}
