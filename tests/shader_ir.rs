@@ -1,6 +1,8 @@
 //! The shader representation: constants print to text that parses back to the same f32, the
-//! interpreter applies each operation once in f32, malformed functions are refused, and a
-//! module using every operation compiles in all wrappers (GLSL 450 / ES 310 / HLSL).
+//! interpreter applies each operation once in f32 (a loop body once per iteration, its
+//! variables assigned in order at its end), malformed functions (including misused loops) are
+//! refused, and a module using every operation and a loop compiles in all wrappers
+//! (GLSL 450 / ES 310 / HLSL).
 
 #[path = "common/shader.rs"]
 mod shader_common;
@@ -126,6 +128,114 @@ fn interpreter_matches_direct_f32_code() {
     }
 }
 
+/// Heron's iteration for √s from x₀ = s with a counter of the steps taken before |Δx| ≤ 1e-6
+/// (a flag carried by the loop freezes the state), and a value computed after the loop.
+fn heron(steps: u32) -> Func {
+    let mut f = Func::new("heron");
+    let s = f.input_scalar("s");
+    let zero = f.c(0.0);
+    let out = f.repeat(steps, &[s, zero, zero], |f, v| {
+        let (x, n, done) = (v[0], v[1], v[2]);
+        let q = f.div(s, x);
+        let t = f.add(x, q);
+        let half = f.c(0.5);
+        let nx = f.mul(t, half);
+        let d = f.sub(nx, x);
+        let ad = f.abs(d);
+        let tol = f.c(1e-6);
+        let one = f.c(1.0);
+        let now = f.select(Cmp::Le, ad, tol, one, zero);
+        let x = f.select(Cmp::Gt, done, zero, x, nx);
+        let n1 = f.add(n, one);
+        let n = f.select(Cmp::Gt, done, zero, n, n1);
+        let done = f.max(done, now);
+        vec![x, n, done]
+    });
+    let sq = f.mul(out[0], out[0]);
+    f.ret(Shape::Vector(3), &[out[0], out[1], sq]);
+    f
+}
+
+#[test]
+fn loops_run_their_body_count_times_in_the_interpreter() {
+    let f = heron(20);
+    assert_eq!(f.n_statements(), 11);
+    assert_eq!(f.n_ops(), 10 * 20 + 1);
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
+    for _ in 0..2000 {
+        let s: f32 = rng.gen_range(0.01f32..100.0);
+        let (mut x, mut n, mut done) = (s, 0.0f32, false);
+        for _ in 0..20 {
+            if done {
+                continue;
+            }
+            let nx = (x + s / x) * 0.5;
+            done = (nx - x).abs() <= 1e-6;
+            x = nx;
+            n += 1.0;
+        }
+        let got = f.eval(&[s]).unwrap();
+        assert_eq!(got[0].to_bits(), x.to_bits(), "{s}");
+        assert_eq!(got[1], n, "{s}");
+        assert_eq!(got[2].to_bits(), (x * x).to_bits(), "{s}");
+    }
+    // one iteration: the variables hold the first step after the loop
+    assert_eq!(heron(1).eval(&[4.0]).unwrap()[0], 2.5);
+}
+
+#[test]
+fn malformed_loops_are_refused() {
+    let mut f = Func::new("body_value_outside");
+    let x = f.input_scalar("x");
+    let mut inner = None;
+    let v = f.repeat(3, &[x], |f, v| {
+        let y = f.add(v[0], v[0]);
+        inner = Some(y);
+        vec![y]
+    });
+    let z = f.add(v[0], inner.unwrap());
+    f.ret(Shape::Scalar, &[z]);
+    assert!(
+        f.validate().is_err(),
+        "a body statement used after the loop"
+    );
+    let mut f = Func::new("body_value_returned");
+    let x = f.input_scalar("x");
+    let mut inner = None;
+    f.repeat(3, &[x], |f, v| {
+        let y = f.mul(v[0], v[0]);
+        inner = Some(y);
+        vec![y]
+    });
+    f.ret(Shape::Scalar, &[inner.unwrap()]);
+    assert!(f.validate().is_err(), "a body statement returned");
+    let mut f = Func::new("swap");
+    let x = f.input_scalar("x");
+    let y = f.input_scalar("y");
+    let v = f.repeat(2, &[x, y], |_, v| vec![v[1], v[0]]);
+    f.ret(Shape::Vector(2), &[v[0], v[1]]);
+    assert!(
+        f.validate().is_err(),
+        "a variable assigned from another one"
+    );
+    let mut f = Func::new("nested");
+    let x = f.input_scalar("x");
+    let v = f.repeat(2, &[x], |f, v| {
+        let w = f.repeat(2, &[v[0]], |f, w| vec![f.add(w[0], w[0])]);
+        vec![w[0]]
+    });
+    f.ret(Shape::Scalar, &[v[0]]);
+    assert!(f.validate().is_err(), "nested loops");
+    assert!(f.eval(&[1.0]).is_err(), "nested loops");
+    let mut f = Func::new("never");
+    let x = f.input_scalar("x");
+    let v = f.repeat(0, &[x], |f, v| vec![f.add(v[0], v[0])]);
+    f.ret(Shape::Scalar, &[v[0]]);
+    assert!(f.validate().is_err(), "zero iterations");
+    assert!(f.eval(&[1.0]).is_err(), "zero iterations");
+    assert!(heron(3).validate().is_ok());
+}
+
 #[test]
 fn malformed_functions_are_refused() {
     let mut f = Func::new("f");
@@ -178,10 +288,11 @@ fn every_operation_compiles_in_all_wrappers() {
     }
     let m = Module {
         header: vec!["all operations".into()],
-        funcs: vec![all_ops()],
+        funcs: vec![all_ops(), heron(20)],
     };
     let g = shader::glsl(&m).unwrap();
     assert!(g.contains("atan(") && !g.contains("atan2("));
+    assert!(g.contains("for (int t_loop") && g.contains("< 20;"));
     assert!(shader::hlsl(&m).unwrap().contains("atan2("));
     shader_common::compile_check("all_ops", &m).unwrap_or_else(|e| panic!("{e}"));
     // the check itself rejects broken code

@@ -1,4 +1,5 @@
-//! f32 interpreter of a [`Func`]: every statement in order, each operation rounded to f32
+//! f32 interpreter of a [`Func`]: every statement in order (a loop body as many times as its
+//! count, the loop variables assigned at its end), each operation rounded to f32
 //! (IEEE add/sub/mul/div/sqrt are exact roundings, as in a shader with `precise`; Rust never
 //! contracts a·b + c into an FMA). Transcendentals (cos, sin, acos, atan2, exp, log) use the
 //! Rust f32 functions; GPUs implement them to a few ulp, so only they can differ.
@@ -44,9 +45,12 @@ impl Func {
             })
             .collect();
         scratch.clear();
-        scratch.reserve(self.nodes.len());
-        for (i, n) in self.nodes.iter().enumerate() {
-            let v = match n {
+        scratch.resize(self.nodes.len(), 0.0);
+        // the open loop: index of its `Loop` node and the iterations left after this one
+        let mut open: Option<(usize, u32)> = None;
+        let mut i = 0;
+        while i < self.nodes.len() {
+            let v = match &self.nodes[i] {
                 Node::Input(p, c) => inputs[offsets[*p] + c],
                 Node::Const(c) => *c,
                 Node::Op(op) => {
@@ -55,8 +59,41 @@ impl Func {
                     }
                     apply(op, scratch)
                 }
+                Node::Var(init) => {
+                    if init.0 as usize >= i {
+                        bail!("{}: loop variable {i} uses a later value", self.name);
+                    }
+                    scratch[init.0 as usize]
+                }
+                Node::Loop(count) => {
+                    if open.is_some() || *count == 0 {
+                        bail!("{}: loop {i} is nested or runs zero times", self.name);
+                    }
+                    open = Some((i, count - 1));
+                    0.0
+                }
+                Node::EndLoop(updates) => {
+                    let Some((start, left)) = open else {
+                        bail!("{}: loop end {i} without a loop", self.name);
+                    };
+                    // in order, as printed (validation refuses a value assigned before it is read)
+                    for &(var, val) in updates {
+                        scratch[var.0 as usize] = scratch[val.0 as usize];
+                    }
+                    if left > 0 {
+                        open = Some((start, left - 1));
+                        i = start + 1;
+                        continue;
+                    }
+                    open = None;
+                    0.0
+                }
             };
-            scratch.push(v);
+            scratch[i] = v;
+            i += 1;
+        }
+        if open.is_some() {
+            bail!("{}: a loop is not closed", self.name);
         }
         let vals = self
             .ret

@@ -1,7 +1,9 @@
-//! A straight-line shader function: scalar f32 inputs, constants and statements
-//! `tN = op(args)`, with outputs gathered into scalars, arrays or vectors. The printers
-//! ([`super::print`]) and the interpreter ([`super::eval`]) read the same nodes in the same
-//! order, so the interpreter computes what the shader computes (IEEE f32, no contraction).
+//! A shader function: scalar f32 inputs, constants and statements `tN = op(args)`, with
+//! outputs gathered into scalars, arrays or vectors; straight-line except for loops with a
+//! constant trip count ([`Func::repeat`]) that carry a few variables from one iteration to the
+//! next. The printers ([`super::print`]) and the interpreter ([`super::eval`]) read the same
+//! nodes in the same order, so the interpreter computes what the shader computes (IEEE f32,
+//! no contraction).
 
 use anyhow::{bail, Result};
 
@@ -89,6 +91,13 @@ pub(crate) enum Node {
     Input(usize, usize),
     Const(f32),
     Op(Op),
+    /// A variable carried by the next loop: `init` before it, the last iteration's value after.
+    Var(V),
+    /// Start of a loop body run this many times (≥ 1).
+    Loop(u32),
+    /// End of the loop body: each variable takes its value (in order; no value is a variable
+    /// assigned here), then the body runs again until its count is reached.
+    EndLoop(Vec<(V, V)>),
 }
 
 /// A parameter: name and shape.
@@ -220,6 +229,34 @@ impl Func {
         self.op(Op::Log(a))
     }
 
+    /// A loop of `count` ≥ 1 iterations carrying the values `init`: `body` receives the
+    /// variables (their current values) and returns their next values, in the same order;
+    /// the result is the variables, which hold the last iteration's values after the loop.
+    /// Statements of the body are visible only inside it; loops do not nest.
+    pub fn repeat(
+        &mut self,
+        count: u32,
+        init: &[V],
+        body: impl FnOnce(&mut Func, &[V]) -> Vec<V>,
+    ) -> Vec<V> {
+        let vars: Vec<V> = init.iter().map(|&v| self.push(Node::Var(v))).collect();
+        self.push(Node::Loop(count));
+        let next = body(self, &vars);
+        assert_eq!(
+            next.len(),
+            vars.len(),
+            "repeat: one next value per variable"
+        );
+        let updates = vars
+            .iter()
+            .zip(&next)
+            .filter(|(v, n)| v != n)
+            .map(|(&v, &n)| (v, n))
+            .collect();
+        self.push(Node::EndLoop(updates));
+        vars
+    }
+
     /// Trailing comment on the statement that defines `v`.
     pub fn note(&mut self, v: V, text: &str) {
         self.notes.push((v, text.replace('\n', " ")));
@@ -268,11 +305,60 @@ impl Func {
     }
 
     /// Number of statements (operations) the function executes.
+    /// A statement in a loop body counts once per iteration.
     pub fn n_ops(&self) -> usize {
+        let scope = self
+            .scopes()
+            .unwrap_or_else(|_| vec![None; self.nodes.len()]);
+        self.nodes
+            .iter()
+            .zip(&scope)
+            .map(|(n, s)| match (n, s) {
+                (Node::Op(_), Some(b)) => match self.nodes[*b] {
+                    Node::Loop(count) => count as usize,
+                    _ => 1,
+                },
+                (Node::Op(_), None) => 1,
+                _ => 0,
+            })
+            .sum()
+    }
+
+    /// Number of statements as printed (a loop body once).
+    pub fn n_statements(&self) -> usize {
         self.nodes
             .iter()
             .filter(|n| matches!(n, Node::Op(_)))
             .count()
+    }
+
+    /// For every node, the index of the `Loop` whose body (or `EndLoop`) it is in; an error
+    /// for nested, empty-count, unmatched or unclosed loops.
+    pub(crate) fn scopes(&self) -> Result<Vec<Option<usize>>> {
+        let mut open: Option<usize> = None;
+        let mut out = Vec::with_capacity(self.nodes.len());
+        for (i, n) in self.nodes.iter().enumerate() {
+            match n {
+                Node::Loop(count) => {
+                    if open.is_some() || *count == 0 {
+                        bail!("{}: loop {i} is nested or runs zero times", self.name);
+                    }
+                    out.push(None);
+                    open = Some(i);
+                }
+                Node::EndLoop(_) => {
+                    if open.is_none() {
+                        bail!("{}: loop end {i} without a loop", self.name);
+                    }
+                    out.push(open.take());
+                }
+                _ => out.push(open),
+            }
+        }
+        if let Some(b) = open {
+            bail!("{}: loop {b} is not closed", self.name);
+        }
+        Ok(out)
     }
 
     /// Check names, shapes and that every value refers to an earlier node.
@@ -299,11 +385,58 @@ impl Func {
                 bail!("{}: parameter '{}' is empty", self.name, p.name);
             }
         }
+        let scope = self.scopes()?;
+        // j is a value usable at node i: a value node before i, outside every loop body or in
+        // the body i is in.
+        let usable = |j: V, i: usize| {
+            let j = j.0 as usize;
+            let here = scope.get(i).copied().flatten();
+            j < i
+                && matches!(
+                    self.nodes[j],
+                    Node::Input(..) | Node::Const(_) | Node::Op(_) | Node::Var(_)
+                )
+                && (scope[j].is_none() || scope[j] == here)
+        };
         for (i, n) in self.nodes.iter().enumerate() {
-            if let Node::Op(op) = n {
-                if op.args().iter().any(|a| a.0 as usize >= i) {
-                    bail!("{}: statement {i} uses a later value", self.name);
+            match n {
+                Node::Op(op) => {
+                    if op.args().iter().any(|&a| !usable(a, i)) {
+                        bail!(
+                            "{}: statement {i} uses a later or out-of-scope value",
+                            self.name
+                        );
+                    }
                 }
+                Node::Var(init) => {
+                    if scope[i].is_some() || !usable(*init, i) {
+                        bail!(
+                            "{}: loop variable {i} is not declared before its loop",
+                            self.name
+                        );
+                    }
+                }
+                Node::EndLoop(updates) => {
+                    let start = scope[i].expect("scopes() pairs every EndLoop");
+                    let mut targets = std::collections::HashSet::new();
+                    for &(var, _) in updates {
+                        let ok = (var.0 as usize) < start
+                            && matches!(self.nodes[var.0 as usize], Node::Var(_));
+                        if !ok || !targets.insert(var) {
+                            bail!(
+                                "{}: loop {start} assigns a non-variable or twice",
+                                self.name
+                            );
+                        }
+                    }
+                    // values are read after earlier assignments of the same loop end
+                    for &(var, val) in updates {
+                        if !usable(val, i) || (val != var && targets.contains(&val)) {
+                            bail!("{}: loop {start} assigns an unusable value", self.name);
+                        }
+                    }
+                }
+                Node::Input(..) | Node::Const(_) | Node::Loop(_) => {}
             }
         }
         let len = self.nodes.len() as u32;
@@ -329,6 +462,10 @@ impl Func {
             .chain(self.outs.iter().flat_map(|o| o.1.iter()));
         if used.clone().any(|v| v.0 >= len) || self.notes.iter().any(|n| n.0 .0 >= len) {
             bail!("{}: a value does not belong to this function", self.name);
+        }
+        let end = self.nodes.len();
+        if used.clone().any(|&v| !usable(v, end)) {
+            bail!("{}: an output is not a value outside the loops", self.name);
         }
         if self.ret.is_none() && self.outs.is_empty() {
             bail!("{}: no outputs", self.name);

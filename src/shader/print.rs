@@ -1,5 +1,6 @@
 //! GLSL and HLSL text of a [`Module`]: one `MOMENTLAB_PRECISE float t_N = …;` line per
-//! statement, in node order, with one operation each. `MOMENTLAB_PRECISE` defaults to the
+//! statement, in node order, with one operation each; a loop is a `for` with a constant trip
+//! count, its variables declared before it and assigned at the end of its body. `MOMENTLAB_PRECISE` defaults to the
 //! `precise` qualifier (GLSL ≥ 4.00, GLSL ES 3.20, HLSL), which forbids the compiler to fuse or
 //! reorder the operations; define it empty beforehand where `precise` is unavailable
 //! (GLSL ES 3.10). Constants print as the shortest decimal of their f64 value, which parses
@@ -70,7 +71,8 @@ pub fn func(f: &Func, lang: Lang) -> Result<String> {
                 component(&p.name, p.shape, *c)
             }
             Node::Const(v) => literal(*v),
-            Node::Op(_) => format!("t_{i}"),
+            Node::Op(_) | Node::Var(_) => format!("t_{i}"),
+            Node::Loop(_) | Node::EndLoop(_) => String::new(),
         })
         .collect();
     if let Some(bad) = f.nodes.iter().find_map(|n| match n {
@@ -96,8 +98,46 @@ pub fn func(f: &Func, lang: Lang) -> Result<String> {
         )
         .collect();
     let _ = writeln!(s, "{ret} {}({})\n{{", f.name, params.join(", "));
+    let notes = |i: usize| -> String {
+        let notes: Vec<&str> = f
+            .notes
+            .iter()
+            .filter(|(v, _)| v.0 as usize == i)
+            .map(|(_, t)| t.as_str())
+            .collect();
+        if notes.is_empty() {
+            String::new()
+        } else {
+            format!(" // {}", notes.join("; "))
+        }
+    };
+    let mut ind = "    ";
     for (i, n) in f.nodes.iter().enumerate() {
-        let Node::Op(op) = n else { continue };
+        let op = match n {
+            Node::Op(op) => op,
+            Node::Var(init) => {
+                let tail = notes(i);
+                let _ = writeln!(s, "{ind}MOMENTLAB_PRECISE float t_{i} = {};{tail}", r(init));
+                continue;
+            }
+            Node::Loop(count) => {
+                let _ = writeln!(
+                    s,
+                    "{ind}for (int t_loop{i} = 0; t_loop{i} < {count}; ++t_loop{i})\n{ind}{{"
+                );
+                ind = "        ";
+                continue;
+            }
+            Node::EndLoop(updates) => {
+                for (var, val) in updates {
+                    let _ = writeln!(s, "{ind}{} = {};", r(var), r(val));
+                }
+                ind = "    ";
+                let _ = writeln!(s, "{ind}}}");
+                continue;
+            }
+            Node::Input(..) | Node::Const(_) => continue,
+        };
         let e = match *op {
             Op::Add(a, b) => format!("{} + {}", r(&a), r(&b)),
             Op::Sub(a, b) => format!("{} - {}", r(&a), r(&b)),
@@ -128,18 +168,8 @@ pub fn func(f: &Func, lang: Lang) -> Result<String> {
             Op::Exp(a) => format!("exp({})", r(&a)),
             Op::Log(a) => format!("log({})", r(&a)),
         };
-        let notes: Vec<&str> = f
-            .notes
-            .iter()
-            .filter(|(v, _)| v.0 as usize == i)
-            .map(|(_, t)| t.as_str())
-            .collect();
-        let tail = if notes.is_empty() {
-            String::new()
-        } else {
-            format!(" // {}", notes.join("; "))
-        };
-        let _ = writeln!(s, "    MOMENTLAB_PRECISE float t_{i} = {e};{tail}");
+        let tail = notes(i);
+        let _ = writeln!(s, "{ind}MOMENTLAB_PRECISE float t_{i} = {e};{tail}");
     }
     for (p, vals) in &f.outs {
         match p.shape {
