@@ -20,7 +20,7 @@
 //! e^{ia}; a point is in A ⇔ its real part exceeds cos a), angles are formed only for the
 //! reported support. [`sharp_bound`] allocates nothing.
 
-use super::linalg::Real;
+use super::linalg::{bias, Real};
 use super::{ClosedForm, Evaluator, Stateless, Technique};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
@@ -693,7 +693,7 @@ fn weight4<T: Real>(z: &[Cx<T>; 4], i: usize, c1: Cx<T>, c2: Cx<T>) -> T {
 
 /// TMSM as a [`Technique`]: biased moments b' = (1 − α)·b + α·b*, by default b* = 0 (the
 /// moments of the uniform distribution on the circle, the centre of the moment space), then
-/// [`sharp_bound`] in f32 or f64.
+/// [`sharp_bound`] in f64, or both in f32.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Tmsm {
     /// Bias weight α.
@@ -768,19 +768,19 @@ pub fn shadow_f32(moments: &[f32], zf: f32, alpha: f32) -> f32 {
 }
 
 impl ClosedForm for Tmsm {
-    /// G((1 − α)·b + α·b*, z_f); the bias is applied in f64, the solve in f32 if `single`.
+    /// G(b + α·(b* − b), z_f): in f64, or if `single` with the moments, α, b* and z_f rounded
+    /// to f32 and the bias applied in f32 (`linalg::bias`, as the GPU path and the other
+    /// closed forms do).
     fn shadow(&self, moments: &[f64], zf: f64) -> f64 {
         if moments.len() != 4 {
             return f64::NAN;
         }
-        let b = self.biased(moments);
         if self.single {
-            sharp_bound(
-                [b[0] as f32, b[1] as f32, b[2] as f32, b[3] as f32],
-                zf as f32,
-            ) as f64
+            let a = self.alpha as f32;
+            let b = [0, 1, 2, 3].map(|j| bias(moments[j] as f32, a, self.b_star[j] as f32));
+            sharp_bound(b, zf as f32) as f64
         } else {
-            sharp_bound(b, zf)
+            sharp_bound(self.biased(moments), zf)
         }
     }
 }

@@ -1,13 +1,17 @@
 //! Real roots of a polynomial of degree ≤ 4 in an interval, for the quartic of the TMSM
-//! closed form (docs/tmsm.md §4.4): Descartes' rule of signs after a Möbius map with interval
-//! bisection (Vincent–Collins–Akritas), derivative isolation as the fallback, safeguarded Newton.
+//! closed form (docs/tmsm.md §4.4): in f64 Descartes' rule of signs after a Möbius map with
+//! interval bisection (Vincent–Collins–Akritas), derivative isolation as the fallback; in f32
+//! derivative isolation alone (a fixed structure the shader export transcribes); safeguarded
+//! Newton in every bracket.
 
 use super::{is_single, max};
 use crate::technique::linalg::Real;
 
 /// Real roots in [lo, hi] of Σ coef[j] σ^j (degree ≤ 4), ascending.
 ///
-/// Quartics: Descartes' rule of signs after the Möbius map σ = lo + (hi − lo)·t/(1 + t) (which
+/// f32: derivative isolation ([`isolate`]) at degree 4 for every input (zero leading
+/// coefficients give no critical point at their level), so that the same brackets and Newton
+/// solves run in the shader export (`tune::export`). f64 quartics: Descartes' rule of signs after the Möbius map σ = lo + (hi − lo)·t/(1 + t) (which
 /// sends t ∈ (0, ∞) to (lo, hi)) bounds the number of roots in (lo, hi) with the right parity:
 /// no sign variation ⇒ no root; one ⇒ exactly one simple root, found by safeguarded Newton;
 /// more ⇒ bisect the interval and test the halves (Vincent–Collins–Akritas), up to
@@ -25,6 +29,9 @@ pub fn roots_in_interval<T: Real>(coef: [T; 5], lo: T, hi: T, out: &mut [T; 4]) 
     }
     let inv = T::ONE / scale;
     let c = coef.map(|v| v * inv);
+    if is_single::<T>() {
+        return isolate(&c, 4, lo, hi, out);
+    }
     let mut deg = 4;
     while deg > 0 && c[deg] == zero {
         deg -= 1;
@@ -148,6 +155,14 @@ fn horner<T: Real>(c: &[T; 5], deg: usize, x: T) -> (T, T, T) {
     (p, dp, mag)
 }
 
+/// Newton steps of [`newton_in_bracket`] at most (f32, f64).
+pub(crate) const NEWTON_STEPS: [usize; 2] = [30, 60];
+/// A Newton step below 4ε·max(|x|, this) ends [`newton_in_bracket`].
+pub(crate) const NEWTON_FLOOR: f64 = 1.0 / 1024.0;
+/// |p| ≤ this·ε at a critical point (coefficients scaled to max |c_j| = 1) is a touching root
+/// in [`isolate`].
+pub(crate) const TOUCHING: f64 = 64.0;
+
 /// The root of p in [a, b] given p(a) = `pa`, p(b) = `pb` of opposite signs: from the secant
 /// point, Newton steps kept inside the shrinking bracket (bisection otherwise), stopped when p
 /// is at rounding level, a step is at rounding level of x or the bracket has collapsed.
@@ -160,9 +175,9 @@ pub(super) fn newton_in_bracket<T: Real>(
     pb: T,
 ) -> T {
     let half = T::of(0.5);
-    let iters = if is_single::<T>() { 30 } else { 60 };
+    let iters = NEWTON_STEPS[usize::from(!is_single::<T>())];
     let stop = T::EPS * T::of(4.0);
-    let floor = T::of(1.0 / 1024.0);
+    let floor = T::of(NEWTON_FLOOR);
     let neg_at_a = pa < T::ZERO;
     let secant = a - pa * (b - a) / (pb - pa);
     let mut x = if secant > a && secant < b {
@@ -234,7 +249,7 @@ fn isolate<T: Real>(c: &[T; 5], deg: usize, lo: T, hi: T, out: &mut [T; 4]) -> u
                     // No sign change; a touching (double) root at a critical point shows up
                     // as |p| tiny there.
                     let touching =
-                        pb == zero || (w + 1 < np - 1 && pb.abs() <= T::of(64.0) * T::EPS);
+                        pb == zero || (w + 1 < np - 1 && pb.abs() <= T::of(TOUCHING) * T::EPS);
                     touching.then_some(b)
                 } else {
                     Some(newton_in_bracket(c, deg, a, b, pa, pb))
@@ -287,6 +302,16 @@ mod tests {
             assert_eq!(got.len(), want.len(), "{roots:?}: {got:?}");
             for (g, w) in got.iter().zip(want) {
                 assert!((g - w).abs() < 1e-6, "{roots:?}: {got:?}");
+            }
+            // f32: derivative isolation at degree 4; a double root is found to ~√ε
+            let mut out = [0.0f32; 4];
+            let n = roots_in_interval(c.map(|v| v as f32), -1.0, 1.0, &mut out);
+            let mut got = out[..n].to_vec();
+            assert!(got.windows(2).all(|p| p[0] <= p[1]), "{roots:?}: {got:?}");
+            got.dedup_by(|x, y| (*x - *y).abs() < 1e-3);
+            assert_eq!(got.len(), want.len(), "f32 {roots:?}: {got:?}");
+            for (g, w) in got.iter().zip(want) {
+                assert!((*g as f64 - w).abs() < 1e-3, "f32 {roots:?}: {got:?}");
             }
         }
     }
