@@ -54,7 +54,7 @@ impl Func {
                 Node::Input(p, c) => inputs[offsets[*p] + c],
                 Node::Const(c) => *c,
                 Node::Op(op) => {
-                    if op.args().iter().any(|a| a.0 as usize >= i) {
+                    if op.last_arg() as usize >= i {
                         bail!("{}: statement {i} uses a later value", self.name);
                     }
                     apply(op, scratch)

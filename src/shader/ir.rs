@@ -72,6 +72,19 @@ pub enum Op {
 }
 
 impl Op {
+    /// The largest argument index (a statement may only use earlier nodes).
+    pub(crate) fn last_arg(&self) -> u32 {
+        use Op::*;
+        match *self {
+            Neg(a) | Abs(a) | Sqrt(a) | Cos(a) | Sin(a) | Acos(a) | Exp(a) | Log(a) => a.0,
+            Add(a, b) | Sub(a, b) | Mul(a, b) | Div(a, b) | Min(a, b) | Max(a, b) | Atan2(a, b) => {
+                a.0.max(b.0)
+            }
+            Clamp(a, b, c) => a.0.max(b.0).max(c.0),
+            Select(_, a, b, x, y) => a.0.max(b.0).max(x.0).max(y.0),
+        }
+    }
+
     pub(crate) fn args(&self) -> Vec<V> {
         use Op::*;
         match *self {
