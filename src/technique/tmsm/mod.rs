@@ -26,7 +26,7 @@ use std::ops::{Add, Div, Mul, Neg, Sub};
 
 mod certified;
 use certified::Verdict;
-mod roots;
+pub(crate) mod roots;
 pub use roots::roots_in_interval;
 
 #[inline(always)]
@@ -150,31 +150,31 @@ impl<T: Real> Neg for Cx<T> {
 }
 
 /// Thresholds of the solver per precision.
-struct Tol<T> {
+pub(crate) struct Tol<T> {
     /// 1 − |c₁|² below this: one Dirac.
-    single: T,
+    pub(crate) single: T,
     /// 1 − |γ₂|² below this: two Diracs (Toeplitz matrix singular).
-    double: T,
+    pub(crate) double: T,
     /// Accepted negative weight of a candidate distribution.
-    weight: T,
+    pub(crate) weight: T,
     /// Angular tolerance for atoms at 0 or z_f in the singular case.
-    angle: T,
+    pub(crate) angle: T,
     /// The certified fast path (§4.6) is used only when every weight of its candidate is at
     /// least this and D₂ = (1 − |c₁|²)(1 − |γ₂|²) is at least `certify_det`; closer to the
     /// boundary of the moment space the full enumeration decides (in f64 it reproduces the
     /// previous implementation, which accepts weights down to −`weight`, to 1e-9). In f32
     /// (judged against the f64 bound) (III-s) is accepted down to −`weight` like every
     /// candidate of the enumeration, and canonical weights are not guarded.
-    certify_weight: T,
-    certify_det: T,
+    pub(crate) certify_weight: T,
+    pub(crate) certify_det: T,
     /// (III-s) with its least weight in [`uncertain_below`, `certify_weight`): undecided, the
     /// full enumeration decides; below: infeasible.
-    uncertain_below: T,
+    pub(crate) uncertain_below: T,
 }
 
 impl<T: Real> Tol<T> {
     #[inline(always)]
-    fn get() -> Tol<T> {
+    pub(crate) fn get() -> Tol<T> {
         if is_single::<T>() {
             Tol {
                 single: T::of(1e-5),
@@ -224,6 +224,28 @@ pub fn sharp_bound<T: Real>(b: [T; 4], zf: T) -> T {
 pub fn sharp_bound_case<T: Real>(b: [T; 4], zf: T) -> (T, Case) {
     let out = evaluate::<T, false>(b, zf);
     (out.g, out.case)
+}
+
+/// [`sharp_bound_case`] and how the G-only path got there.
+#[cfg(test)]
+pub(crate) fn sharp_bound_route<T: Real>(b: [T; 4], zf: T) -> (T, Case, Route) {
+    let out = evaluate::<T, false>(b, zf);
+    (out.g, out.case, out.route)
+}
+
+/// How the G-only path of a positive definite Toeplitz matrix found G.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Route {
+    /// Before the candidates: trivial, one or two Diracs, the lit arc.
+    Direct,
+    /// A certificate of (III-s), (I) or (II) (docs/tmsm.md §4.6).
+    Certified,
+    /// (III-q) from the Newton solve in the bracket of the canonical nodes.
+    Bracketed,
+    /// (III-q) from every root of the quartic in (−1, 1).
+    Isolated,
+    /// The full enumeration of docs/tmsm.md §4.
+    Enumerated,
 }
 
 /// Which branch of docs/tmsm.md produced the result.
@@ -295,6 +317,7 @@ pub fn solve<T: Real>(b: [T; 4], zf: T) -> Detail<T> {
 struct Outcome<T> {
     g: T,
     case: Case,
+    route: Route,
     a: T,
     atoms: [(Cx<T>, T); 4],
     n: usize,
@@ -306,6 +329,7 @@ impl<T: Real> Outcome<T> {
         Outcome {
             g,
             case,
+            route: Route::Direct,
             a,
             atoms: [(Cx::real(T::ZERO), T::ZERO); 4],
             n: 0,
@@ -439,22 +463,26 @@ fn pd_bound<T: Real, const SUPPORT: bool>(
             Verdict::Optimal(g, case) => {
                 out.g = max(zero, min(one, g));
                 out.case = case;
+                out.route = Route::Certified;
                 return out;
             }
             Verdict::Quartic(hint, n) => {
                 if quartic_bracketed(c1, c2, ea, h0, h1, tol, &hint[..n], &mut out) {
                     out.g = max(zero, min(one, out.g));
+                    out.route = Route::Bracketed;
                     return out;
                 }
                 quartic_candidates(c1, c2, ea, h0, h1, tol, &mut out);
                 if out.case == Case::Quartic {
                     out.g = max(zero, min(one, out.g));
+                    out.route = Route::Isolated;
                     return out;
                 }
             }
             Verdict::Unknown => {}
         }
     }
+    out.route = Route::Enumerated;
     let ema = ea.conj();
     let ok = |w: &[T]| w.iter().all(|&wi| wi >= -tol.weight);
     // (I), (II): canonical representations through z_f (s = a) and through 0 (s = −a).
