@@ -68,6 +68,12 @@ fn exported_reconstructions_equal_the_f32_implementation_on_real_windows() {
         setting(Hamburger6, F32, Own::None, 4e-3),
         setting(Hamburger6, Unorm16Theta, Own::None, 1e-4),
         setting(Hamburger6, Unorm16, Own::None, 1e-5),
+        // TMSM: the registry's 32-bit and 16-bit defaults and the tuned settings of the default
+        // report
+        setting(Tmsm, F32, Own::None, 1e-6),
+        setting(Tmsm, F32, Own::None, 6e-6),
+        setting(Tmsm, Unorm16Theta, Own::None, 2e-5),
+        setting(Tmsm, Unorm16Theta, Own::None, 3e-5),
     ];
     let compile = shader_common::tools_present("exported_reconstructions");
     for s in &settings {
@@ -104,11 +110,14 @@ fn exported_reconstructions_equal_the_f32_implementation_on_real_windows() {
                 exact += (ir == own) as usize;
             }
         }
+        let sh = module.func("tunedShadow").unwrap();
         eprintln!(
-            "{:<48} max |IR − f32| = {worst:.2e}, bit-equal {exact}/{}, tunedShadow {} ops",
+            "{:<48} max |IR − f32| = {worst:.2e}, bit-equal {exact}/{}, tunedShadow {} \
+             statements, {} executed",
             s.label(),
             zfs.len(),
-            module.func("tunedShadow").unwrap().n_ops()
+            sh.n_statements(),
+            sh.n_ops()
         );
         assert!(worst <= 1e-5, "{}: {worst}", s.label());
         // The module's own tunedShadow on stored values: encode → (filter) → shadow agrees with
@@ -146,9 +155,17 @@ fn exported_reconstructions_equal_the_f32_implementation_on_real_windows() {
             .unwrap();
         }
     }
-    // No straight-line form for TMSM: the export says so instead of guessing.
-    for st in Tmsm.storages() {
-        let s = setting(Tmsm, *st, Own::None, 1e-5);
-        assert!(export::module(&s, vec![]).unwrap().is_none());
+    // every technique and storage `tune` searches has an export
+    for t in TechniqueKind::ALL {
+        for st in t.storages() {
+            for own in t.own_params(*st) {
+                let s = setting(t, *st, own, t.alphas()[0]);
+                assert!(
+                    export::module(&s, vec![]).unwrap().is_some(),
+                    "{}",
+                    s.label()
+                );
+            }
+        }
     }
 }

@@ -6,9 +6,9 @@
 //! as momentlab's own f32 path, clamped to [0,1]. The depth bias is the caller's:
 //! z_f = z − (ε + s·(|dz/du| + |dz/dv|)), its constants are in the header and the JSON.
 //!
-//! Reconstructions: VSM, ESM, EVSM, Hamburger 4MSM, Hausdorff 4MSM and 6MSM, each a transcript
-//! of the f32 solver with `select` for its branches (every branch is computed, the selects keep
-//! the one the solver takes):
+//! Reconstructions: VSM, ESM, EVSM, Hamburger 4MSM, Hausdorff 4MSM, 6MSM and TMSM, each a
+//! transcript of the f32 solver with `select` for its branches (every branch is computed, the
+//! selects keep the one the solver takes):
 //! * Hausdorff 4MSM: Algorithm 3 (support z_f, z₂, z₃) while z₂ ≥ 0 and z₃ ≤ 1, else the
 //!   distribution on {0, z_f, z_free, 1} with its weight sum through the Newton interpolation
 //!   polynomial;
@@ -17,10 +17,14 @@
 //!   moments do not reach it), the weight sum; a Hankel matrix numerically singular at size 2
 //!   or 3 goes to Algorithm 2 on the first 2 or 4 moments, whose quadratic is solved by
 //!   Laguerre's iteration unrolled `LAGUERRE_STEPS` times (the solver loops until a step is
-//!   at rounding level, at most 200 times) followed by the same three Newton steps.
-//!
-//! TMSM has no straight-line form: its quartic case isolates roots by recursive interval
-//! bisection with Newton solves of up to 30 steps each; its export holds the JSON only.
+//!   at rounding level, at most 200 times) followed by the same three Newton steps;
+//! * TMSM (`tmsm` below): the G-only path of `technique::tmsm::sharp_bound::<f32>` operation for
+//!   operation — one or two Diracs, the lit arc, the certificates of (III-s), (I), (II), the
+//!   quartic's root in the bracket of the canonical nodes, its roots by derivative isolation,
+//!   the full enumeration — with its safeguarded Newton solves as loops of the solver's
+//!   30 steps (`Func::repeat`) whose state freezes where the solver stops.
+
+mod tmsm;
 
 use super::space::{Own, Setting, StorageKind, TechniqueKind};
 use crate::quantize::codegen;
@@ -702,6 +706,10 @@ pub fn reconstruction_into(f: &mut Func, s: &Setting, b: &[V], zf: V) -> Result<
             let bb = biased(f, b, s.alpha, &bs);
             msm6_into(f, &bb, zf)
         }
+        (TechniqueKind::Tmsm, _) => {
+            let bb = biased(f, b, s.alpha, &bs);
+            tmsm::tmsm_into(f, &bb, zf)
+        }
         _ => return Ok(None),
     };
     let zero = f.c(0.0);
@@ -730,6 +738,13 @@ fn basis_into(f: &mut Func, s: &Setting, z: V) -> Vec<V> {
             let mn = f.neg(n);
             vec![p, pp, mn, nn]
         }
+        Own::None if s.family.technique == TechniqueKind::Tmsm => {
+            // t = 2πz: (sin t, cos t, sin 2t, cos 2t)
+            let tau = f.c(std::f32::consts::TAU);
+            let t = f.mul(tau, z);
+            let t2 = f.add(t, t);
+            vec![f.sin(t), f.cos(t), f.sin(t2), f.cos(t2)]
+        }
         Own::None => {
             let m = s.family.technique.moment_count();
             let mut out = vec![z];
@@ -746,15 +761,15 @@ fn basis_into(f: &mut Func, s: &Setting, z: V) -> Vec<V> {
 pub fn module(s: &Setting, header: Vec<String>) -> Result<Option<Module>> {
     let fam = &s.family;
     let m = fam.technique.moment_count();
-    if fam.technique == TechniqueKind::Tmsm {
-        return Ok(None);
-    }
     let theta = fam.technique.theta(fam.storage);
     let with_theta = fam.storage == StorageKind::Unorm16Theta;
     // encode
     let mut enc = Func::new("tunedEncode");
     let z = enc.input_scalar("depth");
-    let stored = if with_theta {
+    let stored = if with_theta && fam.technique == TechniqueKind::Tmsm {
+        let b = basis_into(&mut enc, s, z);
+        codegen::encode_matrix_into(&mut enc, &theta, &b)
+    } else if with_theta {
         let rows = codegen::chebyshev_rows(&theta, &MonomialCurve::power(m)?)?;
         codegen::encode_into(&mut enc, &rows, z)
     } else {
