@@ -187,10 +187,8 @@ pub struct FastSolver {
     factored_ok: bool,
     /// The crossover has just left a basic feasible solution with its (updated) inverse.
     crossed: bool,
-    /// Last optimal basis (warm start), if any, and the transformed moments it was optimal for.
-    warm_basis: Option<Vec<usize>>,
-    last_c: Vec<f64>,
-    warm: bool,
+    /// The warm start carried from one problem to the next.
+    warm: starts::WarmStart,
     stats: FastStats,
     /// Checks every answer in the original coordinates.
     cert: Certifier,
@@ -230,37 +228,15 @@ pub struct FastSolver {
     xold: Vec<f64>,
     /// max_i ‖a_i‖₂.
     amax: f64,
-    /// is_basic[i]: grid column i is in the basis.
-    is_basic: Vec<bool>,
-    /// Coarse stride of partial pricing (1 = always full pricing).
-    stride: usize,
-    /// The columns in pricing blocks (all of them, and the coarse subgrid of partial pricing:
-    /// every `stride`-th point and the last one, at grid indices `coarse_idx`).
-    fine: ColumnTable,
-    coarse: ColumnTable,
-    coarse_idx: Vec<usize>,
-    /// For grid index i: its position in `coarse`, or u32::MAX when it is not a coarse point.
-    coarse_pos: Vec<u32>,
-    ls_sup: Vec<usize>,
-    ls_a: Vec<f64>,
-    ls_q: Vec<f64>,
-    ls_r: Vec<f64>,
-    ls_w: Vec<f64>,
+    /// The column tables and the partial-pricing state.
+    pricing: price::Pricing,
+    /// Least-squares workspace of the polish and the rescue.
+    ls: refine::LeastSquares,
     /// 1 / max_i |M_j(z_i)|: row equilibration of the original system.
     oscale: Vec<f64>,
     lo_rhs: Vec<f64>,
-    /// Crossover workspace: the start distribution, squared residual norms, a residual,
-    /// orthonormal directions and basis positions of its support points.
-    hint: Vec<(usize, f64)>,
-    hint_nrm: Vec<f64>,
-    /// The support's columns coordinate-major (see [`FastSolver::load_hint`]) and their
-    /// projections (see [`FastSolver::choose_support`]).
-    hint_a: Vec<f64>,
-    hint_stride: usize,
-    hint_h: Vec<f64>,
-    hint_v: Vec<f64>,
-    hint_u: Vec<f64>,
-    hint_pos: Vec<usize>,
+    /// Crossover workspace.
+    cross: starts::Crossover,
 }
 
 impl FastSolver {
@@ -297,9 +273,11 @@ impl FastSolver {
             factored: vec![usize::MAX; r],
             factored_ok: false,
             crossed: false,
-            warm_basis: None,
-            last_c: vec![f64::NAN; r],
-            warm: true,
+            warm: starts::WarmStart {
+                basis: None,
+                last_c: vec![f64::NAN; r],
+                on: true,
+            },
             stats: FastStats::default(),
             cert: Certifier::new(&table, cert_rows),
             scaled: ScaledSimplex::default(),
@@ -324,17 +302,21 @@ impl FastSolver {
             yold: vec![0.0; r],
             xold: vec![0.0; r],
             amax,
-            is_basic: vec![false; n],
-            stride: 1,
-            fine,
-            coarse: ColumnTable::default(),
-            coarse_idx: Vec::new(),
-            coarse_pos: vec![u32::MAX; n],
-            ls_sup: vec![0; r],
-            ls_a: vec![0.0; r * r],
-            ls_q: vec![0.0; r * r],
-            ls_r: vec![0.0; r * r],
-            ls_w: vec![0.0; r],
+            pricing: price::Pricing {
+                is_basic: vec![false; n],
+                stride: 1,
+                fine,
+                coarse: ColumnTable::default(),
+                coarse_idx: Vec::new(),
+                coarse_pos: vec![u32::MAX; n],
+            },
+            ls: refine::LeastSquares {
+                sup: vec![0; r],
+                a: vec![0.0; r * r],
+                q: vec![0.0; r * r],
+                r: vec![0.0; r * r],
+                w: vec![0.0; r],
+            },
             oscale: fscale
                 .iter()
                 .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
@@ -342,14 +324,10 @@ impl FastSolver {
             lo_rhs: vec![0.0; mm],
             fscale,
             table,
-            hint: Vec::new(),
-            hint_nrm: Vec::new(),
-            hint_a: Vec::new(),
-            hint_stride: 0,
-            hint_h: Vec::new(),
-            hint_v: vec![0.0; r],
-            hint_u: Vec::new(),
-            hint_pos: Vec::new(),
+            cross: starts::Crossover {
+                v: vec![0.0; r],
+                ..Default::default()
+            },
         };
         solver.set_partial_pricing(true);
         solver
@@ -357,9 +335,9 @@ impl FastSolver {
 
     /// Enable or disable warm start from the previous optimal basis (on by default).
     pub fn set_warm_start(&mut self, on: bool) {
-        self.warm = on;
+        self.warm.on = on;
         if !on {
-            self.warm_basis = None;
+            self.warm.basis = None;
         }
     }
 
@@ -371,7 +349,7 @@ impl FastSolver {
 
     /// The basis the next solve starts from (grid indices), if any.
     pub fn warm_basis(&self) -> Option<&[usize]> {
-        self.warm_basis.as_deref()
+        self.warm.basis.as_deref()
     }
 
     /// Start the next solve from `basis` (rank() distinct grid indices), e.g. to test that any
@@ -385,44 +363,47 @@ impl FastSolver {
                 bail!("basis: index {i} out of range or repeated");
             }
         }
-        self.warm = true;
-        self.warm_basis = Some(basis.to_vec());
-        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        self.warm.on = true;
+        self.warm.basis = Some(basis.to_vec());
+        self.warm.last_c.iter_mut().for_each(|v| *v = f64::NAN);
         Ok(())
     }
 
     /// What the solver carries from one problem to the next (the last optimal basis and its
     /// moments), to time a stretch of problems repeatedly from the same state.
     pub(in crate::lp) fn warm_state(&self) -> (Option<Vec<usize>>, Vec<f64>) {
-        (self.warm_basis.clone(), self.last_c.clone())
+        (self.warm.basis.clone(), self.warm.last_c.clone())
     }
 
     /// Restore a [`Self::warm_state`].
     pub(in crate::lp) fn restore_warm_state(&mut self, state: &(Option<Vec<usize>>, Vec<f64>)) {
-        self.warm_basis.clone_from(&state.0);
-        self.last_c.copy_from_slice(&state.1);
+        self.warm.basis.clone_from(&state.0);
+        self.warm.last_c.copy_from_slice(&state.1);
     }
 
     /// Enable or disable partial pricing (coarse subgrid first; on by default for n ≥ 64).
     pub fn set_partial_pricing(&mut self, on: bool) {
         let n = self.n;
-        self.stride = if on && n >= 64 {
+        self.pricing.stride = if on && n >= 64 {
             ((n as f64 / 2.0).sqrt() as usize).max(2)
         } else {
             1
         };
-        self.coarse_idx = (0..n).step_by(self.stride).collect();
-        if self.coarse_idx.last() != Some(&(n - 1)) {
-            self.coarse_idx.push(n - 1);
+        self.pricing.coarse_idx = (0..n).step_by(self.pricing.stride).collect();
+        if self.pricing.coarse_idx.last() != Some(&(n - 1)) {
+            self.pricing.coarse_idx.push(n - 1);
         }
-        self.coarse_pos.iter_mut().for_each(|v| *v = u32::MAX);
-        for (c, &i) in self.coarse_idx.iter().enumerate() {
-            self.coarse_pos[i] = c as u32;
+        self.pricing
+            .coarse_pos
+            .iter_mut()
+            .for_each(|v| *v = u32::MAX);
+        for (c, &i) in self.pricing.coarse_idx.iter().enumerate() {
+            self.pricing.coarse_pos[i] = c as u32;
         }
-        let (fine, idx) = (&self.fine, &self.coarse_idx);
-        self.coarse = ColumnTable::new(self.r, idx.len(), |k, j| fine.entry(k, idx[j]));
+        let (fine, idx) = (&self.pricing.fine, &self.pricing.coarse_idx);
+        self.pricing.coarse = ColumnTable::new(self.r, idx.len(), |k, j| fine.entry(k, idx[j]));
         for i in 0..n {
-            if self.is_basic[i] {
+            if self.pricing.is_basic[i] {
                 self.set_basic(i, true);
             }
         }
@@ -430,8 +411,8 @@ impl FastSolver {
 
     /// Forget the warm-start basis.
     pub fn reset(&mut self) {
-        self.warm_basis = None;
-        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        self.warm.basis = None;
+        self.warm.last_c.iter_mut().for_each(|v| *v = f64::NAN);
     }
 
     /// Numerical rank of [1, b_1, …, b_m] on the grid (m+1 unless functions are dependent).
@@ -671,7 +652,7 @@ impl FastSolver {
         dist: Option<&[(u32, f64)]>,
     ) -> Solution {
         self.stats.escalations += 1;
-        self.last_c.iter_mut().for_each(|v| *v = f64::NAN);
+        self.warm.last_c.iter_mut().for_each(|v| *v = f64::NAN);
         self.cert.set_moments(moments);
         let pivots = self.scaled.pivots;
         let found = self.scaled.solve(&self.cert, kf, start);

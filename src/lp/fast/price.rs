@@ -12,6 +12,21 @@ use crate::lp::pricing::ColumnTable;
 /// 10.2 → 7.4 pivots per window, with about one such scan per window.
 const GI_TRIGGER: f64 = -1.0;
 
+/// The columns in pricing blocks and the partial-pricing state.
+pub(super) struct Pricing {
+    /// is_basic[i]: grid column i is in the basis.
+    pub(super) is_basic: Vec<bool>,
+    /// Coarse stride of partial pricing (1 = always full pricing).
+    pub(super) stride: usize,
+    /// All columns, and the coarse subgrid of partial pricing (every `stride`-th point and
+    /// the last one, at grid indices `coarse_idx`).
+    pub(super) fine: ColumnTable,
+    pub(super) coarse: ColumnTable,
+    pub(super) coarse_idx: Vec<usize>,
+    /// For grid index i: its position in `coarse`, or u32::MAX when it is not a coarse point.
+    pub(super) coarse_pos: Vec<u32>,
+}
+
 impl FastSolver {
     /// Partial pricing: reduced costs on a coarse subgrid (every `stride`-th point and the last
     /// one), next to z_f and next to the current support points, then on the whole fine window
@@ -20,33 +35,36 @@ impl FastSolver {
     /// pass. Returns (usize::MAX, −TOL_D) when it finds no negative reduced cost (then a full
     /// pass decides).
     pub(super) fn price_partial(&self, kf: usize) -> (usize, f64) {
-        let (n, r, st) = (self.n, self.r, self.stride);
+        let (n, r, st) = (self.n, self.r, self.pricing.stride);
         let y = &self.y[..r];
         let none = (usize::MAX, -TOL_D);
         // Coarse subgrid.
-        let coarse = &self.coarse;
+        let coarse = &self.pricing.coarse;
         // Coarse points below kf: j·st < kf for the regular ones, and the extra last point
         // n − 1 only when kf = n.
-        let nc = self.coarse_idx.len();
+        let nc = self.pricing.coarse_idx.len();
         let regular = if (nc - 1) * st == n - 1 { nc } else { nc - 1 };
         let csplit = kf.div_ceil(st).min(regular) + (regular < nc && kf == n) as usize;
-        debug_assert_eq!(csplit, self.coarse_idx.partition_point(|&i| i < kf));
+        debug_assert_eq!(csplit, self.pricing.coarse_idx.partition_point(|&i| i < kf));
         let cb = coarse.scan(y, csplit, 0, coarse.blocks(), none);
         let mut best = if cb.0 == usize::MAX {
             none
         } else {
-            (self.coarse_idx[cb.0], cb.1)
+            (self.pricing.coarse_idx[cb.0], cb.1)
         };
         // Narrow dips of the reduced cost appear next to the current support points and at
         // the step at z_f: scan a few neighbours of each (whole blocks, overlaps merged).
         const W: usize = 3;
         let mut ranges = [(0usize, 0usize); 10];
         let mut nr = 0;
-        ranges[nr] = self.fine.block_range(kf.saturating_sub(W), kf + W);
+        ranges[nr] = self.pricing.fine.block_range(kf.saturating_sub(W), kf + W);
         nr += 1;
         for &bt in &self.basis {
             if bt != ART && nr < ranges.len() {
-                ranges[nr] = self.fine.block_range(bt.saturating_sub(W), bt + W + 1);
+                ranges[nr] = self
+                    .pricing
+                    .fine
+                    .block_range(bt.saturating_sub(W), bt + W + 1);
                 nr += 1;
             }
         }
@@ -58,7 +76,10 @@ impl FastSolver {
                 distinct += 1;
             }
         }
-        best = self.fine.scan_ranges(y, kf, &ranges[..distinct], best);
+        best = self
+            .pricing
+            .fine
+            .scan_ranges(y, kf, &ranges[..distinct], best);
         if best.0 == usize::MAX {
             return best;
         }
@@ -72,13 +93,14 @@ impl FastSolver {
                 tol_piv: TOL_PIV,
             };
             if let Some(g) = gi_pricing::scan(coarse, y, csplit, &basis) {
-                best = (self.coarse_idx[g.j], g.d);
+                best = (self.pricing.coarse_idx[g.j], g.d);
             }
         }
         // The reduced cost is smooth between coarse points: the minimum of the whole fine
         // window around the best point is the entering column.
         let c = best.0;
         let window = self
+            .pricing
             .fine
             .block_range(c.saturating_sub(st - 1), (c + st).min(n));
         self.scan_fine(y, kf, window, best)
@@ -89,7 +111,12 @@ impl FastSolver {
     /// never come out lowest).
     pub(super) fn price_full(&self, kf: usize) -> (usize, f64) {
         let y = &self.y[..self.r];
-        let got = self.scan_fine(y, kf, (0, self.fine.blocks()), (usize::MAX, -0.25 * TOL_D));
+        let got = self.scan_fine(
+            y,
+            kf,
+            (0, self.pricing.fine.blocks()),
+            (usize::MAX, -0.25 * TOL_D),
+        );
         if got.0 == usize::MAX {
             (usize::MAX, 0.0)
         } else {
@@ -105,17 +132,17 @@ impl FastSolver {
         (blo, bhi): (usize, usize),
         best: (usize, f64),
     ) -> (usize, f64) {
-        self.fine.scan(y, kf, blo, bhi, best)
+        self.pricing.fine.scan(y, kf, blo, bhi, best)
     }
 
     /// Mark grid column i basic (excluded from pricing) or not.
     pub(super) fn set_basic(&mut self, i: usize, on: bool) {
-        self.is_basic[i] = on;
-        self.fine.set_excluded(i, on);
+        self.pricing.is_basic[i] = on;
+        self.pricing.fine.set_excluded(i, on);
         // A table lookup, not `i % stride` (an integer division, ~60 per solve).
-        let c = self.coarse_pos[i];
+        let c = self.pricing.coarse_pos[i];
         if c != u32::MAX {
-            self.coarse.set_excluded(c as usize, on);
+            self.pricing.coarse.set_excluded(c as usize, on);
         }
     }
 }

@@ -19,6 +19,16 @@ pub(super) enum Refined {
     Infeasible,
 }
 
+/// Workspace of the least-squares solves on a support (polish and rescue): support indices,
+/// its columns, their QR factors and the weights.
+pub(super) struct LeastSquares {
+    pub(super) sup: Vec<usize>,
+    pub(super) a: Vec<f64>,
+    pub(super) q: Vec<f64>,
+    pub(super) r: Vec<f64>,
+    pub(super) w: Vec<f64>,
+}
+
 impl FastSolver {
     /// Least squares on the basic positions `ls_sup[..k]`: c ≈ Σ w_a a_{B_t}. On success (w ≥ 0
     /// and residual at rounding level) x becomes w on those positions and 0 elsewhere
@@ -29,17 +39,17 @@ impl FastSolver {
             return false;
         }
         for a in 0..k {
-            let bt = self.basis[self.ls_sup[a]];
-            self.ls_a[a * r..(a + 1) * r].copy_from_slice(&self.rows[bt * r..(bt + 1) * r]);
+            let bt = self.basis[self.ls.sup[a]];
+            self.ls.a[a * r..(a + 1) * r].copy_from_slice(&self.rows[bt * r..(bt + 1) * r]);
         }
-        let w = &mut self.ls_w[..k];
+        let w = &mut self.ls.w[..k];
         if !least_squares(
-            &self.ls_a[..k * r],
+            &self.ls.a[..k * r],
             r,
             k,
             &self.c,
-            &mut self.ls_q,
-            &mut self.ls_r,
+            &mut self.ls.q,
+            &mut self.ls.r,
             w,
         ) {
             return false;
@@ -51,7 +61,7 @@ impl FastSolver {
         for kk in 0..r {
             let mut acc = self.c[kk];
             for a in 0..k {
-                acc -= w[a] * self.ls_a[a * r + kk];
+                acc -= w[a] * self.ls.a[a * r + kk];
             }
             res2 += acc * acc;
         }
@@ -60,7 +70,7 @@ impl FastSolver {
         }
         self.x.iter_mut().for_each(|v| *v = 0.0);
         for a in 0..k {
-            self.x[self.ls_sup[a]] = w[a];
+            self.x[self.ls.sup[a]] = w[a];
         }
         true
     }
@@ -73,7 +83,7 @@ impl FastSolver {
         let mut k = 0;
         for t in 0..self.r {
             if self.basis[t] != ART && self.x[t] > 1e-8 {
-                self.ls_sup[k] = t;
+                self.ls.sup[k] = t;
                 k += 1;
             }
         }
@@ -93,7 +103,7 @@ impl FastSolver {
         order.sort_by(|&a, &b| self.x[b].total_cmp(&self.x[a]));
         let mut found = 0;
         for k in 1..=order.len() {
-            self.ls_sup[..k].copy_from_slice(&order[..k]);
+            self.ls.sup[..k].copy_from_slice(&order[..k]);
             if self.try_support(k) {
                 found = k;
                 break;

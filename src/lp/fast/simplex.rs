@@ -331,7 +331,7 @@ impl FastSolver {
         let (n, r) = (self.n, self.r);
         self.duals(st.phase1, st.kf);
         let kf_eff = if st.phase1 { 0 } else { st.kf };
-        let partial = if bland || self.stride <= 1 {
+        let partial = if bland || self.pricing.stride <= 1 {
             (usize::MAX, 0.0)
         } else {
             self.price_partial(kf_eff)
@@ -362,7 +362,15 @@ impl FastSolver {
         let (q, dq) = if partial.0 != usize::MAX {
             partial
         } else if bland {
-            price_bland(&self.fine, n, r, &self.y, kf_eff, &self.basis, &mut self.s)
+            price_bland(
+                &self.pricing.fine,
+                n,
+                r,
+                &self.y,
+                kf_eff,
+                &self.basis,
+                &mut self.s,
+            )
         } else {
             self.price_full(kf_eff)
         };
@@ -450,7 +458,15 @@ impl FastSolver {
     /// s = row art_pos of B⁻¹A; pick the largest pivot element.
     fn drive_out_artificial(&mut self, st: &mut Run) -> Result<(), Jump> {
         let (n, r) = (self.n, self.r);
-        price(&self.fine, n, r, &self.y, 0, &self.basis, &mut self.s);
+        price(
+            &self.pricing.fine,
+            n,
+            r,
+            &self.y,
+            0,
+            &self.basis,
+            &mut self.s,
+        );
         let mut best = None;
         let mut best_v = TOL_PIV;
         for i in 0..n {

@@ -21,6 +21,31 @@ enum Start {
 /// Smallest pivot element of a crossover step.
 const PIV: f64 = 1e-8;
 
+/// The warm start: the last optimal basis, if any, and the transformed moments it was optimal
+/// for (another z_f for the same moments starts from it, primal feasible).
+pub(super) struct WarmStart {
+    pub(super) basis: Option<Vec<usize>>,
+    pub(super) last_c: Vec<f64>,
+    /// Warm start enabled ([`FastSolver::set_warm_start`]).
+    pub(super) on: bool,
+}
+
+/// Crossover workspace: the start distribution, squared residual norms, a residual,
+/// orthonormal directions and basis positions of its support points.
+#[derive(Default)]
+pub(super) struct Crossover {
+    pub(super) dist: Vec<(usize, f64)>,
+    pub(super) nrm: Vec<f64>,
+    /// The support's columns coordinate-major (see [`FastSolver::load_hint`]) and their
+    /// projections (see [`FastSolver::choose_support`]).
+    pub(super) a: Vec<f64>,
+    pub(super) stride: usize,
+    pub(super) h: Vec<f64>,
+    pub(super) v: Vec<f64>,
+    pub(super) u: Vec<f64>,
+    pub(super) pos: Vec<usize>,
+}
+
 impl FastSolver {
     /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
     /// (two cold runs, the second with Bland's rule throughout).
@@ -91,14 +116,14 @@ impl FastSolver {
     /// The first start of [`Self::attempts`] and the usual one (warm when there is a warm
     /// basis, else cold).
     fn first_start(&mut self, hint: bool) -> (Start, Start) {
-        let warm_or_cold = if self.warm && self.warm_basis.is_some() {
+        let warm_or_cold = if self.warm.on && self.warm.basis.is_some() {
             Start::Warm
         } else {
             Start::Cold
         };
         // The same moments as the last solved problem (another fragment depth for the same
         // texel): its optimal basis is primal feasible here, a better start than the crossover.
-        let same_moments = matches!(warm_or_cold, Start::Warm) && self.last_c == self.c0;
+        let same_moments = matches!(warm_or_cold, Start::Warm) && self.warm.last_c == self.c0;
         if hint && same_moments {
             self.stats.same_moments += 1;
         }
@@ -117,7 +142,7 @@ impl FastSolver {
             Start::Hint | Start::Current => {}
             Start::Warm => {
                 self.mark_basic(false);
-                let wb = self.warm_basis.as_ref().expect("warm basis");
+                let wb = self.warm.basis.as_ref().expect("warm basis");
                 self.basis.copy_from_slice(wb);
                 self.mark_basic(true);
             }
@@ -148,21 +173,21 @@ impl FastSolver {
     /// After a certified fast optimum: its basis is the next warm start.
     pub(super) fn remember_optimal(&mut self) {
         self.last_bound = f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
-        if self.warm {
-            match &mut self.warm_basis {
+        if self.warm.on {
+            match &mut self.warm.basis {
                 Some(wb) => wb.copy_from_slice(&self.basis),
-                None => self.warm_basis = Some(self.basis.clone()),
+                None => self.warm.basis = Some(self.basis.clone()),
             }
-            self.last_c.copy_from_slice(&self.c0);
+            self.warm.last_c.copy_from_slice(&self.c0);
         }
     }
 
     /// After accurate pivots certified `basis` (not the basis the simplex ended on): it is
     /// the next warm start instead, so that the warm basis is always a certified optimum.
     pub(super) fn remember_certified(&mut self, basis: &[usize]) {
-        if self.warm && basis.len() == self.r && basis.iter().all(|&i| i < self.n) {
-            self.warm_basis = Some(basis.to_vec());
-            self.last_c.copy_from_slice(&self.c0);
+        if self.warm.on && basis.len() == self.r && basis.iter().all(|&i| i < self.n) {
+            self.warm.basis = Some(basis.to_vec());
+            self.warm.last_c.copy_from_slice(&self.c0);
         }
     }
 
@@ -232,11 +257,11 @@ impl FastSolver {
     fn load_hint(&mut self, start: &[(u32, f64)]) -> bool {
         let (n, r) = (self.n, self.r);
         let stride = start.len();
-        self.hint.clear();
-        self.hint_nrm.clear();
+        self.cross.dist.clear();
+        self.cross.nrm.clear();
         // Entries past each coordinate's s atoms are never read: no need to clear them.
-        if self.hint_a.len() < r * stride {
-            self.hint_a.resize(r * stride, 0.0);
+        if self.cross.a.len() < r * stride {
+            self.cross.a.resize(r * stride, 0.0);
         }
         for &(i, w) in start {
             let i = i as usize;
@@ -244,26 +269,26 @@ impl FastSolver {
                 return false;
             }
             if w > 0.0 {
-                let k = self.hint.len();
+                let k = self.cross.dist.len();
                 let a = &self.rows[i * r..(i + 1) * r];
                 let mut nrm = 0.0;
                 for (c, &ac) in a.iter().enumerate() {
-                    self.hint_a[c * stride + k] = ac;
+                    self.cross.a[c * stride + k] = ac;
                     nrm += ac * ac;
                 }
-                self.hint.push((i, w));
-                self.hint_nrm.push(nrm);
+                self.cross.dist.push((i, w));
+                self.cross.nrm.push(nrm);
             }
         }
-        self.hint_stride = stride;
-        let s = self.hint.len();
+        self.cross.stride = stride;
+        let s = self.cross.dist.len();
         if s == 0 {
             return false;
         }
-        self.hint_u.clear();
+        self.cross.u.clear();
         // hint_pos[k]: basis position of support point k, or usize::MAX (superbasic).
-        self.hint_pos.clear();
-        self.hint_pos.resize(s, usize::MAX);
+        self.cross.pos.clear();
+        self.cross.pos.resize(s, usize::MAX);
         true
     }
 
@@ -275,20 +300,20 @@ impl FastSolver {
     /// are downdated (‖r‖² −= (a·u)² per chosen direction u); only the chosen column's
     /// residual is formed, by modified Gram–Schmidt twice.
     fn choose_support(&mut self, limit: usize) -> usize {
-        let (r, s) = (self.r, self.hint.len());
+        let (r, s) = (self.r, self.cross.dist.len());
         let mut chosen = 0usize;
         while chosen < limit.min(r) {
             // The last of the largest norms ≥ 1e-10 (chosen points have norm −∞ and keep it
             // through the downdates).
-            let (top, best) = last_max(&self.hint_nrm);
+            let (top, best) = last_max(&self.cross.nrm);
             if top < 1e-10 {
                 break;
             }
-            let i = self.hint[best].0;
-            let v = &mut self.hint_v;
+            let i = self.cross.dist[best].0;
+            let v = &mut self.cross.v;
             v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
             for _pass in 0..2 {
-                for u in self.hint_u.chunks(r) {
+                for u in self.cross.u.chunks(r) {
                     let h = dot(v, u);
                     v.iter_mut().zip(u).for_each(|(a, b)| *a -= h * b);
                 }
@@ -296,28 +321,29 @@ impl FastSolver {
             let nv = norm(v);
             if nv.is_nan() || nv < 1e-5 {
                 // The downdated norm drifted: this column is dependent on the chosen ones.
-                self.hint_nrm[best] = 0.0;
+                self.cross.nrm[best] = 0.0;
                 continue;
             }
             v.iter_mut().for_each(|a| *a /= nv);
             // ‖r_k‖² −= (a_k·v)² for every support point (the chosen ones' values are unused).
-            let h = &mut self.hint_h;
+            let h = &mut self.cross.h;
             h.clear();
             h.resize(s, 0.0);
-            let st = self.hint_stride;
+            let st = self.cross.stride;
             for (c, &vc) in v.iter().enumerate() {
-                let a = &self.hint_a[c * st..c * st + s];
+                let a = &self.cross.a[c * st..c * st + s];
                 h.iter_mut().zip(a).for_each(|(h, a)| *h += a * vc);
             }
-            self.hint_nrm
+            self.cross
+                .nrm
                 .iter_mut()
                 .zip(h.iter())
                 .for_each(|(n, h)| *n -= h * h);
-            self.hint_u.extend_from_slice(v);
-            self.hint_nrm[best] = f64::NEG_INFINITY;
-            self.hint_pos[best] = chosen;
+            self.cross.u.extend_from_slice(v);
+            self.cross.nrm[best] = f64::NEG_INFINITY;
+            self.cross.pos[best] = chosen;
             self.basis[chosen] = i;
-            self.x[chosen] = self.hint[best].1;
+            self.x[chosen] = self.cross.dist[best].1;
             chosen += 1;
         }
         chosen
@@ -339,11 +365,11 @@ impl FastSolver {
             if self.basis[..chosen].contains(&i) {
                 continue;
             }
-            let v = &mut self.hint_v;
+            let v = &mut self.cross.v;
             v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
             let n0 = norm(v);
             for _pass in 0..2 {
-                for u in self.hint_u.chunks(r) {
+                for u in self.cross.u.chunks(r) {
                     let h = dot(v, u);
                     for (a, b) in v.iter_mut().zip(u) {
                         *a -= h * b;
@@ -355,7 +381,7 @@ impl FastSolver {
                 continue;
             }
             v.iter_mut().for_each(|a| *a /= nv);
-            self.hint_u.extend_from_slice(v);
+            self.cross.u.extend_from_slice(v);
             self.basis[chosen] = i;
             self.x[chosen] = 0.0;
             chosen += 1;
@@ -367,12 +393,12 @@ impl FastSolver {
     /// `REFACTOR_EVERY` exchanges); false on a singular basis.
     fn push_out_superbasic(&mut self, kf: usize) -> bool {
         let mut since = 0usize;
-        for k in 0..self.hint.len() {
-            if self.hint_pos[k] != usize::MAX {
+        for k in 0..self.cross.dist.len() {
+            if self.cross.pos[k] != usize::MAX {
                 continue;
             }
-            let (j, w) = self.hint[k];
-            if self.is_basic[j] {
+            let (j, w) = self.cross.dist[k];
+            if self.pricing.is_basic[j] {
                 // A completion column of the cold basis is also in the support: give it the
                 // weight (same column, same point of the feasible set).
                 let Some(t) = self.basis.iter().position(|&b| b == j) else {
