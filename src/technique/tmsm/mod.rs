@@ -767,34 +767,6 @@ impl Default for Tmsm {
     }
 }
 
-/// Biased TMSM in f64: G((1 − α) b, z_f).
-pub fn shadow_f64(moments: &[f64], zf: f64, alpha: f64) -> f64 {
-    let s = 1.0 - alpha;
-    sharp_bound(
-        [
-            s * moments[0],
-            s * moments[1],
-            s * moments[2],
-            s * moments[3],
-        ],
-        zf,
-    )
-}
-
-/// Biased TMSM in f32: G((1 − α) b, z_f).
-pub fn shadow_f32(moments: &[f32], zf: f32, alpha: f32) -> f32 {
-    let s = 1.0 - alpha;
-    sharp_bound(
-        [
-            s * moments[0],
-            s * moments[1],
-            s * moments[2],
-            s * moments[3],
-        ],
-        zf,
-    )
-}
-
 impl ClosedForm for Tmsm {
     /// G(b + α·(b* − b), z_f): in f64, or if `single` with the moments, α, b* and z_f rounded
     /// to f32 and the bias applied in f32 (`linalg::bias`, as the GPU path and the other
