@@ -256,11 +256,6 @@ impl Certifier {
         &self.rows
     }
 
-    /// σ_j for the moments last given (row 0: 1).
-    pub fn sigma(&self) -> &[f64] {
-        &self.sigma
-    }
-
     /// The exact power-of-two row scales ≈ 1/σ_j for the moments last given.
     pub fn row_scales(&self) -> &[f64] {
         &self.scale

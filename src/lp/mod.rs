@@ -11,18 +11,18 @@
 
 pub mod bench;
 pub mod bench_corpus;
-pub mod certify;
+mod certify;
 pub mod corpus;
 mod cpu;
 mod dense;
-pub mod exact;
+mod exact;
 pub mod fast;
 pub mod instances;
 mod ortho;
 mod pricing;
 pub mod reference;
 mod row_kernels;
-pub mod scaled;
+mod scaled;
 
 use crate::Grid;
 use anyhow::{bail, Result};
