@@ -1,8 +1,7 @@
 //! LP candidates through `metrics::evaluate` equal Algorithm 1 solved directly (reference LP)
 //! on snapped depth distributions, and are lower bounds of F_Z.
 
-mod kernel_common;
-use kernel_common::*;
+use crate::common::kernel::*;
 use momentlab::basis::Catalog;
 use momentlab::lp::{reference::ReferenceSolver, GridTable, MomentSolver, Status};
 use momentlab::metrics::{self, Bias, EvalOptions};

@@ -3,8 +3,7 @@
 //! momentlab's own f32 implementation (`registry::build` at f32) to 1e-5 on 10 000 real filter
 //! windows, and the module compiles (glslangValidator + spirv-val, where installed).
 
-#[path = "common/shader.rs"]
-mod shader_common;
+use crate::common::shader as shader_common;
 
 use momentlab::metrics::windows::stacks_corpus;
 use momentlab::technique::timing::moments_of;

@@ -1,8 +1,7 @@
 //! PCF reference, fragments, trivial counts, grid snapping and `metrics::evaluate` against an
 //! independent brute-force loop (tests/kernel_common).
 
-mod kernel_common;
-use kernel_common::*;
+use crate::common::kernel::*;
 use momentlab::metrics::{self, Bias, EvalOptions, Receiver, Subject, Subsample};
 use momentlab::technique::{Evaluator, Technique};
 use momentlab::Grid;

@@ -1,7 +1,6 @@
 //! Five-panel pictures: written PNG decodes to the documented panel layout and colours.
 
-mod kernel_common;
-use kernel_common::*;
+use crate::common::kernel::*;
 use momentlab::metrics::{self, Bias, Subject};
 use momentlab::report::pictures::{self, BACKGROUND, GAP, GAP_PX, PANELS};
 use momentlab::technique::{Evaluator, Technique};

@@ -1,7 +1,6 @@
 //! The 9×9 Gaussian, separable filtering and moment maps against direct 81-tap sums.
 
-mod kernel_common;
-use kernel_common::*;
+use crate::common::kernel::*;
 use momentlab::kernel::{self, Gaussian};
 use rand::Rng;
 

@@ -12,8 +12,7 @@
 //! Also: the default θ₂/θ₄ are the published ones up to rounding (paper channel order), and
 //! every emitted snippet compiles (tests/common/shader.rs).
 
-#[path = "common/shader.rs"]
-mod shader_common;
+use crate::common::shader as shader_common;
 
 use momentlab::artefact::read_json;
 use momentlab::quantize::codegen::{self, ChannelOrder, EncoderForm, Layout};

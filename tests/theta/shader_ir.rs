@@ -4,8 +4,7 @@
 //! refused, and a module using every operation and a loop compiles in all wrappers
 //! (GLSL 450 / ES 310 / HLSL).
 
-#[path = "common/shader.rs"]
-mod shader_common;
+use crate::common::shader as shader_common;
 
 use momentlab::shader::{self, Cmp, Func, Module, Shape};
 use rand::{Rng, SeedableRng};

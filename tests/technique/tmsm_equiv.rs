@@ -7,7 +7,7 @@
 //! to 1e-9 (rounding-scaled for clusters); f32 is judged against the f64 bound of the same
 //! rounded input and must be at least as close as the previous f32 results.
 
-mod tmsm_old;
+use crate::tmsm_old;
 
 use momentlab::technique::tmsm;
 use rand::{Rng, SeedableRng};

@@ -1,0 +1,14 @@
+//! The project as a whole: README and docs against the code and artefacts, artefact and
+//! module-graph hygiene, the bad-input corpus of every command, `reproduce --tiny` end to end
+//! and its report in a browser.
+
+#[path = "../common/mod.rs"]
+mod common;
+
+mod artefact_hygiene;
+mod cli_bad_input;
+mod docs_hygiene;
+mod module_graph;
+mod readme_figures;
+mod report_browser;
+mod reproduce_tiny;
