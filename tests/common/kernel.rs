@@ -233,3 +233,15 @@ pub fn vsm(b: &[f64], zf: f64) -> f64 {
         d * d / (var + d * d)
     }
 }
+
+/// The grid point nearest to z, independent of `metrics::snap`: a linear scan, ties to the
+/// lower point.
+pub fn nearest(grid: &momentlab::Grid, z: f64) -> f64 {
+    let mut best = grid.points()[0];
+    for &p in grid.points() {
+        if (p - z).abs() < (best - z).abs() {
+            best = p;
+        }
+    }
+    best
+}

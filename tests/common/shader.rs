@@ -9,7 +9,6 @@
 #![allow(dead_code)]
 
 use momentlab::shader::{self, Module, Shape};
-use std::path::PathBuf;
 use std::process::Command;
 
 /// True if glslangValidator and spirv-val run. If they do not: panics when
@@ -173,9 +172,7 @@ fn wrappers(m: &Module) -> Result<Vec<Wrapper>, String> {
 /// temporary files and the error messages. Err lists every wrapper that failed with the
 /// compiler's output and the wrapper source.
 pub fn compile_check(label: &str, m: &Module) -> Result<(), String> {
-    let dir: PathBuf =
-        std::env::temp_dir().join(format!("momentlab-shader-{}-{label}", std::process::id()));
-    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let dir = super::tmp(&format!("shader-{label}"));
     let mut errors = Vec::new();
     for (i, (what, ext, args, src)) in wrappers(m)?.into_iter().enumerate() {
         let file = dir.join(format!("w{i}.{ext}"));

@@ -1,6 +1,7 @@
 //! Eye-view pictures: the bilinear shadow-map lookup against a hand computation, and the PCF
 //! eye view of a sphere over a plane against the analytic shadow disk.
 
+use crate::common::{decode_png, no_mesh, tmp};
 use momentlab::metrics::{Bias, Subject};
 use momentlab::render::eye::{self, bilinear};
 use momentlab::render::scene::{quad, sphere};
@@ -85,10 +86,6 @@ fn disk_scene_json(camera: &str) -> String {
     )
 }
 
-fn no_mesh(p: &str) -> anyhow::Result<Vec<u8>> {
-    anyhow::bail!("no mesh {p}")
-}
-
 #[test]
 fn the_scene_file_camera_replaces_the_default() {
     let plain = Scene::from_json(&disk_scene_json(""), &no_mesh).unwrap();
@@ -164,10 +161,7 @@ fn bad_cameras_are_one_line_errors() {
 struct Dir(std::path::PathBuf);
 impl Dir {
     fn new(tag: &str) -> Dir {
-        let d = std::env::temp_dir().join(format!("momentlab-eye-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Dir(d)
+        Dir(tmp(&format!("eye-{tag}")))
     }
     fn p(&self, rel: &str) -> std::path::PathBuf {
         self.0.join(rel)
@@ -180,20 +174,11 @@ impl Drop for Dir {
 }
 
 fn momentlab(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_momentlab"))
+    crate::common::momentlab()
         .args(args)
         .env("CI", "1")
         .output()
         .unwrap()
-}
-
-fn decode(path: &std::path::Path) -> (usize, usize, Vec<u8>) {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    buf.truncate(info.buffer_size());
-    (info.width as usize, info.height as usize, buf)
 }
 
 #[test]
@@ -241,9 +226,9 @@ fn evaluate_writes_eye_and_layer_pictures_with_the_scene_camera() {
     }
     want.sort();
     assert_eq!(names, want);
-    let (w, h, top) = decode(&d.p("top/out/disk_sun_vsm.eye.png"));
+    let (w, h, top) = decode_png(&d.p("top/out/disk_sun_vsm.eye.png"));
     assert_eq!((w, h), (3 * 40 + 3 * GAP_PX + BAR_PX, 40));
-    let (_, _, plain) = decode(&d.p("plain/out/disk_sun_vsm.eye.png"));
+    let (_, _, plain) = decode_png(&d.p("plain/out/disk_sun_vsm.eye.png"));
     assert_ne!(top, plain, "the scene file's camera changes the eye view");
     // From straight above the sphere covers the picture's centre: lit from 70°, its top is
     // bright in the PCF panel.

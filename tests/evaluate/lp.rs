@@ -8,16 +8,6 @@ use momentlab::metrics::{self, Bias, EvalOptions};
 use momentlab::technique::lp_candidate::LpCandidate;
 use momentlab::Grid;
 
-fn nearest(grid: &Grid, z: f64) -> f64 {
-    let mut best = grid.points()[0];
-    for &p in grid.points() {
-        if (p - z).abs() < (best - z).abs() {
-            best = p;
-        }
-    }
-    best
-}
-
 #[test]
 fn lp_candidate_evaluation_equals_direct_algorithm_1() {
     let mut r = rng(21);

@@ -2,69 +2,36 @@
 //! independent brute-force loop (tests/kernel_common).
 
 use crate::common::kernel::*;
+use crate::common::technique::Mock;
 use momentlab::metrics::{self, Bias, EvalOptions, Receiver, Subject, Subsample};
-use momentlab::technique::{Evaluator, Technique};
 use momentlab::Grid;
 use rand::Rng;
 
-/// Private VSM (Cantelli) test technique with an optional depth grid.
-struct TestVsm {
-    grid: Option<Grid>,
-    /// Return NaN when z_f lies in this interval (to test NaN accounting).
-    nan_band: Option<(f64, f64)>,
-}
-
-struct TestVsmEval<'a>(&'a TestVsm);
-
-impl Evaluator for TestVsmEval<'_> {
-    fn shadow(&mut self, b: &[f64], zf: f64) -> f64 {
-        if let Some((lo, hi)) = self.0.nan_band {
+/// A VSM (Cantelli) test technique on (z, z²): with a depth grid it asserts that z_f is
+/// snapped to it, and it answers NaN when z_f lies in `nan_band` (to test NaN accounting).
+fn test_vsm(grid: Option<Grid>, nan_band: Option<(f64, f64)>) -> Mock {
+    let snapped = grid.clone();
+    let basis = |z: f64, out: &mut [f64]| {
+        out[0] = z;
+        out[1] = z * z;
+    };
+    let mut t = Mock::new("test-vsm", 2, basis, move |b, zf| {
+        if let Some((lo, hi)) = nan_band {
             if zf >= lo && zf < hi {
                 return f64::NAN;
             }
         }
-        if let Some(g) = &self.0.grid {
+        if let Some(g) = &snapped {
             assert!(g.points().contains(&zf), "z_f {zf} not snapped to the grid");
         }
         vsm(b, zf)
-    }
+    });
+    t.grid = grid;
+    t
 }
 
-impl Technique for TestVsm {
-    fn name(&self) -> String {
-        "test-vsm".into()
-    }
-    fn moment_count(&self) -> usize {
-        2
-    }
-    fn basis(&self, z: f64, out: &mut [f64]) {
-        out[0] = z;
-        out[1] = z * z;
-    }
-    fn depth_grid(&self) -> Option<&Grid> {
-        self.grid.as_ref()
-    }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(TestVsmEval(self))
-    }
-}
-
-fn plain_vsm() -> TestVsm {
-    TestVsm {
-        grid: None,
-        nan_band: None,
-    }
-}
-
-fn nearest(grid: &Grid, z: f64) -> f64 {
-    // independent of metrics::snap: linear scan, ties to the lower point
-    let mut best = grid.points()[0];
-    for &p in grid.points() {
-        if (p - z).abs() < (best - z).abs() {
-            best = p;
-        }
-    }
-    best
+fn plain_vsm() -> Mock {
+    test_vsm(None, None)
 }
 
 /// Brute-force evaluation of the test VSM: (sum |G − PCF|, finite count, trivial, nan count).
@@ -399,10 +366,7 @@ fn grid_techniques_snap_depths_and_match_brute_force() {
                 random_stack(&mut r, &format!("g{gi}v{i}"), w, h)
             })
             .collect();
-        let t = TestVsm {
-            grid: Some(grid.clone()),
-            nan_band: None,
-        };
+        let t = test_vsm(Some(grid.clone()), None);
         let bias = Bias::default();
         let rep = metrics::evaluate(&stacks, &t, &EvalOptions::default()).unwrap();
         let (mut sum, mut n, mut triv) = (0.0, 0, 0);
@@ -456,10 +420,7 @@ fn non_finite_outputs_are_counted_not_averaged() {
         .map(|i| random_stack(&mut r, &format!("n{i}"), 17, 13))
         .collect();
     let band = (0.3, 0.5);
-    let t = TestVsm {
-        grid: None,
-        nan_band: Some(band),
-    };
+    let t = test_vsm(None, Some(band));
     let bias = Bias::default();
     let rep = metrics::evaluate(&stacks, &t, &EvalOptions::default()).unwrap();
     let (mut sum, mut n, mut nan) = (0.0, 0, 0);

@@ -1,31 +1,14 @@
 //! Five-panel pictures: written PNG decodes to the documented panel layout and colours.
 
 use crate::common::kernel::*;
+use crate::common::technique::Mock;
+use crate::common::{decode_png, tmp, tmp_path};
 use momentlab::metrics::{self, Bias, Subject};
 use momentlab::report::pictures::{self, BACKGROUND, GAP, GAP_PX, PANELS};
-use momentlab::technique::{Evaluator, Technique};
 
 /// A technique that always says "lit" (G = 0): the error panel then shows PCF itself.
-struct AlwaysLit;
-struct AlwaysLitEval;
-impl Evaluator for AlwaysLitEval {
-    fn shadow(&mut self, _: &[f64], _: f64) -> f64 {
-        0.0
-    }
-}
-impl Technique for AlwaysLit {
-    fn name(&self) -> String {
-        "always-lit".into()
-    }
-    fn moment_count(&self) -> usize {
-        1
-    }
-    fn basis(&self, z: f64, out: &mut [f64]) {
-        out[0] = z;
-    }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(AlwaysLitEval)
-    }
+fn always_lit() -> Mock {
+    Mock::new("always-lit", 1, |z, out| out[0] = z, |_, _| 0.0)
 }
 
 /// 48×32: a tilted ground plane (two layers under a floating box at x,y ∈ 16..28), and an
@@ -46,31 +29,20 @@ fn scene() -> momentlab::stack::DepthStack {
     })
 }
 
-fn decode(path: &std::path::Path) -> (usize, usize, Vec<u8>) {
-    let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
-    let mut reader = dec.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    assert_eq!(info.color_type, png::ColorType::Rgb);
-    buf.truncate(info.buffer_size());
-    (info.width as usize, info.height as usize, buf)
-}
-
 #[test]
 fn picture_layout_and_colours() {
     let s = scene();
-    let t = AlwaysLit;
+    let t = always_lit();
     let shadows = metrics::front_shadows(&s, Subject::Technique(&t), &Bias::default()).unwrap();
     let img = pictures::view_picture(&s, &shadows).unwrap();
     let (w, h) = (48, 32);
     assert_eq!(img.width, PANELS * w + (PANELS - 1) * GAP_PX);
     assert_eq!(img.height, h);
 
-    let dir = std::env::temp_dir().join(format!("momentlab-pictures-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp("pictures");
     let path = dir.join("box.png");
     pictures::write_png(&path, &img).unwrap();
-    let (pw, ph, data) = decode(&path);
+    let (pw, ph, data) = decode_png(&path);
     assert_eq!((pw, ph), (img.width, img.height));
     assert_eq!(data, img.data, "PNG round trip is lossless");
 
@@ -115,8 +87,7 @@ fn mismatched_shadow_maps_are_rejected() {
     let e = pictures::view_picture(&s, &bad).unwrap_err().to_string();
     assert!(e.contains("test/box"), "{e}");
     // A picture whose folder is a regular file: a one-line error naming the path.
-    let blocker =
-        std::env::temp_dir().join(format!("momentlab-png-blocker-{}", std::process::id()));
+    let blocker = tmp_path("png-blocker");
     std::fs::write(&blocker, b"not a folder").unwrap();
     let e = pictures::write_png(&blocker.join("x.png"), &pictures::RgbImage::new(2, 2, GAP))
         .unwrap_err();
@@ -130,7 +101,7 @@ fn mismatched_shadow_maps_are_rejected() {
 #[test]
 fn layer_pictures_show_the_shadow_on_the_hidden_layer() {
     let s = scene();
-    let t = AlwaysLit;
+    let t = always_lit();
     let (w, h) = (48, 32);
     let sh = metrics::layer_shadows(&s, 1, Subject::Technique(&t), &Bias::default()).unwrap();
     let img = pictures::layer_picture(&s, 1, &sh).unwrap();

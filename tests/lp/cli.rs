@@ -2,27 +2,12 @@
 //! known answers (single Diracs, moments reproduced by the support, G ≤ true CDF) and every
 //! kind of bad input (exit 1, one-line error naming the problem).
 
+use crate::common::lp::{check_points, Tol};
 use serde_json::{json, Value};
-use std::io::Write;
-use std::process::{Command, Stdio};
 
+/// `momentlab args` with `stdin` piped in: (exit code, stdout, stderr).
 fn run(args: &[&str], stdin: &str) -> (i32, String, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_momentlab"))
-        .args(args)
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // The binary may exit (e.g. on a bad file argument) before reading stdin: a broken
-    // pipe here is expected then, and the exit status tells the rest.
-    let _ = child.stdin.take().unwrap().write_all(stdin.as_bytes());
-    let out = child.wait_with_output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
+    crate::common::run(args, Some(stdin))
 }
 
 fn lp(input: &Value) -> Vec<Value> {
@@ -41,33 +26,27 @@ fn moments(basis: &[fn(f64) -> f64], diracs: &[(f64, f64)]) -> Vec<f64> {
 
 const MSM: [fn(f64) -> f64; 4] = [|z| z, |z| z * z, |z| z * z * z, |z| z * z * z * z];
 
-fn check_support(r: &Value, basis: &[fn(f64) -> f64], b: &[f64], grid_n: usize, zf: f64) {
+/// A result of `momentlab lp` is optimal and its support checks out ([`check_points`]) on the
+/// uniform grid of `grid_n` points, to 1e-7.
+fn check_result(r: &Value, basis: &[fn(f64) -> f64], b: &[f64], grid_n: usize, zf: f64) {
     assert_eq!(r["status"], "optimal", "{r}");
-    let support = r["support"].as_array().unwrap();
-    let pts: Vec<(f64, f64)> = support
+    let support: Vec<(f64, f64)> = r["support"]
+        .as_array()
+        .unwrap()
         .iter()
         .map(|p| (p[0].as_f64().unwrap(), p[1].as_f64().unwrap()))
         .collect();
-    let total: f64 = pts.iter().map(|p| p.1).sum();
-    assert!((total - 1.0).abs() < 1e-7, "Σw = {total}");
-    for &(z, w) in &pts {
-        assert!(w >= 0.0);
+    let row = |z: f64| {
         let k = z * (grid_n - 1) as f64;
-        assert!(
-            (k - k.round()).abs() < 1e-9,
-            "support point {z} not on the grid"
-        );
-    }
-    for (j, bj) in basis.iter().enumerate() {
-        let got: f64 = pts.iter().map(|&(z, w)| w * bj(z)).sum();
-        assert!((got - b[j]).abs() < 1e-7, "moment {j}: {got} vs {}", b[j]);
-    }
+        ((k - k.round()).abs() < 1e-9).then(|| basis.iter().map(|f| f(z)).collect())
+    };
+    let tol = Tol {
+        mass: 1e-7,
+        moment: 1e-7,
+    };
     let g = r["g"].as_f64().unwrap();
-    let below: f64 = pts.iter().filter(|p| p.0 < zf).map(|p| p.1).sum();
-    assert!(
-        (g - below).abs() < 1e-7,
-        "g {g} vs support mass below zf {below}"
-    );
+    check_points(&support, g, b, zf, row, &vec![1.0; basis.len()], tol)
+        .unwrap_or_else(|e| panic!("{e}: {r}"));
 }
 
 #[test]
@@ -93,7 +72,7 @@ fn single_diracs_give_zero_or_one() {
             (g - want).abs() < 1e-7,
             "zf {zf}, b {b:?}: g = {g}, want {want}"
         );
-        check_support(r, &MSM, b, n, *zf);
+        check_result(r, &MSM, b, n, *zf);
     }
 }
 
@@ -127,7 +106,7 @@ fn mixtures_batch_with_infeasible_entries_and_explicit_grid() {
         match c {
             None => assert_eq!(r, &json!({"status": "infeasible"})),
             Some((b, zf, cdf)) => {
-                check_support(r, &MSM, b, n, *zf);
+                check_result(r, &MSM, b, n, *zf);
                 // G is a lower bound over all distributions with these moments.
                 let g = r["g"].as_f64().unwrap();
                 assert!(g <= cdf + 1e-7, "g {g} > true CDF {cdf} at zf {zf}");
@@ -138,8 +117,7 @@ fn mixtures_batch_with_infeasible_entries_and_explicit_grid() {
 
 #[test]
 fn formulas_user_catalogs_and_pretty_output() {
-    let dir = std::env::temp_dir().join(format!("momentlab-cli-lp-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::tmp("cli-lp");
     let cat = dir.join("cat.json");
     std::fs::write(
         &cat,
@@ -489,7 +467,7 @@ fn batch_with_unsettled_problems_answers_every_other_problem() {
             }
             ("optimal", None) => {
                 let b: Vec<f64> = serde_json::from_value(problems[k]["moments"].clone()).unwrap();
-                check_support(r, &MSM, &b, n, problems[k]["zf"].as_f64().unwrap());
+                check_result(r, &MSM, &b, n, problems[k]["zf"].as_f64().unwrap());
             }
             ("failed", None) => {
                 failed += 1;

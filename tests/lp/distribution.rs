@@ -4,6 +4,7 @@
 //! orthonormalised coordinates; the answer must be that of the reference solver on the
 //! moments b = Σ w b(z_i), on thousands of random and adversarial distributions.
 
+use crate::common::lp::check_support;
 use momentlab::basis::Catalog;
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::instances::{kernel_patches, power_table, smooth_functions, table_of};
@@ -13,41 +14,6 @@ use momentlab::Grid;
 use rand::seq::SliceRandom;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-/// The support is a distribution on the grid with moments b, and G is its mass below z_f.
-fn check_support(table: &GridTable, b: &[f64], zf: f64, sol: &Solution) -> Result<(), String> {
-    let z = table.grid().points();
-    let (mut mass, mut below) = (0.0, 0.0);
-    let mut mom = vec![0.0; table.m()];
-    for &(zs, w) in &sol.support {
-        let i = z
-            .iter()
-            .position(|&v| v == zs)
-            .ok_or(format!("support point {zs} off the grid"))?;
-        if w <= 0.0 {
-            return Err(format!("weight {w}"));
-        }
-        mass += w;
-        if zs < zf {
-            below += w;
-        }
-        for (mj, v) in mom.iter_mut().zip(table.row(i)) {
-            *mj += w * v;
-        }
-    }
-    if (mass - 1.0).abs() > 1e-9 || (below - sol.g).abs() > 1e-9 {
-        return Err(format!("mass {mass}, below {below}, G {}", sol.g));
-    }
-    for j in 0..table.m() {
-        let scale = (0..table.n())
-            .map(|i| table.row(i)[j].abs())
-            .fold(1e-300, f64::max);
-        if (mom[j] - b[j]).abs() > 1e-7 * scale {
-            return Err(format!("moment {j}: {} vs {}", mom[j], b[j]));
-        }
-    }
-    Ok(())
-}
 
 /// Random distributions: kernel patches (up to 81 atoms, clustered), random scatter of 1–81
 /// atoms, single Diracs, runs of neighbouring grid points, end points.
@@ -178,7 +144,7 @@ fn run(seed: u64, tables: usize, per_table: usize, ns: &[usize], catalog: bool, 
                         continue;
                     }
                 }
-                if let Err(e) = check_support(&table, &b, zf, &f) {
+                if let Err(e) = check_support(&table, &b, zf, &f, 1e-7) {
                     t.failures.push(format!("{what}: {e}"));
                     continue;
                 }
@@ -277,7 +243,7 @@ fn kernel_distributions_at_1024_match_reference() {
                 unsettled += 1;
                 continue;
             }
-            check_support(&table, &b, zf, &f).unwrap();
+            check_support(&table, &b, zf, &f, 1e-7).unwrap();
             let diff = (f.g - r.g).abs().max((f.g - s.g).abs());
             let bound = fast.last_error_bound().max(moments_only.last_error_bound());
             if diff <= 1e-9 {
@@ -393,7 +359,7 @@ fn distribution_above_zf_is_its_own_optimum() {
                 assert_eq!(after.zero_mass, before.zero_mass + 1, "no zero-mass path");
                 assert_eq!(after.pivots, before.pivots);
                 let b = distribution_moments(&table, &dist).unwrap();
-                check_support(&table, &b, zf, &sol).unwrap();
+                check_support(&table, &b, zf, &sol, 1e-7).unwrap();
                 // The support is the distribution itself, merged and sorted.
                 let mut atoms: Vec<u32> = dist.iter().filter(|e| e.1 > 0.0).map(|e| e.0).collect();
                 atoms.sort();

@@ -212,8 +212,7 @@ fn committed_artefacts_record_live_commands_and_no_tmp_paths() {
 
 #[test]
 fn the_scanner_finds_planted_dead_flags_and_tmp_paths() {
-    let dir = std::env::temp_dir().join(format!("momentlab-artefacts-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = crate::common::tmp_path("artefacts");
     std::fs::create_dir_all(dir.join("theta")).unwrap();
     let w = |f: &str, s: &str| std::fs::write(dir.join(f), s).unwrap();
     // Live commands: no finding.

@@ -3,15 +3,12 @@
 //! error). Every run is killed after 10 s (a runaway is a failure, not a slow pass); no run may
 //! panic (101) or abort (134), and stderr must be exactly one line.
 
+use crate::common::{bin, tmp, tmp_path};
 use momentlab::stack::{DepthStack, StackMeta};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
-
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_momentlab")
-}
 
 /// Run with a hard 10 s limit; returns (exit code, stdout, stderr). Killed runs fail the test.
 fn run(args: &[&str], stdin: Option<&str>) -> (i32, String, String) {
@@ -132,10 +129,7 @@ struct Fixtures {
 
 impl Fixtures {
     fn new() -> Fixtures {
-        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-        let k = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let root = std::env::temp_dir().join(format!("momentlab-bad-{}-{k}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&root);
+        let root = tmp_path("bad");
         for d in ["empty", "a", "b", "huge", "lossy", "wide"] {
             std::fs::create_dir_all(root.join(d)).unwrap();
         }
@@ -528,10 +522,7 @@ struct Scratch(PathBuf);
 
 impl Scratch {
     fn new(tag: &str) -> Scratch {
-        let d = std::env::temp_dir().join(format!("momentlab-w-{tag}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        Scratch(d)
+        Scratch(tmp(&format!("w-{tag}")))
     }
     fn path(&self, rel: &str) -> PathBuf {
         self.0.join(rel)

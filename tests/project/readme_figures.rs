@@ -107,8 +107,7 @@ fn copy_dir(from: &Path, to: &Path) {
 
 #[test]
 fn one_changed_number_in_an_artefact_fails_the_check() {
-    let tmp = std::env::temp_dir().join(format!("momentlab-readme-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
+    let tmp = crate::common::tmp_path("readme");
     copy_dir(&root().join("reports"), &tmp);
     let blocks = readme::blocks(&readme_text()).unwrap();
     let block = |n: &str| blocks.iter().find(|b| b.0 == n).unwrap().1.clone();

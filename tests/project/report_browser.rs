@@ -184,9 +184,8 @@ fn report_loads_in_headless_chromium() {
         eprintln!("SKIPPED report_loads_in_headless_chromium: chromium not installed (apt-get install chromium)");
         return;
     };
-    let root = std::env::temp_dir().join(format!("momentlab-browser-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
-    let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
+    let root = crate::common::tmp_path("browser");
+    let out = crate::common::momentlab()
         .args(["reproduce", "--tiny", "--run", "b"])
         .arg("--out")
         .arg(root.join("reports"))

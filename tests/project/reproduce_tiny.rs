@@ -2,12 +2,9 @@
 //! only to files that exist, numbers are finite, and the report's numbers equal those of
 //! `momentlab evaluate` on the same stacks.
 
+use crate::common::{bin, tmp_path};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-
-fn bin() -> &'static str {
-    env!("CARGO_BIN_EXE_momentlab")
-}
 
 fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
     for e in std::fs::read_dir(dir).unwrap() {
@@ -37,8 +34,7 @@ fn all_numbers_finite(v: &serde_json::Value, path: &str, nulls: &mut Vec<String>
 
 #[test]
 fn tiny_reproduce_writes_a_complete_consistent_report() {
-    let root = std::env::temp_dir().join(format!("momentlab-reproduce-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
+    let root = tmp_path("reproduce");
     // The default places (relative to the working directory), spelled out for the first run.
     let reports = root.join("results/reports");
     let results = root.join("results");

@@ -110,8 +110,7 @@ fn split_list_respects_parentheses() {
 }
 
 fn load_err(text: &str) -> String {
-    let dir = std::env::temp_dir().join(format!("momentlab-cat-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::tmp("cat");
     let path = dir.join(format!(
         "{:x}.json",
         text.len() * 7919 + text.as_bytes()[1] as usize
@@ -128,8 +127,7 @@ fn load_err(text: &str) -> String {
 
 #[test]
 fn user_catalogs_load_and_bad_ones_fail_clearly() {
-    let dir = std::env::temp_dir().join(format!("momentlab-cat-ok-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::tmp("cat-ok");
     let path = dir.join("mine.json");
     std::fs::write(
         &path,

@@ -5,6 +5,7 @@
 //! `Dataset::from_stacks` keeps about the cap, every (view, layer) stratum in proportion, and
 //! its estimate is within a few standard errors of the exact value.
 
+use crate::common::tmp_path;
 use momentlab::basis::Catalog;
 use momentlab::metrics::{self, Bias, EvalOptions};
 use momentlab::search::run::load_table;
@@ -15,7 +16,6 @@ use momentlab::technique::{by_name, Technique};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::path::PathBuf;
 
 /// A w×h stack with `layers` surfaces per texel: a tilted ground plane in the deepest layer,
 /// random box occluders above it (so shadow edges, partial PCF values and several layers).
@@ -81,12 +81,6 @@ fn stack(seed: u64, w: usize, h: usize, layers: usize) -> DepthStack {
     }
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("momentlab-cons-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
 /// Exhaustive sweep errors (in the order of `names`) and the metrics::evaluate errors of the
 /// same candidates as techniques on `grid`.
 fn compare(stacks: &[DepthStack], grid: &Grid, solver: &str, names: &[&[&str]], tag: &str) {
@@ -103,7 +97,7 @@ fn compare(stacks: &[DepthStack], grid: &Grid, solver: &str, names: &[&[&str]], 
     assert!(data.trivial_count() > 0);
     let table = load_table(None, grid).unwrap();
     let m = names[0].len();
-    let dir = tmp(tag);
+    let dir = tmp_path(tag);
     let opts = SweepOptions {
         m,
         grid: grid.len(),

@@ -4,39 +4,14 @@
 //! solves), exactly when no elimination by confidence is possible (every shard, a candidate
 //! subset, several sample sizes). The calibration times real solves.
 
+use crate::common::search::{table, WITH_DEGENERATE};
+use crate::common::tmp_path;
 use momentlab::search::plan::{plan, Plan};
-use momentlab::search::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Scorer, SweepConfig};
+use momentlab::search::{run_sweep, Dataset, Hooks, Outcome, Scorer, SweepConfig};
 use momentlab::Grid;
-use std::path::PathBuf;
-
-fn table(grid: &Grid) -> FunctionTable {
-    // z, z², z³, sin 2πz, cos 2πz, e^{2z}, 1 − z (degenerate with z), 2z² + 1 (span of z²).
-    let names = ["z", "z^2", "z^3", "s", "c", "e", "1-z", "2z^2+1"];
-    FunctionTable::new(
-        grid,
-        names.iter().map(|s| s.to_string()).collect(),
-        |j, z| match j {
-            0 => z,
-            1 => z * z,
-            2 => z * z * z,
-            3 => (2.0 * std::f64::consts::PI * z).sin(),
-            4 => (2.0 * std::f64::consts::PI * z).cos(),
-            5 => (2.0 * z).exp(),
-            6 => 1.0 - z,
-            _ => 2.0 * z * z + 1.0,
-        },
-    )
-    .unwrap()
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("momentlab-plan-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
 
 fn actual(cfg: &SweepConfig, s: &Scorer, name: &str) -> momentlab::search::SweepSummary {
-    let dir = tmp(name);
+    let dir = tmp_path(name);
     let out = run_sweep(cfg, s, &dir, &Hooks::default()).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     match out {
@@ -48,7 +23,7 @@ fn actual(cfg: &SweepConfig, s: &Scorer, name: &str) -> momentlab::search::Sweep
 #[test]
 fn plan_equals_the_sweeps_own_schedule() {
     let grid = Grid::uniform(24).unwrap();
-    let table = table(&grid);
+    let table = table(&grid, &WITH_DEGENERATE);
     let mut checked = 0;
     for (texels, first_sample, growth) in [(60, 40, 2), (25, 16, 3)] {
         let data = Dataset::synthetic(11, &grid, 3, texels, 3).unwrap();
@@ -110,7 +85,7 @@ fn plan_equals_the_sweeps_own_schedule() {
 #[test]
 fn without_confidence_eliminations_the_plan_is_exact() {
     let grid = Grid::uniform(24).unwrap();
-    let table = table(&grid);
+    let table = table(&grid, &WITH_DEGENERATE);
     let data = Dataset::synthetic(11, &grid, 3, 25, 3).unwrap();
     let s = Scorer::new(&data, &table, "reference", 16).unwrap();
     let mut cfg = SweepConfig::new(3, &s, "synthetic");

@@ -3,10 +3,10 @@
 //! elimination resolves the top of a real LP sweep with fewer fragments than independent
 //! intervals (both counted).
 
+use crate::common::search::{table, SMOOTH};
+use crate::common::tmp_path;
 use momentlab::search::race::{self, Bound, Elimination, Moments, Rule, StageStats};
-use momentlab::search::{
-    run_sweep, Dataset, FunctionTable, Hooks, Outcome, RaceSummary, Scorer, SweepConfig,
-};
+use momentlab::search::{run_sweep, Dataset, Hooks, Outcome, RaceSummary, Scorer, SweepConfig};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -196,32 +196,6 @@ fn certified_set_contains_the_true_best_at_the_stated_rate() {
     assert!(mean_tied < 10.0, "mean tied set {mean_tied}");
 }
 
-/// 0 z, 1 z², 2 z³, 3 z⁴, 4 sin 2πz, 5 cos 2πz, 6 exp(2z), 7 exp(−10(z−½)²).
-fn table(grid: &Grid) -> FunctionTable {
-    let names = [
-        "z",
-        "z^2",
-        "z^3",
-        "z^4",
-        "sin(2pi z)",
-        "cos(2pi z)",
-        "exp(2z)",
-        "bump",
-    ];
-    FunctionTable::new(
-        grid,
-        names.iter().map(|s| s.to_string()).collect(),
-        |j, z| match j {
-            0..=3 => z.powi(j as i32 + 1),
-            4 => (2.0 * std::f64::consts::PI * z).sin(),
-            5 => (2.0 * std::f64::consts::PI * z).cos(),
-            6 => (2.0 * z).exp(),
-            _ => (-10.0 * (z - 0.5) * (z - 0.5)).exp(),
-        },
-    )
-    .unwrap()
-}
-
 fn race_once(s: &Scorer, paired: bool, name: &str) -> RaceSummary {
     let mut cfg = SweepConfig::new(2, s, "synthetic");
     cfg.first_sample = 32;
@@ -230,8 +204,7 @@ fn race_once(s: &Scorer, paired: bool, name: &str) -> RaceSummary {
     cfg.top = 1;
     cfg.keep = 1.0; // no cap: every elimination is by evidence
     cfg.paired = paired;
-    let dir = std::env::temp_dir().join(format!("momentlab-racing-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
+    let dir = tmp_path(&format!("racing-{name}"));
     let Outcome::Complete(sum) = run_sweep(&cfg, s, &dir, &Hooks::default()).unwrap() else {
         panic!()
     };
@@ -246,7 +219,7 @@ fn race_once(s: &Scorer, paired: bool, name: &str) -> RaceSummary {
 fn paired_elimination_resolves_with_fewer_fragments() {
     let grid = Grid::uniform(32).unwrap();
     let data = Dataset::synthetic(5, &grid, 3, 400, 3).unwrap();
-    let t = table(&grid);
+    let t = table(&grid, &SMOOTH);
     let s = Scorer::new(&data, &t, "fast", 256).unwrap();
     let paired = race_once(&s, true, "paired");
     let indep = race_once(&s, false, "independent");

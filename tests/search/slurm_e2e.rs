@@ -8,12 +8,12 @@
 //! test says so loudly and passes, except with MOMENTLAB_REQUIRE_SLURM=1 (set by .ci/run after
 //! it brought the cluster up), where a missing cluster is a failure.
 
+use crate::common::{bin, momentlab, tmp};
 use momentlab::search::{read_rows, Row};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-const BIN: &str = env!("CARGO_BIN_EXE_momentlab");
 const SHARDS: usize = 4;
 /// C(37, 2) candidates of the embedded catalog.
 const CANDIDATES: usize = 666;
@@ -144,14 +144,12 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
         eprintln!("\n{0}\n{msg}\n{0}\n", "!".repeat(78));
         return;
     }
-    let root = std::env::temp_dir().join(format!("momentlab-slurm-e2e-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&root);
-    std::fs::create_dir_all(&root).unwrap();
+    let root = tmp("slurm-e2e");
     let mut jobs = Jobs(Vec::new());
 
     // Small rendered stacks (64², 49 465 fragments) and a 1 032-fragment stratified sample.
     let stacks = root.join("stacks");
-    run(Command::new(BIN)
+    run(momentlab()
         .args(["render", "--resolution", "64", "--out"])
         .arg(&stacks));
     let stacks = stacks.to_str().unwrap().to_string();
@@ -170,7 +168,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
 
     // The unsharded run, outside Slurm.
     let single = root.join("single");
-    run(Command::new(BIN)
+    run(momentlab()
         .arg("search")
         .args(args)
         .arg("--results")
@@ -187,7 +185,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
             .arg("--cpus-per-task=1")
             .arg("--")
             .args(args)
-            .env("MOMENTLAB", BIN),
+            .env("MOMENTLAB", bin()),
     );
     let (array, merge) = job_ids(&out);
     jobs.0.extend([array.clone(), merge.clone()]);
@@ -238,7 +236,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
     let dirs: Vec<PathBuf> = (0..SHARDS)
         .map(|i| runs.join(format!("shard-{i}")))
         .collect();
-    let o = Command::new(BIN)
+    let o = momentlab()
         .arg("merge")
         .args(&dirs)
         .arg("--out")
@@ -252,7 +250,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
     let out = stdout(
         Command::new(scripts().join("resubmit.sh"))
             .arg(&runs)
-            .env("MOMENTLAB", BIN),
+            .env("MOMENTLAB", bin()),
     );
     assert!(out.contains("resubmitted: tasks 1 as"), "{out}");
     let (array2, merge2) = job_ids(&out);
@@ -314,7 +312,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
                 .args(args)
                 .args(["--candidates", "1,2,3,4"])
                 .args(extra)
-                .env("MOMENTLAB", BIN),
+                .env("MOMENTLAB", bin()),
         );
         out.trim().split(';').next().unwrap().to_string()
     };
@@ -330,7 +328,7 @@ fn sharded_sweep_on_slurm_merges_resumes_and_refuses_failures() {
             .arg(&fail)
             .arg("2")
             .args(args)
-            .env("MOMENTLAB", BIN),
+            .env("MOMENTLAB", bin()),
     );
     let fmerge = out.trim().split(';').next().unwrap().to_string();
     jobs.0.push(fmerge.clone());

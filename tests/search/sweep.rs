@@ -2,44 +2,15 @@
 //! exhaustive ranking, interrupted runs resume to the same file, shards merge to the single run,
 //! degenerate and duplicate-span candidates are flagged.
 
+use crate::common::search::{table, WITH_DEGENERATE};
+use crate::common::tmp_path;
 use momentlab::search::race::Elimination;
 use momentlab::search::{
     merge_dirs, read_rows, run_sweep, Dataset, FunctionTable, Hooks, Outcome, Row, Scorer,
     SweepConfig,
 };
 use momentlab::Grid;
-use std::f64::consts::PI;
-use std::path::{Path, PathBuf};
-
-/// 0 z, 1 z^2, 2 z^3, 3 sin(2πz), 4 cos(2πz), 5 exp(2z), 6 1−z (degenerate with z),
-/// 7 2z^2+1 (same span as z^2).
-fn table(grid: &Grid) -> FunctionTable {
-    let names = [
-        "z",
-        "z^2",
-        "z^3",
-        "sin(2pi z)",
-        "cos(2pi z)",
-        "exp(2z)",
-        "1-z",
-        "2z^2+1",
-    ];
-    FunctionTable::new(
-        grid,
-        names.iter().map(|s| s.to_string()).collect(),
-        |j, z| match j {
-            0 => z,
-            1 => z * z,
-            2 => z * z * z,
-            3 => (2.0 * PI * z).sin(),
-            4 => (2.0 * PI * z).cos(),
-            5 => (2.0 * z).exp(),
-            6 => 1.0 - z,
-            _ => 2.0 * z * z + 1.0,
-        },
-    )
-    .unwrap()
-}
+use std::path::Path;
 
 struct Fixture {
     data: Dataset,
@@ -50,7 +21,7 @@ fn fixture() -> Fixture {
     let grid = Grid::uniform(24).unwrap();
     Fixture {
         data: Dataset::synthetic(11, &grid, 3, 60, 3).unwrap(),
-        table: table(&grid),
+        table: table(&grid, &WITH_DEGENERATE),
     }
 }
 
@@ -62,12 +33,6 @@ fn config(s: &Scorer, m: usize) -> SweepConfig {
     c.pilot = 4;
     c.batch = 3;
     c
-}
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("momentlab-search-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
 }
 
 /// Rows without the timing field, sorted by index.
@@ -113,7 +78,7 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     if let Some(k) = keep {
         cfg.keep = k;
     }
-    let race = tmp(&format!("race{}", cfg.keep));
+    let race = tmp_path(&format!("race{}", cfg.keep));
     let Outcome::Complete(sum) = run(&cfg, &s, &race) else {
         panic!()
     };
@@ -122,7 +87,7 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     let race_sum = sum.race.clone().unwrap();
     let mut ex_cfg = cfg.clone();
     ex_cfg.exhaustive = true;
-    let ex = tmp(&format!("exhaustive{}", cfg.keep));
+    let ex = tmp_path(&format!("exhaustive{}", cfg.keep));
     run(&ex_cfg, &s, &ex);
 
     let ex_rows = rows(&ex);
@@ -208,7 +173,7 @@ fn degenerate_and_duplicate_candidates_are_flagged() {
         idx(0, 1),
         idx(0, 2),
     ]);
-    let dir = tmp("flags");
+    let dir = tmp_path("flags");
     run(&cfg, &s, &dir);
     let r = rows(&dir);
     let get = |a, b| r.iter().find(|x| x.index == idx(a, b)).unwrap();
@@ -227,7 +192,7 @@ fn degenerate_and_duplicate_candidates_are_flagged() {
     assert!((sa - sb).abs() < 1e-6 * ids.len() as f64, "{sa} {sb}");
     // A duplicate whose representative is not in the run is scored itself.
     cfg.candidates = Some(vec![idx(0, 7)]);
-    let dir2 = tmp("flags2");
+    let dir2 = tmp_path("flags2");
     run(&cfg, &s, &dir2);
     assert!(rows(&dir2)[0].error.is_some());
     for d in [dir, dir2] {
@@ -240,13 +205,13 @@ fn interrupted_runs_resume_to_the_same_file() {
     let f = fixture();
     let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
     let cfg = config(&s, 2);
-    let full = tmp("uninterrupted");
+    let full = tmp_path("uninterrupted");
     run(&cfg, &s, &full);
     let want = file_without_seconds(&full, "results.jsonl");
     let want_stage0 = file_without_seconds(&full, "stage0.jsonl");
     // Kill after k batches, once or repeatedly, then resume.
     for k in [1usize, 2, 4, 7, 11] {
-        let dir = tmp(&format!("resume{k}"));
+        let dir = tmp_path(&format!("resume{k}"));
         let mut stops = 0;
         loop {
             let hooks = Hooks {
@@ -270,7 +235,7 @@ fn interrupted_runs_resume_to_the_same_file() {
     }
     // Torn writes: stop, cut the results and stage files mid-line, resume.
     for (k, cut) in [(3usize, 5usize), (6, 17), (9, 1)] {
-        let dir = tmp(&format!("torn{k}"));
+        let dir = tmp_path(&format!("torn{k}"));
         let hooks = Hooks {
             stop_after_batches: Some(k),
             progress: None,
@@ -308,17 +273,17 @@ fn shards_merge_to_the_single_run() {
     for exhaustive in [true, false] {
         let mut cfg = config(&s, 2);
         cfg.exhaustive = exhaustive;
-        let single = tmp(&format!("single{exhaustive}"));
+        let single = tmp_path(&format!("single{exhaustive}"));
         run(&cfg, &s, &single);
         let mut dirs = Vec::new();
         for i in 0..3 {
             let mut c = cfg.clone();
             c.shard = [i, 3];
-            let d = tmp(&format!("shard{exhaustive}{i}"));
+            let d = tmp_path(&format!("shard{exhaustive}{i}"));
             run(&c, &s, &d);
             dirs.push(d);
         }
-        let merged = tmp(&format!("merged{exhaustive}"));
+        let merged = tmp_path(&format!("merged{exhaustive}"));
         // Missing shard is an error.
         let e = merge_dirs(&dirs[..2], &merged, false, false).unwrap_err();
         assert!(format!("{e:#}").contains("shard 2/3 is missing"), "{e:#}");

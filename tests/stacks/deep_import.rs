@@ -4,6 +4,7 @@
 //! computed from neighbours match the analytic ones on plane interiors and `evaluate` agrees
 //! within the tolerance docs/stacks.md states; corrupt files are one-line errors, never panics.
 
+use crate::common::{bits, momentlab, tmp};
 use momentlab::stack::{self, deep, DepthStack};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -13,21 +14,8 @@ fn fixtures() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/deep")
 }
 
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("momentlab_deep_{}_{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
 fn reference() -> DepthStack {
     stack::read(&fixtures().join("layered/deep_ref.exr")).unwrap()
-}
-
-fn bits(v: &[Vec<f32>]) -> Vec<Vec<u32>> {
-    v.iter()
-        .map(|l| l.iter().map(|x| x.to_bits()).collect())
-        .collect()
 }
 
 const KINDS: [&str; 3] = ["deep_none", "deep_rle", "deep_zips"];
@@ -103,8 +91,8 @@ fn neighbour_slopes_are_exact_inside_planes() {
     assert!(exact * 10 >= total * 8, "{exact} of {total} exact");
 }
 
-fn evaluate_error(bin: &str, dir: &Path, technique: &str) -> f64 {
-    let o = std::process::Command::new(bin)
+fn evaluate_error(dir: &Path, technique: &str) -> f64 {
+    let o = momentlab()
         .args(["evaluate", "--technique", technique, "--json", "--stacks"])
         .arg(dir)
         .output()
@@ -116,7 +104,6 @@ fn evaluate_error(bin: &str, dir: &Path, technique: &str) -> f64 {
 
 #[test]
 fn evaluate_errors_agree_with_the_per_layer_stack() {
-    let bin = env!("CARGO_BIN_EXE_momentlab");
     let deep_dir = tmp("eval");
     for ext in ["exr", "json"] {
         std::fs::copy(
@@ -127,8 +114,8 @@ fn evaluate_errors_agree_with_the_per_layer_stack() {
     }
     let ref_dir = fixtures().join("layered");
     for technique in ["hamburger4", "vsm"] {
-        let a = evaluate_error(bin, &deep_dir, technique);
-        let b = evaluate_error(bin, &ref_dir, technique);
+        let a = evaluate_error(&deep_dir, technique);
+        let b = evaluate_error(&ref_dir, technique);
         eprintln!("{technique}: deep {a} per-layer {b}");
         assert!(b > 0.0);
         // docs/stacks.md: within 1 % of the error (relative) or 1e-4 (absolute)
@@ -141,9 +128,8 @@ fn evaluate_errors_agree_with_the_per_layer_stack() {
 
 #[test]
 fn import_cli_converts_deep_images_and_reports_one_line_errors() {
-    let bin = env!("CARGO_BIN_EXE_momentlab");
     let out = tmp("cli");
-    let o = std::process::Command::new(bin)
+    let o = momentlab()
         .arg("import")
         .arg(fixtures().join("deep_rle.exr"))
         .arg("--out")
@@ -158,7 +144,7 @@ fn import_cli_converts_deep_images_and_reports_one_line_errors() {
     assert_eq!(bits(&copied.depth), bits(&reference().depth));
 
     let fails = |args: &[&std::ffi::OsStr]| {
-        let o = std::process::Command::new(bin).args(args).output().unwrap();
+        let o = momentlab().args(args).output().unwrap();
         assert_eq!(o.status.code(), Some(1), "{args:?}");
         let e = String::from_utf8_lossy(&o.stderr).to_string();
         assert_eq!(e.lines().count(), 1, "{e}");
@@ -172,7 +158,7 @@ fn import_cli_converts_deep_images_and_reports_one_line_errors() {
     );
     // with --sort it imports to the reference
     let out2 = tmp("cli_sort");
-    let o = std::process::Command::new(bin)
+    let o = momentlab()
         .arg("import")
         .arg(&unsorted)
         .arg("--sort")

@@ -3,22 +3,11 @@
 //! sampling tolerance of the sampled extreme, where the tolerance is the largest change of that
 //! coordinate between neighbouring samples (an extremum lies inside one sample cell).
 
+use crate::common::geom::{cross, normalize};
 use momentlab::render::rectified::{direction_in_frustum, rectified, rectified_bounds};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::f64::consts::{PI, TAU};
-
-fn normalize(v: [f64; 3]) -> [f64; 3] {
-    let n = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    [v[0] / n, v[1] / n, v[2] / n]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
 
 /// Far-plane corners of a camera at the origin looking along `fwd`.
 fn frustum(fwd: [f64; 3], up_hint: [f64; 3], tx: f64, ty: f64, far: f64) -> [[f64; 3]; 4] {

@@ -1,30 +1,12 @@
 //! The ray caster on analytic scenes: depths, layer counts and slopes against closed forms, and
 //! the BVH against brute-force world-space ray–triangle intersection (Möller–Trumbore).
 
+use crate::common::geom::{cross, dot, normalize, sub, V};
 use momentlab::render::scene::{boxed, quad};
 use momentlab::render::{render_view, Scene, Tri, DEDUP_EPS, MARGIN};
 use momentlab::stack::{validate, DepthStack};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-type V = [f64; 3];
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn sub(a: V, b: V) -> V {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: V, b: V) -> V {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn normalize(a: V) -> V {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
 
 /// World-space origin (on the near plane) of texel (x, y)'s ray, from the sidecar fields only.
 fn ray_origin(st: &DepthStack, x: usize, y: usize) -> V {

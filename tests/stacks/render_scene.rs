@@ -1,14 +1,11 @@
 //! Scene files: primitives, transforms, OBJ meshes, the embedded dataset, and rejection of bad
 //! scene input (never a panic).
 
+use crate::common::{momentlab, no_mesh, tmp};
 use momentlab::render::scene::load_obj_bytes;
 use momentlab::render::{default_dataset, embedded_scenes, render_view, Scene};
 use momentlab::stack::validate;
 use std::path::PathBuf;
-
-fn no_mesh(p: &str) -> anyhow::Result<Vec<u8>> {
-    anyhow::bail!("no mesh {p}")
-}
 
 fn parse(text: &str) -> anyhow::Result<Scene> {
     Scene::from_json(text, &no_mesh)
@@ -167,10 +164,7 @@ fn embedded_dataset_is_three_scenes_by_four_views_and_hard() {
 
 #[test]
 fn render_cli_rejects_bad_input_with_one_line() {
-    let bin = env!("CARGO_BIN_EXE_momentlab");
-    let dir = std::env::temp_dir().join(format!("momentlab_render_cli_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp("render-cli");
     std::fs::write(
         dir.join("bad.json"),
         r#"{"name":"b","lights":[{"dir":[0,-1,0]}],"objects":[{"type":"box","size":[1,0,1]}]}"#,
@@ -178,7 +172,7 @@ fn render_cli_rejects_bad_input_with_one_line() {
     .unwrap();
     let out = dir.join("out");
     let run = |args: &[&str]| {
-        let o = std::process::Command::new(bin).args(args).output().unwrap();
+        let o = momentlab().args(args).output().unwrap();
         assert_eq!(o.status.code(), Some(1), "{args:?}");
         let e = String::from_utf8_lossy(&o.stderr).to_string();
         assert_eq!(e.lines().count(), 1, "{e}");
@@ -197,7 +191,7 @@ fn render_cli_rejects_bad_input_with_one_line() {
     assert!(e.contains("/nonexistent/dir"), "{e}");
 
     // a good run of one small scene writes 4 valid stacks
-    let s = std::process::Command::new(bin)
+    let s = momentlab()
         .args(["render", "--only", "thin", "--resolution", "32", "--out", o])
         .output()
         .unwrap();
@@ -279,10 +273,7 @@ fn lights_must_shine_down_onto_the_receivers() {
 
 #[test]
 fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
-    let bin = env!("CARGO_BIN_EXE_momentlab");
-    let dir = std::env::temp_dir().join(format!("momentlab_scenes_arg_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = tmp("scenes-arg");
     std::fs::write(dir.join("box.obj"), Z_UP_BOX).unwrap();
     std::fs::write(
         dir.join("one.json"),
@@ -292,7 +283,7 @@ fn scenes_option_takes_a_folder_a_scene_file_or_a_mesh_file() {
     .unwrap();
     let out = dir.join("out");
     let o = out.to_str().unwrap();
-    let run = |args: &[&str]| std::process::Command::new(bin).args(args).output().unwrap();
+    let run = |args: &[&str]| momentlab().args(args).output().unwrap();
     let ok = |args: &[&str]| {
         let r = run(args);
         assert!(

@@ -1,18 +1,12 @@
 //! Depth-stack files: write → read is bit-exact; every kind of bad input is rejected with a
 //! message naming the file (and layer / texel); `momentlab import` exits 1 with one line.
 
+use crate::common::{bits, momentlab, tmp};
 use exr::prelude::*;
 use momentlab::stack::{self, validate, DepthStack, StackMeta};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use std::path::{Path, PathBuf};
-
-fn tmp(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("momentlab_stack_io_{}_{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use std::path::Path;
 
 fn meta(w: usize, h: usize, layers: usize) -> StackMeta {
     StackMeta {
@@ -58,12 +52,6 @@ fn random_stack(rng: &mut ChaCha8Rng, w: usize, h: usize, layers: usize) -> Dept
         }
     }
     st
-}
-
-fn bits(v: &[Vec<f32>]) -> Vec<Vec<u32>> {
-    v.iter()
-        .map(|l| l.iter().map(|x| x.to_bits()).collect())
-        .collect()
 }
 
 #[test]
@@ -370,8 +358,7 @@ fn import_cli_validates_copies_and_fails_with_one_line() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
     let st = random_stack(&mut rng, 9, 7, 4);
     stack::write(&dir.join("a.exr"), &st).unwrap();
-    let bin = env!("CARGO_BIN_EXE_momentlab");
-    let o = std::process::Command::new(bin)
+    let o = momentlab()
         .args([
             "import",
             dir.to_str().unwrap(),
@@ -395,7 +382,7 @@ fn import_cli_validates_copies_and_fails_with_one_line() {
         stack_chans(&bad),
         Some(&serde_json::to_string(&bad.meta).unwrap()),
     );
-    let o = std::process::Command::new(bin)
+    let o = momentlab()
         .args(["import", p.to_str().unwrap()])
         .output()
         .unwrap();

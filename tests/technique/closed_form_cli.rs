@@ -194,31 +194,16 @@ fn shadow_answers_receiver_depths_outside_the_unit_interval() {
 /// The binary answers the engine's batch (z − ε slightly below 0) instead of rejecting it.
 #[test]
 fn shadow_binary_accepts_biased_receiver_depths() {
-    use std::io::Write;
-    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_momentlab"))
-        .arg("shadow")
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(
-            br#"{"technique":"hausdorff4","problems":[
+    let (code, out, err) = crate::common::run(
+        &["shadow"],
+        Some(
+            r#"{"technique":"hausdorff4","problems":[
                 {"moments":[0.5,0.3,0.2,0.15],"zf":-0.002},
                 {"moments":[0.5,0.3,0.2,0.15],"zf":1.003}]}"#,
-        )
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ),
     );
-    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
     assert_eq!(v["results"][0]["g"], 0.0);
     assert_eq!(v["results"][1]["g"], 1.0);
 }

@@ -1,30 +1,13 @@
 //! The stability harness detects what it claims to detect.
 
+use crate::common::technique::Mock;
 use momentlab::stability::{self, Config, Entry, Mode, Scenario};
 use momentlab::technique::tmsm::{self, Tmsm};
-use momentlab::technique::{Evaluator, Technique};
+use momentlab::technique::Technique;
 
 /// A broken technique with the TMSM basis: returns a fixed value.
-struct Constant(f64);
-struct ConstEval(f64);
-impl Evaluator for ConstEval {
-    fn shadow(&mut self, _: &[f64], _: f64) -> f64 {
-        self.0
-    }
-}
-impl Technique for Constant {
-    fn name(&self) -> String {
-        "constant".into()
-    }
-    fn moment_count(&self) -> usize {
-        4
-    }
-    fn basis(&self, z: f64, out: &mut [f64]) {
-        tmsm::basis(z, out)
-    }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(ConstEval(self.0))
-    }
+fn constant(c: f64) -> Mock {
+    Mock::new("constant", 4, tmsm::basis, move |_, _| c)
 }
 
 #[test]
@@ -51,11 +34,11 @@ fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
     let techs = vec![
         e(
             "nan",
-            Box::new(Constant(f64::NAN)),
-            Box::new(Constant(f64::NAN)),
+            Box::new(constant(f64::NAN)),
+            Box::new(constant(f64::NAN)),
         ),
-        e("two", Box::new(Constant(2.0)), Box::new(Constant(2.0))),
-        e("one", Box::new(Constant(1.0)), Box::new(Constant(1.0))),
+        e("two", Box::new(constant(2.0)), Box::new(constant(2.0))),
+        e("one", Box::new(constant(1.0)), Box::new(constant(1.0))),
         e(
             "tmsm0",
             Box::new(Tmsm::new(0.0, false)),

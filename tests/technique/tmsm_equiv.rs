@@ -7,23 +7,12 @@
 //! to 1e-9 (rounding-scaled for clusters); f32 is judged against the f64 bound of the same
 //! rounded input and must be at least as close as the previous f32 results.
 
+use crate::common::technique::tmsm_moments;
 use crate::tmsm_old;
 
 use momentlab::technique::tmsm;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-fn moments_of(atoms: &[(f64, f64)]) -> [f64; 4] {
-    let mut b = [0.0; 4];
-    let mut row = [0.0; 4];
-    for &(z, w) in atoms {
-        tmsm::basis(z, &mut row);
-        for j in 0..4 {
-            b[j] += w * row[j];
-        }
-    }
-    b
-}
 
 fn normalised(mut atoms: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
     let s: f64 = atoms.iter().map(|a| a.1).sum();
@@ -44,7 +33,7 @@ fn random_input(rng: &mut ChaCha8Rng) -> ([f64; 4], f64) {
             )
         })
         .collect();
-    let b = moments_of(&normalised(atoms));
+    let b = tmsm_moments(&normalised(atoms));
     // Half of the inputs are biased towards the centre like the registry's technique.
     let alpha = if rng.gen_bool(0.5) { 0.0 } else { 1e-6 };
     (b.map(|v| v * (1.0 - alpha)), rng.gen_range(0.0..1.0))
@@ -58,13 +47,13 @@ fn adversarial_input(rng: &mut ChaCha8Rng, i: usize) -> ([f64; 4], f64) {
         0 => {
             let d = z(rng);
             let zf = d + [0.0, 1e-12, -1e-12, 1e-7, -1e-7][rng.gen_range(0..5)];
-            (moments_of(&[(d, 1.0)]), zf.clamp(1e-9, 1.0 - 1e-9))
+            (tmsm_moments(&[(d, 1.0)]), zf.clamp(1e-9, 1.0 - 1e-9))
         }
         // Two Diracs (boundary of the moment space), one possibly at the seam.
         1 => {
             let d0 = if rng.gen_bool(0.3) { 0.0 } else { z(rng) };
             let atoms = vec![(d0, z(rng) + 0.01), (z(rng), z(rng) + 0.01)];
-            (moments_of(&normalised(atoms)), z(rng))
+            (tmsm_moments(&normalised(atoms)), z(rng))
         }
         // Tight cluster (flat receiver): 3–5 Diracs within 1e-4, z_f inside or next to it.
         2 => {
@@ -72,14 +61,14 @@ fn adversarial_input(rng: &mut ChaCha8Rng, i: usize) -> ([f64; 4], f64) {
             let atoms = (0..rng.gen_range(3..=5))
                 .map(|_| (c + 1e-4 * z(rng), z(rng) + 0.01))
                 .collect();
-            (moments_of(&normalised(atoms)), c + 2e-4 * (z(rng) - 0.25))
+            (tmsm_moments(&normalised(atoms)), c + 2e-4 * (z(rng) - 0.25))
         }
         // Three Diracs, one at the seam (depth 0) or at z_f.
         3 => {
             let zf = z(rng);
             let first = if rng.gen_bool(0.5) { 0.0 } else { zf };
             let atoms = vec![(first, 0.3), (z(rng), 0.3), (z(rng), 0.4)];
-            (moments_of(&atoms), zf)
+            (tmsm_moments(&atoms), zf)
         }
         // Lit arc: all mass behind z_f.
         4 => {
@@ -87,30 +76,30 @@ fn adversarial_input(rng: &mut ChaCha8Rng, i: usize) -> ([f64; 4], f64) {
             let atoms = (0..4)
                 .map(|_| (zf + (1.0 - zf) * z(rng), z(rng) + 0.01))
                 .collect();
-            (moments_of(&normalised(atoms)), zf)
+            (tmsm_moments(&normalised(atoms)), zf)
         }
         // z_f very close to 0 or 1.
         5 => {
             let atoms = (0..3).map(|_| (z(rng), z(rng) + 0.01)).collect();
             let zf = [1e-9, 1e-5, 1.0 - 1e-5, 1.0 - 1e-9][rng.gen_range(0..4)];
-            (moments_of(&normalised(atoms)), zf)
+            (tmsm_moments(&normalised(atoms)), zf)
         }
         // Near-singular Toeplitz matrix: two Diracs plus a tiny third.
         6 => {
             let eps = [1e-13, 1e-11, 1e-9, 1e-7][rng.gen_range(0..4)];
             let atoms = vec![(z(rng), 0.5), (z(rng), 0.5 - eps), (z(rng), eps)];
-            (moments_of(&atoms), z(rng))
+            (tmsm_moments(&atoms), z(rng))
         }
         // Slightly outside the moment space (rounded / quantized moments).
         7 => {
             let atoms = vec![(z(rng), 0.5), (z(rng), 0.5)];
-            let b = moments_of(&atoms).map(|v| v * (1.0 + 1e-6));
+            let b = tmsm_moments(&atoms).map(|v| v * (1.0 + 1e-6));
             (b, z(rng))
         }
         // Many Diracs spread uniformly (interior, near the centre).
         8 => {
             let atoms = (0..12).map(|_| (z(rng), 1.0)).collect();
-            (moments_of(&normalised(atoms)), z(rng))
+            (tmsm_moments(&normalised(atoms)), z(rng))
         }
         // Two Diracs 1e-5..1e-3 apart (a flat receiver on the boundary of the moment space),
         // z_f at one of them, between them or just behind both.
@@ -119,7 +108,7 @@ fn adversarial_input(rng: &mut ChaCha8Rng, i: usize) -> ([f64; 4], f64) {
             let gap = [1e-5, 1e-4, 1e-3][rng.gen_range(0..3)];
             let atoms = vec![(d, 0.2 + 0.6 * z(rng)), (d + gap, 1.0)];
             let zf = [d, d + gap, d + 0.5 * gap, d + 2.0 * gap][rng.gen_range(0..4)];
-            (moments_of(&normalised(atoms)), zf)
+            (tmsm_moments(&normalised(atoms)), zf)
         }
         // Two clusters, z_f between them.
         _ => {
@@ -130,7 +119,7 @@ fn adversarial_input(rng: &mut ChaCha8Rng, i: usize) -> ([f64; 4], f64) {
                 (c1, 0.3),
                 (c1 + 1e-3 * z(rng), 0.2),
             ];
-            (moments_of(&atoms), 0.5 * (c0 + c1))
+            (tmsm_moments(&atoms), 0.5 * (c0 + c1))
         }
     }
 }

@@ -10,23 +10,12 @@
 //! the lit arc exists, no support returned) does the uniform grid spacing h enter: there the LP
 //! value is bounded by h²/2·‖p_h‖∞ (Bernstein); we allow 400·h² and report the maximum.
 
+use crate::common::technique::tmsm_moments;
 use momentlab::lp::{make_solver, GridTable, Status};
 use momentlab::technique::tmsm::{self, Case};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-fn moments_of(atoms: &[(f64, f64)]) -> [f64; 4] {
-    let mut b = [0.0; 4];
-    let mut row = [0.0; 4];
-    for &(z, w) in atoms {
-        tmsm::basis(z, &mut row);
-        for j in 0..4 {
-            b[j] += w * row[j];
-        }
-    }
-    b
-}
 
 /// Random distribution with 1..=4 Diracs, sometimes clustered, sometimes at 0 or at z_f.
 fn random_case(rng: &mut ChaCha8Rng, it: usize) -> (Vec<(f64, f64)>, f64) {
@@ -75,7 +64,7 @@ fn run(n: usize, count: usize, seed: u64) -> Stats {
     };
     for it in 0..count {
         let (atoms, zf) = random_case(&mut rng, it);
-        let b = moments_of(&atoms);
+        let b = tmsm_moments(&atoms);
         let det = tmsm::solve(b, zf);
         *st.cases.entry(format!("{:?}", det.case)).or_default() += 1;
         // Grid: uniform ∪ generating Diracs ∪ {z_f} ∪ closed-form support.
@@ -96,7 +85,7 @@ fn run(n: usize, count: usize, seed: u64) -> Stats {
             continue;
         };
         // The oracle's own accuracy: its distribution must reproduce (1, b).
-        let got = moments_of(&sol.support);
+        let got = tmsm_moments(&sol.support);
         let mass: f64 = sol.support.iter().map(|s| s.1).sum();
         let resid = (0..4)
             .map(|j| (got[j] - b[j]).abs())
@@ -173,7 +162,7 @@ fn tmsm_f32_path_and_registry_agree_with_f64() {
     for _ in 0..20_000 {
         // Well-conditioned inputs: 5 spread Diracs.
         let atoms: Vec<(f64, f64)> = (0..5).map(|_| (rng.gen::<f64>(), 0.2)).collect();
-        let b = moments_of(&atoms);
+        let b = tmsm_moments(&atoms);
         let zf = rng.gen_range(0.01..0.99);
         let g64 = ev.shadow(&b, zf);
         let g32 = t32.shadow(&b, zf);

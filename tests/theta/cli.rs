@@ -1,15 +1,11 @@
 //! `momentlab theta` end to end: JSON fields, snippets, summary, and one-line errors.
 
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_momentlab"))
-}
+use crate::common::{momentlab, tmp, tmp_path};
 
 #[test]
 fn theta2_json_and_snippets() {
-    let dir = std::env::temp_dir().join(format!("momentlab_theta_cli_{}", std::process::id()));
-    let out = bin()
+    let dir = tmp_path("theta-cli");
+    let out = momentlab()
         .args(["theta", "--m", "2", "--restarts", "2", "--json", "--out"])
         .arg(&dir)
         .output()
@@ -50,7 +46,7 @@ fn theta2_json_and_snippets() {
     );
     std::fs::remove_file(dir.join("theta2.glsl")).unwrap();
     std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
-    let out = bin()
+    let out = momentlab()
         .args(["theta", "--snippets"])
         .arg(&dir)
         .output()
@@ -73,7 +69,7 @@ fn theta2_json_and_snippets() {
     assert_eq!(file, v);
     assert_eq!(v["basin"]["starts"].as_array().unwrap().len(), 2);
     // a second run into the same directory refuses to overwrite, before searching
-    let again = bin()
+    let again = momentlab()
         .args(["theta", "--m", "2", "--out"])
         .arg(&dir)
         .output()
@@ -82,7 +78,7 @@ fn theta2_json_and_snippets() {
     let err = String::from_utf8_lossy(&again.stderr);
     assert!(err.contains("exists") && err.contains("--force"), "{err}");
     // summary over a directory with only θ2: table lists ours and the published ones
-    let out = bin()
+    let out = momentlab()
         .args(["theta", "--summary"])
         .arg(&dir)
         .output()
@@ -99,9 +95,8 @@ fn theta2_json_and_snippets() {
 
 #[test]
 fn default_output_is_a_run_directory_under_results() {
-    let cwd = std::env::temp_dir().join(format!("momentlab_theta_cwd_{}", std::process::id()));
-    std::fs::create_dir_all(&cwd).unwrap();
-    let out = bin()
+    let cwd = tmp("theta-cwd");
+    let out = momentlab()
         .current_dir(&cwd)
         .args(["theta", "--m", "2", "--restarts", "1"])
         .output()
@@ -135,7 +130,7 @@ fn bad_input_gives_one_line_errors() {
         vec!["theta", "--snippets", "/nonexistent/momentlab"],
         vec!["theta", "--snippets", "/", "--m", "2"],
     ] {
-        let out = bin().args(&args).output().unwrap();
+        let out = momentlab().args(&args).output().unwrap();
         assert!(!out.status.success(), "{args:?} succeeded");
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(

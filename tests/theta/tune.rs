@@ -20,7 +20,6 @@ use momentlab::progress::Bar;
 use momentlab::stack::{DepthStack, StackMeta};
 use momentlab::tune::space::{StorageKind, TechniqueKind};
 use momentlab::tune::{tune, Options};
-use std::process::Command;
 
 fn scene(name: &str, delta: f32, n: usize) -> DepthStack {
     let zr = 0.6f32;
@@ -162,24 +161,9 @@ fn picks_16_bit_when_the_tolerance_allows_and_32_bit_when_not() {
         .all(|s| s.chosen.setting.family.storage == StorageKind::F32));
 }
 
-fn momentlab(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
-        .args(args)
-        .env("MOMENTLAB_PROGRESS", "off")
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into(),
-        String::from_utf8_lossy(&out.stderr).into(),
-    )
-}
-
 #[test]
 fn bad_input_is_one_line_before_any_work() {
-    let dir = std::env::temp_dir().join(format!("momentlab-tune-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = crate::common::tmp("tune");
     let missing = dir.join("missing");
     let cases: Vec<(Vec<String>, &str)> = vec![
         (
@@ -210,7 +194,7 @@ fn bad_input_is_one_line_before_any_work() {
     for (args, what) in cases {
         let mut a = vec!["tune"];
         a.extend(args.iter().map(String::as_str));
-        let (code, out, err) = momentlab(&a);
+        let (code, out, err) = crate::common::run(&a, None);
         assert_ne!(code, 0, "{a:?}");
         assert!(out.is_empty(), "{a:?}: {out}");
         assert_eq!(err.trim().lines().count(), 1, "{a:?}: {err}");
