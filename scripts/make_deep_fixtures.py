@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the deep OpenEXR test fixtures of tests/deep_import.rs into tests/fixtures/deep/.
+"""Writes the deep OpenEXR test fixtures of tests/stacks/deep_import.rs into tests/fixtures/deep/.
 
 A 24x20 light view (orthographic, light travelling along -y, Z = distance along the light)
 of three analytic planes: a ground Z = 20 + 0.15 u + 0.05 v everywhere, a box top Z = 12 over

@@ -1,5 +1,5 @@
 //! The adversarial corpus of Algorithm 1 problems (deterministic for a seed), used by the tests
-//! (tests/lp_contract.rs) and by `momentlab bench lp --corpus adversarial`.
+//! (tests/lp/contract.rs) and by `momentlab bench lp --corpus adversarial`.
 //!
 //! Every problem is the moment vector of a known distribution on the grid (so it is feasible
 //! and its own mass below z_f bounds G from above), chosen where solvers break:

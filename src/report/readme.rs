@@ -2,9 +2,9 @@
 //!
 //! README holds marked blocks `<!-- generated:NAME -->` … `<!-- end -->`; [`render`] writes the
 //! exact text of each block from the artefacts, [`blocks`] reads README's blocks and [`splice`]
-//! replaces them. tests/readme_figures.rs asserts that README's blocks equal the rendered ones
-//! (and rewrites them with `MOMENTLAB_UPDATE_README=1`), so a changed artefact fails the test
-//! until README is regenerated.
+//! replaces them. tests/project/readme_figures.rs asserts that README's blocks equal the rendered
+//! ones (and rewrites them with `MOMENTLAB_UPDATE_README=1`), so a changed artefact fails the
+//! test until README is regenerated.
 
 use anyhow::{anyhow, bail, Context, Result};
 use serde_json::Value;

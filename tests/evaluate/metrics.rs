@@ -1,5 +1,5 @@
 //! PCF reference, fragments, trivial counts, grid snapping and `metrics::evaluate` against an
-//! independent brute-force loop (tests/kernel_common).
+//! independent brute-force loop (tests/common/kernel.rs).
 
 use crate::common::kernel::*;
 use crate::common::technique::Mock;

@@ -1,7 +1,7 @@
 //! The PCF reference on curved, tessellated surfaces: the front layer seen from a light is lit
 //! by definition, so any PCF shadow on it is the reference's own acne. Sphere (convex), torus
 //! (saddles on the inner ring) and an open bowl (concave) under lights; planes are covered by
-//! the brute-force tests in tests/evaluate_metrics.rs.
+//! the brute-force tests in tests/evaluate/metrics.rs.
 
 use momentlab::metrics::{self, Bias, Receiver};
 use momentlab::render::scene::{sphere, torus};

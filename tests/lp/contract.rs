@@ -189,7 +189,7 @@ fn adversarial_corpus_is_certified() {
         solves += st.solves;
         escalated += st.escalations;
         failed += st.failed;
-        // The targets: no failures on the one-function and MSM flat-receiver groups.
+        // No failures at all on the one-function and MSM flat-receiver groups.
         if g.basis.len() == 1 {
             assert_eq!(st.failed, 0, "{}", g.name);
         }

@@ -448,6 +448,6 @@ fn kernel_problems_match_reference_at_1024() {
     // often than random mixtures: allow up to a fifth of them within the rounding bound.
     // From the moments alone (no distribution to start from) about 6 % of these come back
     // `failed`: the f64 moments of a window on 2–3 neighbouring grid points leave G open
-    // beyond 1e-9 (docs/lp.md). The target of none is not met; this bounds it.
+    // beyond 1e-9 (docs/lp.md). None would be the goal; this bounds the share.
     tally.finish_with(300, 5, 100, 10);
 }

@@ -231,7 +231,8 @@ fn run(n: usize, count: usize, seed: u64, from_distribution: bool) -> (Tally, Ve
 fn check(t: &Tally, what: &str, percent: usize) {
     eprintln!("{what}: {t:?}");
     // About 3 % of the benchmark's kernel problems come back `failed` (z_f on a cluster of
-    // 2–3 neighbouring grid points; docs/lp.md). The target of none is not met.
+    // 2–3 neighbouring grid points; docs/lp.md). None would be the goal; this
+    // bounds the share.
     assert!(
         t.unsettled * 20 <= (t.solved as u64 + t.unsettled),
         "{what}: too many unsettled"

@@ -1,7 +1,7 @@
 //! `lp:exp(80*(z-1))` (ESM's function as an LP candidate) on every fragment of a rendered view:
 //! the sharp bound on the grid lies pointwise between Markov's bound (the closed-form `esm`,
 //! sharp on I = R, so weaker on [0,1]) and the true CDF F_Z(z_f). Before the certificates the
-//! LP answered G = 0 "optimal" on exactly these inputs (issue 12: 31.9 % error against ESM's
+//! LP answered G = 0 "optimal" on exactly these inputs (31.9 % error against ESM's
 //! 9.9 %).
 
 use momentlab::basis::Catalog;

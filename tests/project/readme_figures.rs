@@ -84,7 +84,7 @@ fn readme_blocks_equal_what_the_artefacts_render() {
         assert_eq!(
             body, &fresh,
             "README block '{name}' differs from what reports/ renders; run \
-             MOMENTLAB_UPDATE_README=1 cargo test --release --test readme_figures"
+             MOMENTLAB_UPDATE_README=1 cargo test --release --test project readme_figures"
         );
     }
 }

@@ -8,7 +8,7 @@
 //!   tolerance 1e-7 for round-off) and LP_h − G ≤ ½·(h/δ)² for z_f at distance ≥ δ from the
 //!   support of Z (dual argument, see [`K_H2`]).
 //!
-//! The instance count per technique is `MOMENTLAB_CF_INSTANCES` (default 10 000, as the issue asks).
+//! The instance count per technique is `MOMENTLAB_CF_INSTANCES` (default 10 000).
 
 use momentlab::lp::{make_solver, GridTable, Status};
 use momentlab::technique::hamburger::Hamburger;

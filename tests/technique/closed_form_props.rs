@@ -1,4 +1,5 @@
-//! Properties of the closed-form solvers (issue 4, "How it is checked"): Hamburger m = 2 is VSM;
+//! Properties of the closed-form solvers (docs/techniques.md, "How the solvers are checked"):
+//! Hamburger m = 2 is VSM;
 //! perfect reconstruction for at most m/2 Diracs (Proposition 4); 6MSM equals Algorithm 2 at
 //! m = 6; Hamburger 4MSM is invariant to affine depth maps while ESM is not; CSM equals the
 //! truncated Fourier step evaluated directly; the f32 paths compute in single precision.

@@ -1,6 +1,6 @@
 //! The rewritten TMSM closed form (`technique::tmsm`, unit-circle arithmetic, lit-arc early exit,
 //! Descartes fast path in the quartic) against the implementation it replaced, kept verbatim as
-//! the oracle in tests/tmsm_old/mod.rs: 100 000 random inputs and adversarial families
+//! the oracle in tests/technique/tmsm_old.rs: 100 000 random inputs and adversarial families
 //! (boundary moment vectors with ≤ 2 Diracs, tight clusters, a Dirac at the seam or at z_f,
 //! z_f near 0 and 1, the lit arc, near-singular Toeplitz matrices, two Diracs 1e-5..1e-3 apart
 //! with z_f at one of them, moment vectors just outside the moment space, NaN). f64 must agree

@@ -1,6 +1,6 @@
 //! The TMSM closed form as it was before the rewrite for speed (commit 491dd4f,
 //! src/technique/tmsm.rs, unchanged apart from dropping the unused Ferrari/Cardano solvers and
-//! the `Technique` impl): the oracle of tests/tmsm_equiv.rs. Do not edit.
+//! the `Technique` impl): the oracle of tests/technique/tmsm_equiv.rs. Do not edit.
 #![allow(dead_code, clippy::all)]
 
 use std::ops::{Add, Div, Mul, Neg, Sub};
