@@ -1114,7 +1114,7 @@ mod tests {
         b
     }
 
-    /// Distributions of the families of tests/tmsm_equiv.rs: random 1–6 Diracs (some
+    /// Distributions of the families of tests/technique/tmsm_equiv.rs: random 1–6 Diracs (some
     /// clustered), one Dirac with z_f at it or next to it, two Diracs (one at the seam, or
     /// 1e-5…1e-3 apart with z_f at one of them), tight clusters, Diracs at 0 or z_f, lit arcs,
     /// z_f near 0 or 1, near-singular Toeplitz matrices, moments just outside the moment space.
