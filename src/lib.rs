@@ -30,6 +30,7 @@
 
 pub mod artefact;
 pub mod basis;
+pub mod bench;
 pub mod cli;
 pub mod grid;
 pub mod kernel;

@@ -3,9 +3,9 @@
 //! in the same run. The timing loop lives in [`crate::lp::bench`].
 
 use super::common::{resolution, usize_in};
-use crate::lp::bench::{run_one, BenchConfig, BenchRow};
-use crate::lp::bench_corpus::{self, CorpusRow, Start};
-use crate::lp::corpus::{self, Group};
+use crate::bench::corpus::{self, Group};
+use crate::bench::kernels::{run_one, BenchConfig, BenchRow};
+use crate::bench::timing::{self, CorpusRow, Start};
 use crate::progress::Bar;
 use anyhow::{bail, Result};
 use std::path::PathBuf;
@@ -19,7 +19,7 @@ pub enum CorpusKind {
     /// Filter windows of fragments sampled from real depth stacks (every layer, the pipeline's
     /// bias), depths snapped to each grid.
     Stacks,
-    /// The adversarial corpus (lp::corpus: flat receivers, adjacent points, tight clusters,
+    /// The adversarial corpus (bench::corpus: flat receivers, adjacent points, tight clusters,
     /// boundary moments, steep exponentials, power bases up to m = 12).
     Adversarial,
     /// Given as moments only (the path of `momentlab lp`): mixed 1–4 Diracs on grid points and
@@ -185,7 +185,7 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         let grid = crate::Grid::uniform(n)?;
         match &args.basis {
             Some(_) => corpus::table_for(&catalog, &grid, &basis),
-            None => crate::lp::instances::power_table(&grid, args.m),
+            None => crate::bench::instances::power_table(&grid, args.m),
         }
     };
     if args.corpus == CorpusKind::Moments {
@@ -276,7 +276,7 @@ fn run_corpus(args: &Args) -> Result<()> {
                     }
                     _ => format!("stacks n = {}", g.table.n()),
                 };
-                bench_corpus::run(
+                timing::run(
                     &name,
                     std::slice::from_ref(g),
                     args.reference_inputs,
@@ -289,7 +289,7 @@ fn run_corpus(args: &Args) -> Result<()> {
     } else {
         // Two reference solves per table keep the reference part to seconds.
         let per = args.reference_inputs.div_ceil(groups.len()).max(2);
-        vec![bench_corpus::run(
+        vec![timing::run(
             "adversarial",
             &groups,
             per,

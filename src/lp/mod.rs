@@ -9,15 +9,11 @@
 
 #![warn(missing_docs)]
 
-pub mod bench;
-pub mod bench_corpus;
 mod certify;
-pub mod corpus;
 mod cpu;
 mod dense;
 mod exact;
 pub mod fast;
-pub mod instances;
 mod ortho;
 mod pricing;
 pub mod reference;

@@ -1,9 +1,9 @@
 //! The correctness contract of Algorithm 1 (src/lp/certify.rs): no answer labelled optimal
 //! without its certificate. Checked against the one-function closed form for monotone f and on
-//! the adversarial corpus (src/lp/corpus.rs), independently of the solver's own checks.
+//! the adversarial corpus (src/bench/corpus.rs), independently of the solver's own checks.
 
 use momentlab::basis::Catalog;
-use momentlab::lp::corpus::{self, mass_below, table_for};
+use momentlab::bench::corpus::{self, mass_below, table_for};
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::{distribution_moments, GridTable, MomentSolver, Status};
 use momentlab::Grid;

@@ -6,8 +6,8 @@
 
 use crate::common::lp::check_support;
 use momentlab::basis::Catalog;
+use momentlab::bench::instances::{kernel_patches, power_table, smooth_functions, table_of};
 use momentlab::lp::fast::FastSolver;
-use momentlab::lp::instances::{kernel_patches, power_table, smooth_functions, table_of};
 use momentlab::lp::reference::ReferenceSolver;
 use momentlab::lp::{distribution_moments, GridTable, MomentSolver, Solution, Status};
 use momentlab::Grid;
@@ -317,7 +317,7 @@ fn bad_distributions_are_errors() {
 #[test]
 fn distribution_above_zf_is_its_own_optimum() {
     let mut rng = ChaCha8Rng::seed_from_u64(41);
-    let exps: Vec<momentlab::lp::instances::SmoothFn> = vec![
+    let exps: Vec<momentlab::bench::instances::SmoothFn> = vec![
         ("exp(40z)", |z| (40.0 * z).exp()),
         ("exp(-40z)", |z| (-40.0 * z).exp()),
         ("exp(80(z-1))", |z| (80.0 * (z - 1.0)).exp()),

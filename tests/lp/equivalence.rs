@@ -3,11 +3,11 @@
 
 use crate::common::lp::check_support;
 use momentlab::basis::Catalog;
-use momentlab::lp::fast::FastSolver;
-use momentlab::lp::instances::{
+use momentlab::bench::instances::{
     kernel_patches, mixture_moments, power_table, random_mixture, smooth_functions, table_of,
     SmoothFn,
 };
+use momentlab::lp::fast::FastSolver;
 use momentlab::lp::reference::ReferenceSolver;
 use momentlab::lp::{support_reproduces, GridTable, MomentSolver, Solution, Status};
 use momentlab::Grid;

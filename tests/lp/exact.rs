@@ -14,10 +14,10 @@
 
 #![allow(clippy::needless_range_loop)] // exact Gaussian elimination on small matrices
 
-use momentlab::lp::bench::problems;
-use momentlab::lp::corpus;
+use momentlab::bench::corpus;
+use momentlab::bench::instances::power_table;
+use momentlab::bench::kernels::problems;
 use momentlab::lp::fast::FastSolver;
-use momentlab::lp::instances::power_table;
 use momentlab::lp::reference::ReferenceSolver;
 use momentlab::lp::{GridTable, MomentSolver, Status};
 use momentlab::Grid;
@@ -414,7 +414,7 @@ fn numerically_singular_optimal_basis_still_answers() {
         (48, 0.29247352333857),
         (56, 0.16297116177733595),
     ];
-    let b = momentlab::lp::instances::mixture_moments(&table, &mix);
+    let b = momentlab::bench::instances::mixture_moments(&table, &mix);
     let zf = 0.7619047619047619;
     for warm in [true, false] {
         let mut fast = FastSolver::new(table.clone());

@@ -1,10 +1,10 @@
 //! Known answers for Algorithm 1 (fast solver): single Diracs, the Cantelli limit, bad input,
 //! and independence of the start basis.
 
-use momentlab::lp::fast::FastSolver;
-use momentlab::lp::instances::{
+use momentlab::bench::instances::{
     mixture_moments, power_table, random_mixture, smooth_functions, table_of,
 };
+use momentlab::lp::fast::FastSolver;
 use momentlab::lp::{make_solver, MomentSolver, Status};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};

@@ -5,7 +5,7 @@
 //! 9.9 %).
 
 use momentlab::basis::Catalog;
-use momentlab::lp::corpus::table_for;
+use momentlab::bench::corpus::table_for;
 use momentlab::lp::fast::FastSolver;
 use momentlab::lp::{MomentSolver, Status};
 use momentlab::metrics::windows::stacks_corpus;

@@ -371,12 +371,12 @@ impl FastSolver {
 
     /// What the solver carries from one problem to the next (the last optimal basis and its
     /// moments), to time a stretch of problems repeatedly from the same state.
-    pub(in crate::lp) fn warm_state(&self) -> (Option<Vec<usize>>, Vec<f64>) {
+    pub(crate) fn warm_state(&self) -> (Option<Vec<usize>>, Vec<f64>) {
         (self.warm.basis.clone(), self.warm.last_c.clone())
     }
 
     /// Restore a [`Self::warm_state`].
-    pub(in crate::lp) fn restore_warm_state(&mut self, state: &(Option<Vec<usize>>, Vec<f64>)) {
+    pub(crate) fn restore_warm_state(&mut self, state: &(Option<Vec<usize>>, Vec<f64>)) {
         self.warm.basis.clone_from(&state.0);
         self.warm.last_c.copy_from_slice(&state.1);
     }

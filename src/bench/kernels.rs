@@ -2,10 +2,10 @@
 //! microseconds per LP of the reference and the fast solver (with and without warm start) on the
 //! same moment vectors, and their ratio, measured in the same run.
 
-use super::fast::FastSolver;
 use super::instances::{kernel_patches, mixture_moments, power_table};
-use super::reference::ReferenceSolver;
-use super::{MomentSolver, Status};
+use crate::lp::fast::FastSolver;
+use crate::lp::reference::ReferenceSolver;
+use crate::lp::{MomentSolver, Status};
 use crate::Grid;
 use anyhow::{bail, Result};
 use rand::SeedableRng;
@@ -231,7 +231,7 @@ pub fn run_one(cfg: &BenchConfig, n: usize, mut progress: impl FnMut()) -> Resul
     let fast_dist_mean_us = mean(&td);
     let fast_dist_us = median(&mut td);
     Ok(BenchRow {
-        pricing_kernel: super::pricing_kernel(),
+        pricing_kernel: crate::lp::pricing_kernel(),
         n,
         m: cfg.m,
         problems: probs.len(),

@@ -3,7 +3,7 @@
 //! and "realistic" moment vectors as a 9×9 Gaussian PCF kernel (σ = 2.4 texels, the paper's
 //! reference filter, Section 3.2) produces them over a depth map with 1–3 depth clusters.
 
-use super::GridTable;
+use crate::lp::GridTable;
 use crate::Grid;
 use anyhow::Result;
 use rand::Rng;

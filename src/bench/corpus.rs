@@ -13,8 +13,8 @@
 //! alone, exp(80(z−1)) (ESM's c = 80), the paper's bases (MSM z…z⁴, TMSM's trigonometric
 //! basis, EVSM's exponentials) and mixed bases with exp(±40z), at n = 256…8192.
 
-use super::GridTable;
 use crate::basis::Catalog;
+use crate::lp::GridTable;
 use crate::Grid;
 use anyhow::{Context, Result};
 use rand::{Rng, SeedableRng};

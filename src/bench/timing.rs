@@ -8,9 +8,9 @@
 //! carried from one problem to the next.
 
 use super::corpus::{Group, Problem};
-use super::fast::FastSolver;
-use super::reference::ReferenceSolver;
-use super::{distribution_moments, support_reproduces, MomentSolver, Solution, Status};
+use crate::lp::fast::FastSolver;
+use crate::lp::reference::ReferenceSolver;
+use crate::lp::{distribution_moments, support_reproduces, MomentSolver, Solution, Status};
 use anyhow::Result;
 use std::time::Instant;
 
@@ -247,7 +247,7 @@ struct Timed {
     /// Its answers (of the last pass).
     sols: Vec<Solution>,
     /// Its counters over one pass (escalations, exact, same_moments, pivots).
-    stats: super::fast::FastStats,
+    stats: crate::lp::fast::FastStats,
     /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
     /// of the first problems.
     reference: Vec<(usize, Vec<f64>, f64, Result<Solution>)>,
@@ -348,9 +348,9 @@ fn time_stretch(
 #[cfg(test)]
 mod tests {
     use super::{time_group, Spread, Start, STRETCH};
-    use crate::lp::corpus::{problem, Group, Kind};
+    use crate::bench::corpus::{problem, Group, Kind};
+    use crate::bench::instances::power_table;
     use crate::lp::fast::FastSolver;
-    use crate::lp::instances::power_table;
     use crate::lp::MomentSolver;
     use crate::Grid;
     use rand::SeedableRng;
@@ -411,7 +411,7 @@ mod tests {
     fn moments_start_answers_as_sequential_solves() {
         let grid = Grid::uniform(512).unwrap();
         let table = power_table(&grid, 4).unwrap();
-        let mut groups = crate::lp::corpus::moments_groups(&table, "z..z^4", STRETCH + 7, 3);
+        let mut groups = crate::bench::corpus::moments_groups(&table, "z..z^4", STRETCH + 7, 3);
         assert_eq!(groups.len(), 2);
         for g in &mut groups {
             let timed = time_group(g, 2, 3, Start::Moments).unwrap();
