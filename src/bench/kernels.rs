@@ -3,8 +3,8 @@
 //! same moment vectors, and their ratio, measured in the same run.
 
 use super::instances::{kernel_patches, mixture_moments, power_table};
-use crate::lp::fast::FastSolver;
-use crate::lp::reference::ReferenceSolver;
+use crate::lp::FastSolver;
+use crate::lp::ReferenceSolver;
 use crate::lp::{MomentSolver, Status};
 use crate::Grid;
 use anyhow::{bail, Result};

@@ -8,8 +8,8 @@
 //! carried from one problem to the next.
 
 use super::corpus::{Group, Problem};
-use crate::lp::fast::FastSolver;
-use crate::lp::reference::ReferenceSolver;
+use crate::lp::FastSolver;
+use crate::lp::ReferenceSolver;
 use crate::lp::{distribution_moments, support_reproduces, MomentSolver, Solution, Status};
 use anyhow::Result;
 use std::time::Instant;
@@ -247,7 +247,7 @@ struct Timed {
     /// Its answers (of the last pass).
     sols: Vec<Solution>,
     /// Its counters over one pass (escalations, exact, same_moments, pivots).
-    stats: crate::lp::fast::FastStats,
+    stats: crate::lp::FastStats,
     /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
     /// of the first problems.
     reference: Vec<(usize, Vec<f64>, f64, Result<Solution>)>,
@@ -350,7 +350,7 @@ mod tests {
     use super::{time_group, Spread, Start, STRETCH};
     use crate::bench::corpus::{problem, Group, Kind};
     use crate::bench::instances::power_table;
-    use crate::lp::fast::FastSolver;
+    use crate::lp::FastSolver;
     use crate::lp::MomentSolver;
     use crate::Grid;
     use rand::SeedableRng;

@@ -4,8 +4,10 @@
 //!
 //! G(b, z_f) = min Σ_{z_i < z_f} w_i  s.t.  w ≥ 0, Σ w_i = 1, Σ w_i b(z_i) = b.
 //!
-//! Two solvers behind [`MomentSolver`]: [`reference::ReferenceSolver`] (good_lp + microlp, the LP
-//! exactly as stated) and the fast solver.
+//! Two solvers behind [`MomentSolver`]: [`ReferenceSolver`] (good_lp + microlp, the LP exactly
+//! as stated) and [`FastSolver`] (certified; its answers carry a checked certificate, with an
+//! exact simplex as the last resort). The public API is this file: the grid table, the solvers
+//! and their trait, the answer and its status.
 
 #![warn(missing_docs)]
 
@@ -13,12 +15,15 @@ mod certify;
 mod cpu;
 mod dense;
 mod exact;
-pub mod fast;
+mod fast;
 mod ortho;
 mod pricing;
-pub mod reference;
+mod reference;
 mod row_kernels;
 mod scaled;
+
+pub use fast::{FastSolver, FastStats};
+pub use reference::ReferenceSolver;
 
 use crate::Grid;
 use anyhow::{bail, Result};

@@ -3,7 +3,7 @@
 
 use crate::common::kernel::*;
 use momentlab::basis::Catalog;
-use momentlab::lp::{reference::ReferenceSolver, GridTable, MomentSolver, Status};
+use momentlab::lp::{GridTable, MomentSolver, ReferenceSolver, Status};
 use momentlab::metrics::{self, Bias, EvalOptions};
 use momentlab::technique::lp_candidate::LpCandidate;
 use momentlab::Grid;

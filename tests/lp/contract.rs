@@ -4,7 +4,7 @@
 
 use momentlab::basis::Catalog;
 use momentlab::bench::corpus::{self, mass_below, table_for};
-use momentlab::lp::fast::FastSolver;
+use momentlab::lp::FastSolver;
 use momentlab::lp::{distribution_moments, GridTable, MomentSolver, Status};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};

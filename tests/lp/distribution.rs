@@ -7,8 +7,8 @@
 use crate::common::lp::check_support;
 use momentlab::basis::Catalog;
 use momentlab::bench::instances::{kernel_patches, power_table, smooth_functions, table_of};
-use momentlab::lp::fast::FastSolver;
-use momentlab::lp::reference::ReferenceSolver;
+use momentlab::lp::FastSolver;
+use momentlab::lp::ReferenceSolver;
 use momentlab::lp::{distribution_moments, GridTable, MomentSolver, Solution, Status};
 use momentlab::Grid;
 use rand::seq::SliceRandom;

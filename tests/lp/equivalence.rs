@@ -7,8 +7,8 @@ use momentlab::bench::instances::{
     kernel_patches, mixture_moments, power_table, random_mixture, smooth_functions, table_of,
     SmoothFn,
 };
-use momentlab::lp::fast::FastSolver;
-use momentlab::lp::reference::ReferenceSolver;
+use momentlab::lp::FastSolver;
+use momentlab::lp::ReferenceSolver;
 use momentlab::lp::{support_reproduces, GridTable, MomentSolver, Solution, Status};
 use momentlab::Grid;
 use rand::seq::SliceRandom;

@@ -17,8 +17,8 @@
 use momentlab::bench::corpus;
 use momentlab::bench::instances::power_table;
 use momentlab::bench::kernels::problems;
-use momentlab::lp::fast::FastSolver;
-use momentlab::lp::reference::ReferenceSolver;
+use momentlab::lp::FastSolver;
+use momentlab::lp::ReferenceSolver;
 use momentlab::lp::{GridTable, MomentSolver, Status};
 use momentlab::Grid;
 use num_bigint::BigInt;

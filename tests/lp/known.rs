@@ -4,7 +4,7 @@
 use momentlab::bench::instances::{
     mixture_moments, power_table, random_mixture, smooth_functions, table_of,
 };
-use momentlab::lp::fast::FastSolver;
+use momentlab::lp::FastSolver;
 use momentlab::lp::{make_solver, MomentSolver, Status};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};

@@ -6,7 +6,7 @@
 
 use momentlab::basis::Catalog;
 use momentlab::bench::corpus::table_for;
-use momentlab::lp::fast::FastSolver;
+use momentlab::lp::FastSolver;
 use momentlab::lp::{MomentSolver, Status};
 use momentlab::metrics::windows::stacks_corpus;
 use momentlab::technique::esm::esm;

@@ -2,7 +2,7 @@
 //! against an independently tabulated reference LP, infeasible → NaN.
 
 use momentlab::basis::Catalog;
-use momentlab::lp::{make_solver, reference::ReferenceSolver, GridTable, MomentSolver, Status};
+use momentlab::lp::{make_solver, GridTable, MomentSolver, ReferenceSolver, Status};
 use momentlab::technique::lp_candidate::LpCandidate;
 use momentlab::technique::{by_name, Technique};
 use momentlab::Grid;
