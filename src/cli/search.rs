@@ -362,6 +362,14 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");
     }
+    if r.summary.is_some() {
+        // Where the time went (stage files of a racing run; none for --exhaustive).
+        let times = crate::search::timing::stage_family_times(&results, &table, opts.m)?;
+        if !times.is_empty() {
+            eprintln!("search: LP time per stage and candidate family (CPU seconds in the LPs)");
+            eprint!("{}", crate::search::timing::render(&times));
+        }
+    }
     if shard[1] > 1 {
         eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", shard[0], shard[1]);
         return Ok(());

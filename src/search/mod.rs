@@ -31,6 +31,7 @@ pub mod select;
 pub mod span;
 pub mod sweep;
 pub mod tieset;
+pub mod timing;
 
 pub use config::{Parameters, SweepConfig};
 pub use dataset::{Dataset, DatasetBuilder, Fragment, SamplePlan, DEFAULT_MAX_FRAGMENTS};
