@@ -12,10 +12,11 @@ pub mod search;
 pub mod shader;
 pub mod technique;
 
-use std::io::Write;
+use std::io::{Read, Write};
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::{Duration, Instant};
 
 /// A path under the system temp folder that no other call of this process returns (the test
 /// binaries run many tests in one process): `momentlab-<pid>-<k>-<name>`, with nothing there.
@@ -46,12 +47,25 @@ pub fn momentlab() -> Command {
 }
 
 /// Runs `momentlab args` with `stdin` (none: no input) and progress reporting off; returns
-/// (exit code, stdout, stderr). The binary may exit (e.g. on a bad argument) before reading
-/// its input: a broken pipe is expected then, and the exit status tells the rest.
+/// (exit code, stdout, stderr), −1 for a run ended by a signal.
 pub fn run(args: &[&str], stdin: Option<&str>) -> (i32, String, String) {
-    let mut child = momentlab()
-        .args(args)
-        .env("MOMENTLAB_PROGRESS", "off")
+    let mut cmd = momentlab();
+    cmd.args(args).env("MOMENTLAB_PROGRESS", "off");
+    let (code, out, err) = run_limited(&mut cmd, stdin, None);
+    (code.unwrap_or(-1), out, err)
+}
+
+/// Runs `cmd` with `stdin` (none: no input), reading stdout and stderr as it runs; with a
+/// `limit`, a run still going after it is killed and the test fails. Returns (exit code, None
+/// when ended by a signal; stdout; stderr). The program may exit (e.g. on a bad argument)
+/// before reading its input: a broken pipe is expected then, and the exit status tells the
+/// rest.
+pub fn run_limited(
+    cmd: &mut Command,
+    stdin: Option<&str>,
+    limit: Option<Duration>,
+) -> (Option<i32>, String, String) {
+    let mut child = cmd
         .stdin(if stdin.is_some() {
             Stdio::piped()
         } else {
@@ -68,15 +82,31 @@ pub fn run(args: &[&str], stdin: Option<&str>) -> (i32, String, String) {
             let _ = w.write_all(text.as_bytes());
         })
     });
-    let out = child.wait_with_output().unwrap();
+    let read_all = |mut r: Box<dyn Read + Send>| {
+        std::thread::spawn(move || {
+            let mut s = String::new();
+            let _ = r.read_to_string(&mut s);
+            s
+        })
+    };
+    let t_out = read_all(Box::new(child.stdout.take().unwrap()));
+    let t_err = read_all(Box::new(child.stderr.take().unwrap()));
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s;
+        }
+        if let Some(limit) = limit.filter(|&l| start.elapsed() > l) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("{cmd:?}: still running after {limit:?} (killed)");
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
     if let Some(w) = writer {
         w.join().unwrap();
     }
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8(out.stdout).unwrap(),
-        String::from_utf8(out.stderr).unwrap(),
-    )
+    (status.code(), t_out.join().unwrap(), t_err.join().unwrap())
 }
 
 /// A mesh loader for scenes that must not load any mesh file.

@@ -3,62 +3,20 @@
 //! error). Every run is killed after 10 s (a runaway is a failure, not a slow pass); no run may
 //! panic (101) or abort (134), and stderr must be exactly one line.
 
-use crate::common::{bin, tmp, tmp_path};
+use crate::common::{bin, run_limited, tmp, tmp_path};
 use momentlab::stack::{DepthStack, StackMeta};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Run with a hard 10 s limit; returns (exit code, stdout, stderr). Killed runs fail the test.
 fn run(args: &[&str], stdin: Option<&str>) -> (i32, String, String) {
-    let mut child = Command::new(bin())
-        .args(args)
-        .env("CI", "1")
-        .stdin(if stdin.is_some() {
-            Stdio::piped()
-        } else {
-            Stdio::null()
-        })
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    if let Some(text) = stdin {
-        let mut w = child.stdin.take().unwrap();
-        let text = text.to_string();
-        std::thread::spawn(move || {
-            let _ = w.write_all(text.as_bytes());
-        });
-    }
-    let mut out = child.stdout.take().unwrap();
-    let mut err = child.stderr.take().unwrap();
-    let t_out = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = out.read_to_string(&mut s);
-        s
-    });
-    let t_err = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = err.read_to_string(&mut s);
-        s
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > Duration::from_secs(10) {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{args:?}: still running after 10 s (killed)");
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    let code = status
-        .code()
-        .unwrap_or_else(|| panic!("{args:?}: killed by a signal"));
-    (code, t_out.join().unwrap(), t_err.join().unwrap())
+    let mut cmd = Command::new(bin());
+    cmd.args(args).env("CI", "1");
+    let (code, out, err) = run_limited(&mut cmd, stdin, Some(Duration::from_secs(10)));
+    let code = code.unwrap_or_else(|| panic!("{args:?}: killed by a signal"));
+    (code, out, err)
 }
 
 fn meta(width: usize, layers: usize) -> StackMeta {

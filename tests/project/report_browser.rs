@@ -8,10 +8,9 @@
 //! Without chromium the test is skipped loudly — unless MOMENTLAB_REQUIRE_BROWSER=1 (set by
 //! .ci/run when it installed chromium), where a missing browser is a failure.
 
-use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 fn browser() -> Option<PathBuf> {
     let path = std::env::var_os("PATH")?;
@@ -20,41 +19,6 @@ fn browser() -> Option<PathBuf> {
             .map(|d| d.join(name))
             .find(|p| p.is_file())
     })
-}
-
-/// Run `cmd` with a hard limit; returns (exit code, stdout, stderr).
-fn run_limited(cmd: &mut Command, limit: Duration) -> (Option<i32>, String, String) {
-    let mut child = cmd
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut out = child.stdout.take().unwrap();
-    let mut err = child.stderr.take().unwrap();
-    let t_out = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = out.read_to_string(&mut s);
-        s
-    });
-    let t_err = std::thread::spawn(move || {
-        let mut s = String::new();
-        let _ = err.read_to_string(&mut s);
-        s
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().unwrap() {
-            break s;
-        }
-        if start.elapsed() > limit {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!("{cmd:?}: still running after {limit:?} (killed)");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    (status.code(), t_out.join().unwrap(), t_err.join().unwrap())
 }
 
 /// Installed first in <head>: records console.error calls, script errors, failed resource
@@ -145,12 +109,13 @@ fn chromium(bin: &Path, profile: &Path) -> Command {
 /// Load `page` (next to the report, so relative links resolve) and return the checker's result.
 fn check_page(bin: &Path, profile: &Path, page: &Path) -> serde_json::Value {
     let url = format!("file://{}", page.display());
-    let (code, out, err) = run_limited(
+    let (code, out, err) = crate::common::run_limited(
         chromium(bin, profile)
             .arg("--virtual-time-budget=5000")
             .arg("--dump-dom")
             .arg(&url),
-        Duration::from_secs(90),
+        None,
+        Some(Duration::from_secs(90)),
     );
     assert_eq!(code, Some(0), "chromium --dump-dom failed: {err}");
     let start = out
@@ -306,12 +271,13 @@ fn report_loads_in_headless_chromium() {
     std::fs::create_dir_all(&shots).unwrap();
     let shot = shots.join("report_tiny.png");
     let _ = std::fs::remove_file(&shot);
-    let (code, _, err) = run_limited(
+    let (code, _, err) = crate::common::run_limited(
         chromium(&bin, &profile)
             .arg("--window-size=1280,2400")
             .arg(format!("--screenshot={}", shot.display()))
             .arg(format!("file://{}", run.join("index.html").display())),
-        Duration::from_secs(90),
+        None,
+        Some(Duration::from_secs(90)),
     );
     assert_eq!(code, Some(0), "chromium --screenshot failed: {err}");
     let dec = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
