@@ -4,8 +4,9 @@
 use crate::search::plan::{Plan, Schedule};
 use crate::search::SweepOptions;
 
-/// Calibration sample: candidates × fragments, solved on one thread (≈ 0.1–1 s).
-pub const CALIBRATION: [usize; 2] = [32, 1024];
+/// Calibration sample: candidates (stratified by family) × fragments, solved on all threads
+/// (≈ 1 s).
+pub const CALIBRATION: [usize; 2] = [64, 1024];
 
 /// Safety factor on the estimated time of a task for `--time`.
 const TIME_MARGIN: f64 = 1.5;
@@ -25,12 +26,19 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         count(plan.duplicates),
         count(plan.fragments)
     );
+    let strata: Vec<String> = c
+        .strata
+        .iter()
+        .map(|(family, sampled, all)| format!("{family} {sampled} of {}", count(*all as u64)))
+        .collect();
     println!(
-        "plan: calibration: {} candidates × {} fragments = {} LP solves in {:.2} s on one thread ({} unsettled) → {} LP solves/s per core",
+        "plan: calibration: {} candidates ({}) × {} fragments = {} LP solves in {:.2} s on {} threads ({} unsettled) → {} LP solves/s per core",
         c.candidates,
+        strata.join(", "),
         count(c.fragments as u64),
         count(c.lp_solves),
         c.seconds,
+        c.threads,
         c.failures,
         count(c.rate().round() as u64)
     );

@@ -79,7 +79,7 @@ pub struct Opts {
     #[arg(long, default_value = "fast")]
     pub solver: String,
     /// Fragments in racing stage 0 (each next stage: × growth; ≥ 1).
-    #[arg(long, default_value_t = 1024, value_parser = usize_in(1, u32::MAX as u64))]
+    #[arg(long, default_value_t = crate::search::config::DEFAULT_FIRST_SAMPLE, value_parser = usize_in(1, u32::MAX as u64))]
     pub first_sample: usize,
     /// Factor by which each racing stage's fragment block grows (2..=64).
     #[arg(long, default_value_t = 4, value_parser = usize_in(2, 64))]

@@ -7,6 +7,10 @@ use super::Scorer;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
+/// Fragments in racing stage 0 by default (then ×`growth` per stage: 512, 2048, 8192, 32768, the
+/// rest of the 131 072-fragment sample): the budget of docs/search.md, "Budget".
+pub const DEFAULT_FIRST_SAMPLE: usize = 512;
+
 /// Everything that determines the rows of a run (stored as `config.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SweepConfig {
@@ -131,7 +135,7 @@ impl SweepConfig {
             candidates: None,
             shard: [0, 1],
             solver: scorer.solver().to_string(),
-            first_sample: 1024,
+            first_sample: DEFAULT_FIRST_SAMPLE,
             growth: 4,
             keep: 0.25,
             confidence: 0.99,

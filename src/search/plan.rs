@@ -1,7 +1,7 @@
 //! What a sweep will cost before it runs (`momentlab search --plan`): the candidates it scores,
 //! the racing stages and LP solves exactly as [`super::run_sweep`] schedules them (for racing
-//! and for the exhaustive mode, per shard), and the core-hours from a short single-threaded
-//! calibration of the LP solver on this machine and data.
+//! and for the exhaustive mode, per shard), and the core-hours from a short calibration of the
+//! LP solver on this machine and data (a sample stratified by candidate family, all threads).
 //!
 //! LP solves (as `SweepSummary::lp_solves`): the pilot block P picks the stage-0 reference
 //! (pilot·|P| solves); racing stage k with |C_k| candidates on a block of B_k fragments costs
@@ -70,23 +70,30 @@ pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64, keep: f64) -> Sc
     }
 }
 
-/// A timed sample of LP solves: evenly spaced candidates on the first fragments of the
-/// stratified order (a racing block), one solver per candidate, on one thread.
+/// A timed sample of LP solves: candidates stratified by family (steepest exponential,
+/// [`super::timing::family_of`]) in proportion to the family's share of the run, on the first
+/// fragments of the stratified order (a racing block), scored the way the race scores a stage
+/// (all threads, one solver per candidate and chunk). The families' LP costs differ by up to 8×
+/// (docs/search.md), so an unstratified sample misjudges the mix.
 #[derive(Clone, Debug)]
 pub struct Calibration {
     pub candidates: usize,
     pub fragments: usize,
     pub lp_solves: u64,
-    /// Wall time of the solves on one thread.
+    /// Wall time of the sample on `threads` threads.
     pub seconds: f64,
+    /// Threads the sample ran on (those of the sweep).
+    pub threads: usize,
     /// Unsettled LPs in the sample.
     pub failures: u64,
+    /// Per family: (family, candidates sampled, candidates in the run).
+    pub strata: Vec<(&'static str, usize, usize)>,
 }
 
 impl Calibration {
-    /// LP solves per second on one core.
+    /// LP solves per second on one core (the sample's wall-time throughput per thread).
     pub fn rate(&self) -> f64 {
-        self.lp_solves as f64 / self.seconds.max(1e-9)
+        self.lp_solves as f64 / (self.seconds.max(1e-9) * self.threads.max(1) as f64)
     }
     /// Core-hours for `lp_solves` solves at the calibrated rate.
     pub fn core_hours(&self, lp_solves: u64) -> f64 {
@@ -150,34 +157,125 @@ pub fn plan(cfg: &SweepConfig, scorer: &Scorer, calibration: [usize; 2]) -> Resu
     })
 }
 
-/// Time `[candidates, fragments]` LP solves on one thread (see [`Calibration`]).
+/// Proportional allocation of `k` samples to strata of the given sizes (largest remainder, at
+/// least one per non-empty stratum when k allows), then evenly spaced members of each stratum.
+pub fn stratified_sample(strata: &[Vec<usize>], k: usize) -> Vec<Vec<usize>> {
+    let total: usize = strata.iter().map(Vec::len).sum();
+    if total == 0 || k == 0 {
+        return vec![Vec::new(); strata.len()];
+    }
+    let k = k.min(total);
+    let quota: Vec<f64> = strata
+        .iter()
+        .map(|s| k as f64 * s.len() as f64 / total as f64)
+        .collect();
+    let mut take: Vec<usize> = strata
+        .iter()
+        .zip(&quota)
+        .map(|(s, q)| {
+            (q.floor() as usize)
+                .max(usize::from(!s.is_empty()))
+                .min(s.len())
+        })
+        .collect();
+    let mut by_remainder: Vec<usize> = (0..strata.len()).collect();
+    by_remainder
+        .sort_by(|&a, &b| (quota[b] - quota[b].floor()).total_cmp(&(quota[a] - quota[a].floor())));
+    for &i in by_remainder.iter().cycle().take(4 * strata.len() * k) {
+        if take.iter().sum::<usize>() >= k {
+            break;
+        }
+        if take[i] < strata[i].len() {
+            take[i] += 1;
+        }
+    }
+    strata
+        .iter()
+        .zip(&take)
+        .map(|(s, &t)| (0..t).map(|j| s[j * s.len() / t]).collect())
+        .collect()
+}
+
+/// Time a stratified sample of `candidates` candidates of `active` × `fragments` fragments
+/// (see [`Calibration`]).
 pub fn calibrate(
     scorer: &Scorer,
     active: &[&Vec<usize>],
     order: &[u32],
     [candidates, fragments]: [usize; 2],
 ) -> Result<Calibration> {
-    let k = candidates.clamp(1, active.len().max(1));
     let mut block: Vec<u32> =
         order[..fragments.clamp(1, order.len().max(1)).min(order.len())].to_vec();
     block.sort_unstable();
+    let names = scorer.table().names();
+    let family = |c: &[usize]| {
+        super::timing::family_of(&c.iter().map(|&j| names[j].clone()).collect::<Vec<_>>())
+    };
+    let mut labels: Vec<&'static str> = Vec::new();
+    let mut strata: Vec<Vec<usize>> = Vec::new();
+    for (i, c) in active.iter().enumerate() {
+        let f = family(c);
+        match labels.iter().position(|l| *l == f) {
+            Some(p) => strata[p].push(i),
+            None => {
+                labels.push(f);
+                strata.push(vec![i]);
+            }
+        }
+    }
+    let sample = stratified_sample(&strata, candidates);
     let mut out = Calibration {
         candidates: 0,
         fragments: block.len(),
         lp_solves: 0,
         seconds: 0.0,
+        threads: rayon::current_num_threads(),
         failures: 0,
+        strata: labels
+            .iter()
+            .zip(&sample)
+            .zip(&strata)
+            .map(|((l, s), all)| (*l, s.len(), all.len()))
+            .collect(),
     };
-    if active.is_empty() || block.is_empty() {
+    let cands: Vec<Vec<usize>> = sample
+        .iter()
+        .flatten()
+        .map(|&i| active[i].clone())
+        .collect();
+    if cands.is_empty() || block.is_empty() {
         return Ok(out);
     }
     let t0 = Instant::now();
-    for j in 0..k {
-        let e = scorer.errors_seq(active[j * active.len() / k], &block)?;
-        out.failures += e.failures;
-        out.lp_solves += block.len() as u64;
-        out.candidates += 1;
-    }
+    let errs = scorer.errors_many(&cands, &block, &|_| {})?;
     out.seconds = t0.elapsed().as_secs_f64();
+    out.failures = errs.iter().map(|e| e.failures).sum();
+    out.candidates = cands.len();
+    out.lp_solves = (cands.len() * block.len()) as u64;
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Proportional allocation: 64 of the m = 4 catalog's family sizes (20 445, 11 440, 13 685,
+    /// 20 475) gives 20, 11, 13, 20 by the floors and the largest remainders; small strata get
+    /// one; members are evenly spaced.
+    #[test]
+    fn stratified_sample_allocates_in_proportion() {
+        let sizes = [20_445usize, 11_440, 13_685, 20_475];
+        let strata: Vec<Vec<usize>> = sizes.iter().map(|&n| (0..n).collect()).collect();
+        let s = stratified_sample(&strata, 64);
+        let got: Vec<usize> = s.iter().map(Vec::len).collect();
+        assert_eq!(got, vec![20, 11, 13, 20]);
+        assert_eq!(s[1][..3], [0, 1040, 2080]);
+        let tiny = vec![(0..1000).collect(), vec![7], Vec::new()];
+        let s = stratified_sample(&tiny, 10);
+        assert_eq!(s.iter().map(Vec::len).collect::<Vec<_>>(), vec![9, 1, 0]);
+        assert_eq!(s[1], vec![7]);
+        let all = stratified_sample(&tiny, 5000);
+        assert_eq!(all.iter().map(Vec::len).sum::<usize>(), 1001);
+        assert!(stratified_sample(&tiny, 0).iter().all(Vec::is_empty));
+    }
 }

@@ -75,7 +75,7 @@ impl Default for SweepOptions {
             candidates: None,
             names: None,
             shard: [0, 1],
-            first_sample: 1024,
+            first_sample: super::config::DEFAULT_FIRST_SAMPLE,
             growth: 4,
             keep: 0.25,
             confidence: 0.99,
