@@ -84,6 +84,11 @@ pub struct Opts {
     /// Factor by which each racing stage's fragment block grows (2..=64).
     #[arg(long, default_value_t = 4, value_parser = usize_in(2, 64))]
     pub growth: usize,
+    /// Early look: a stage block whose halves hold at least this many fragments is first
+    /// tested on its first half, by confidence only, and the survivors on the whole block
+    /// (0 = never).
+    #[arg(long, default_value_t = crate::search::config::DEFAULT_EARLY_LOOK)]
+    pub early_look: usize,
     /// Budget cap per stage: of the candidates not eliminated by confidence, at most
     /// max(⌈keep·|C|⌉, top) stay (by the stage mean); the others leave "by the cap" and are
     /// reported as such (1 = no cap).
@@ -271,6 +276,7 @@ pub fn run(args: Args) -> Result<()> {
         shard,
         first_sample: args.first_sample,
         growth: args.growth,
+        early_look: args.early_look,
         keep: args.keep,
         confidence: args.confidence,
         bound: crate::search::race::Bound::parse(&args.bound).context("--bound")?,

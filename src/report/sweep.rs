@@ -345,12 +345,13 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
             s,
             "Budget: the sweep's sample of {} non-trivial fragments (`--max-fragments`) and a cap of \
              max(⌈{}·|C|⌉, top) candidates per stage. Tests: {} bound, {}, confidence {c:.0} % for all \
-             eliminations together (Bonferroni over {} stages, the candidates of each stage and the shards).\n",
+             eliminations together (Bonferroni over the {} looks of the stages, the candidates of each stage and the shards; \
+             a stage block whose halves hold at least `--early-look` fragments is tested on its first half by confidence only, then on the whole block).\n",
             r.fragment_budget,
             opts.keep,
             r.bound.name(),
             if r.paired { "paired differences to the stage reference" } else { "independent intervals" },
-            r.stages.len()
+            r.looks
         );
         s.push_str("| stage | candidates | fragments | reference | z | cap | eliminated by confidence | by the cap |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
         for (k, st) in r.stages.iter().enumerate() {
@@ -362,7 +363,14 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
                 st.reference,
                 st.z,
                 st.cap,
-                st.confidence_eliminated,
+                if st.early_eliminated > 0 {
+                    format!(
+                        "{} ({} at the early look)",
+                        st.confidence_eliminated, st.early_eliminated
+                    )
+                } else {
+                    st.confidence_eliminated.to_string()
+                },
                 st.cap_eliminated
             );
         }

@@ -11,6 +11,10 @@ use serde::{Deserialize, Serialize};
 /// rest of the 131 072-fragment sample): the budget of docs/search.md, "Budget".
 pub const DEFAULT_FIRST_SAMPLE: usize = 512;
 
+/// Early look by default: blocks of at least 2 × 1024 fragments are tested on their first half
+/// too (the normal approximation is used on blocks of ≥ 1024 fragments only).
+pub const DEFAULT_EARLY_LOOK: usize = 1024;
+
 /// Everything that determines the rows of a run (stored as `config.json`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct SweepConfig {
@@ -41,6 +45,10 @@ pub struct SweepConfig {
     pub first_sample: usize,
     /// Sample growth factor per stage.
     pub growth: usize,
+    /// Early look: a stage block whose halves hold at least this many fragments is first tested
+    /// on its first half, by confidence only (0: never; [`super::race::looks`]).
+    #[serde(default)]
+    pub early_look: usize,
     /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage.
     pub keep: f64,
     /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
@@ -137,6 +145,7 @@ impl SweepConfig {
             solver: scorer.solver().to_string(),
             first_sample: DEFAULT_FIRST_SAMPLE,
             growth: 4,
+            early_look: DEFAULT_EARLY_LOOK,
             keep: 0.25,
             confidence: 0.99,
             bound: Bound::Normal,

@@ -166,8 +166,8 @@ pub fn normal_quantile(p: f64) -> f64 {
     }
 }
 
-/// δ per test: α split evenly over `stages` planned stages, the `candidates` tested in the stage
-/// and `shards` shards (Bonferroni).
+/// δ per test: α split evenly over `stages` planned looks (a stage's block is one or two looks,
+/// [`looks`]), the `candidates` tested in the stage and `shards` shards (Bonferroni).
 pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) -> f64 {
     alpha / (stages.max(1) * candidates.max(1) * shards.max(1)) as f64
 }
@@ -271,6 +271,18 @@ pub fn blocks(
         size = size.saturating_mul(growth.max(1));
     }
     (pilot, out)
+}
+
+/// The looks of a stage block of `len` fragments (ranges into the block): when each half holds
+/// at least `early_look` fragments (0: never), the candidates are first tested on the first
+/// half by confidence only, and the survivors then on the whole block (confidence and cap);
+/// otherwise one look at the whole block. Each look counts as a test in [`stage_delta`].
+pub fn looks(len: usize, early_look: usize) -> Vec<std::ops::Range<usize>> {
+    if early_look > 0 && len / 2 >= early_look {
+        vec![0..len / 2, len / 2..len]
+    } else {
+        vec![0..len]
+    }
 }
 
 /// Mean and standard error of a difference pooled over blocks: `parts` are
@@ -415,6 +427,15 @@ mod tests {
         let d = decide(&s, 0, &cap);
         assert_eq!(d.iter().filter(|x| x.is_none()).count(), 1);
         assert_eq!(d[1], Some(Elimination::Cap));
+    }
+
+    #[test]
+    fn early_look_splits_large_blocks_in_halves() {
+        assert_eq!(looks(2048, 1024), vec![0..1024, 1024..2048]);
+        assert_eq!(looks(2047, 1024), vec![0..2047]);
+        assert_eq!(looks(87_040, 1024), vec![0..43_520, 43_520..87_040]);
+        assert_eq!(looks(4096, 0), vec![0..4096]);
+        assert_eq!(looks(1, 1), vec![0..1]);
     }
 
     #[test]

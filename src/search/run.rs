@@ -46,6 +46,8 @@ pub struct SweepOptions {
     pub shard: [usize; 2],
     pub first_sample: usize,
     pub growth: usize,
+    /// Early look (see [`SweepConfig::early_look`]).
+    pub early_look: usize,
     pub keep: f64,
     /// Confidence of the elimination tests (all stages and candidates together).
     pub confidence: f64,
@@ -77,6 +79,7 @@ impl Default for SweepOptions {
             shard: [0, 1],
             first_sample: super::config::DEFAULT_FIRST_SAMPLE,
             growth: 4,
+            early_look: super::config::DEFAULT_EARLY_LOOK,
             keep: 0.25,
             confidence: 0.99,
             bound: super::race::Bound::Normal,
@@ -249,6 +252,7 @@ pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig>
         shard: opts.shard,
         first_sample: opts.first_sample,
         growth: opts.growth,
+        early_look: opts.early_look,
         keep: opts.keep,
         confidence: opts.confidence,
         bound: opts.bound,

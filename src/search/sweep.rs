@@ -93,6 +93,9 @@ pub struct RaceSummary {
     /// Fragments of the pilot block (choosing the stage-0 reference).
     pub pilot_fragments: u64,
     pub stages: Vec<StageLog>,
+    /// Planned looks over all stages (the Bonferroni count of [`race::stage_delta`]).
+    #[serde(default)]
+    pub looks: u64,
     /// Non-trivial fragments available (the kept sample: the fragment budget).
     pub fragment_budget: u64,
     /// Fragments the race used before completing the survivors (pilot and stage blocks).
@@ -120,6 +123,9 @@ pub struct StageLog {
     /// Candidates allowed to stay by the cap.
     pub cap: u64,
     pub confidence_eliminated: u64,
+    /// Of those, eliminated at the early look (on the first half of the block).
+    #[serde(default)]
+    pub early_eliminated: u64,
     pub cap_eliminated: u64,
 }
 
@@ -506,6 +512,10 @@ fn race_all(
     };
     let order = data.stratified_order(cfg.seed);
     let (pilot_range, plan) = race::blocks(order.len(), cfg.first_sample, cfg.growth);
+    let planned_looks: usize = plan
+        .iter()
+        .map(|r| race::looks(r.len(), cfg.early_look).len())
+        .sum();
     let sorted = |ids: &[u32]| {
         let mut b = ids.to_vec();
         b.sort_unstable();
@@ -527,7 +537,7 @@ fn race_all(
         if cur.len() <= 1 {
             break;
         }
-        let block = sorted(&order[range.clone()]);
+        let block = &order[range.clone()];
         let reference = match leader {
             Some(l) => l,
             None => {
@@ -538,29 +548,9 @@ fn race_all(
                 pilot_best(ctx, &cur, p, &pilot_block)?
             }
         };
-        let path = dir.join(format!("stage{k}.jsonl"));
-        let label = format!(
-            "stage {k}: {} candidates × {} fragments",
-            cur.len(),
-            block.len()
-        );
-        let stored = match score_block(ctx, w, &path, &cur, reference, &block, label)? {
-            Ok(s) => s,
-            Err(Stopped) => return Ok(Err(Stopped)),
-        };
-        lp_solves += ((cur.len() + 1) * block.len()) as u64;
         stage_sizes.push((cur.len() as u64, block.len() as u64));
         used += block.len() as u64;
-        let stats: Vec<StageStats> = cur
-            .iter()
-            .map(|i| {
-                stored
-                    .get(i)
-                    .map(StageRow::stats)
-                    .with_context(|| format!("{}: candidate {i} missing", path.display()))
-            })
-            .collect::<Result<_>>()?;
-        let delta = race::stage_delta(alpha, plan.len(), cur.len(), cfg.shard[1]);
+        let delta = race::stage_delta(alpha, planned_looks, cur.len(), cfg.shard[1]);
         let rule = race::Rule {
             delta,
             bound: cfg.bound,
@@ -568,32 +558,82 @@ fn race_all(
             keep: cfg.keep,
             top: cfg.top,
         };
-        let decisions = race::decide(&stats, reference, &rule);
-        let mut out = Vec::new();
-        let mut next = Vec::new();
-        let (mut conf, mut cap) = (0u64, 0u64);
-        for (s, d) in stats.iter().zip(&decisions) {
-            pooled
-                .entry(s.index)
-                .or_insert_with(|| StageRow::empty(s.index))
-                .add(&stored[&s.index]);
-            match d {
-                None => next.push(s.index),
-                Some(e) => {
-                    conf += (*e == Elimination::Confidence) as u64;
-                    cap += (*e == Elimination::Cap) as u64;
-                    if !done.contains(&s.index) {
-                        let mut row = pooled_row(&pooled[&s.index], data, names, nontrivial);
-                        row.stage = k;
-                        row.eliminated = Some(*e);
-                        row.versus = Some(reference);
-                        row.diff = Some(s.d.mean() * scale);
-                        row.diff_se = Some(s.d.se() * scale);
-                        out.push(row);
+        // Looks: the first half by confidence only, then the survivors on the whole block.
+        let looks = race::looks(block.len(), cfg.early_look);
+        let mut alive = cur.clone();
+        let mut acc: HashMap<u64, StageRow> = HashMap::new();
+        let mut left: Vec<(StageStats, Elimination)> = Vec::new();
+        let mut early = 0u64;
+        for (j, part) in looks.iter().enumerate() {
+            let last = j + 1 == looks.len();
+            let ids = sorted(&block[part.clone()]);
+            let path = stage_file(dir, k, j);
+            let label = format!(
+                "stage {k}{}: {} candidates × {} fragments",
+                if looks.len() > 1 {
+                    format!(", look {}/{}", j + 1, looks.len())
+                } else {
+                    String::new()
+                },
+                alive.len(),
+                ids.len()
+            );
+            let stored = match score_block(ctx, w, &path, &alive, reference, &ids, label)? {
+                Ok(s) => s,
+                Err(Stopped) => return Ok(Err(Stopped)),
+            };
+            lp_solves += ((alive.len() + 1) * ids.len()) as u64;
+            let stats: Vec<StageStats> = alive
+                .iter()
+                .map(|i| {
+                    let r = stored
+                        .get(i)
+                        .with_context(|| format!("{}: candidate {i} missing", path.display()))?;
+                    let a = acc.entry(*i).or_insert_with(|| StageRow::empty(*i));
+                    a.add(r);
+                    Ok(a.stats())
+                })
+                .collect::<Result<_>>()?;
+            let look_rule = if last {
+                rule
+            } else {
+                race::Rule { keep: 1.0, ..rule }
+            };
+            let decisions = race::decide(&stats, reference, &look_rule);
+            alive.clear();
+            for (s, d) in stats.iter().zip(&decisions) {
+                match d {
+                    None => alive.push(s.index),
+                    Some(e) => {
+                        early += !last as u64;
+                        left.push((*s, *e));
                     }
                 }
             }
         }
+        let next = alive;
+        let mut out = Vec::new();
+        let (mut conf, mut cap) = (0u64, 0u64);
+        for i in &cur {
+            pooled
+                .entry(*i)
+                .or_insert_with(|| StageRow::empty(*i))
+                .add(&acc[i]);
+        }
+        for (s, e) in &left {
+            conf += (*e == Elimination::Confidence) as u64;
+            cap += (*e == Elimination::Cap) as u64;
+            if !done.contains(&s.index) {
+                let mut row = pooled_row(&pooled[&s.index], data, names, nontrivial);
+                row.stage = k;
+                row.eliminated = Some(*e);
+                row.versus = Some(reference);
+                row.diff = Some(s.d.mean() * scale);
+                row.diff_se = Some(s.d.se() * scale);
+                out.push(row);
+            }
+        }
+        out.sort_by_key(|r| r.index);
         for batch in out.chunks(1000) {
             if let Err(Stopped) = w.append(&results, batch)? {
                 return Ok(Err(Stopped));
@@ -608,11 +648,12 @@ fn race_all(
             z: race::normal_quantile(1.0 - delta),
             cap: race::cap(cfg.keep, cur.len() as u64, cfg.top as u64),
             confidence_eliminated: conf,
+            early_eliminated: early,
             cap_eliminated: cap,
         });
         n_conf += conf;
         n_cap += cap;
-        history.push((reference, stored));
+        history.push((reference, acc));
         cur = next;
         leader = best_of(&cur, &pooled);
         run = k + 1;
@@ -684,6 +725,7 @@ fn race_all(
             paired: cfg.paired,
             pilot_fragments: if run > 0 { pilot_range.len() as u64 } else { 0 },
             stages: logs,
+            looks: planned_looks as u64,
             fragment_budget: nontrivial,
             fragments_used: if run > 0 { used } else { nontrivial },
             resolved,
@@ -694,6 +736,16 @@ fn race_all(
             cap_eliminated: n_cap,
         },
     }))
+}
+
+/// The statistics file of look `j` of racing stage `k`: `stage{k}.jsonl` for the first (or
+/// only) look, `stage{k}.look{j}.jsonl` for the second.
+pub fn stage_file(dir: &Path, k: usize, j: usize) -> std::path::PathBuf {
+    if j == 0 {
+        dir.join(format!("stage{k}.jsonl"))
+    } else {
+        dir.join(format!("stage{k}.look{j}.jsonl"))
+    }
 }
 
 /// The best of `p` evenly spaced candidates of `cur` on the pilot block (stage-0 reference).

@@ -1,6 +1,7 @@
 //! Where a sweep's time went: per racing stage and candidate family, the LPs solved, the mean
 //! CPU µs per LP, the unsettled LPs and the share of all LP time, read from the per-candidate
-//! statistics of the stage files (`stage{k}.jsonl`: fragments and CPU seconds per candidate).
+//! statistics of the stage files (`stage{k}.jsonl` and the early look's `stage{k}.look1.jsonl`:
+//! fragments and CPU seconds per candidate).
 //!
 //! A candidate's family is its steepest exponential exp(c·z) (|c| ≥ 40, ≥ 20, smaller), else
 //! "no exponential": the escalation to the double-double simplex concentrates in steep
@@ -61,27 +62,34 @@ struct StageTime {
 pub fn stage_family_times(dir: &Path, table: &FunctionTable, m: usize) -> Result<Vec<FamilyTime>> {
     let mut out = Vec::new();
     for k in 0.. {
-        let path = dir.join(format!("stage{k}.jsonl"));
-        if !path.exists() {
+        if !super::sweep::stage_file(dir, k, 0).exists() {
             break;
         }
         let mut by: BTreeMap<&'static str, FamilyTime> = BTreeMap::new();
-        for row in crate::artefact::read_jsonl::<StageTime>(&path, false)? {
-            let cols = index_to_subset(table.len(), m, row.index)
-                .with_context(|| format!("{}: candidate {}", path.display(), row.index))?;
-            let family = family_of(&table.names_of(&cols));
-            let e = by.entry(family).or_insert_with(|| FamilyTime {
-                stage: format!("stage {k}"),
-                family,
-                candidates: 0,
-                lps: 0,
-                seconds: 0.0,
-                failures: 0,
-            });
-            e.candidates += 1;
-            e.lps += row.n;
-            e.seconds += row.seconds;
-            e.failures += row.failures;
+        // The early look's second file holds the same candidates again (fewer): LPs and time
+        // add up, candidates are counted once.
+        for look in 0..2 {
+            let path = super::sweep::stage_file(dir, k, look);
+            if !path.exists() {
+                continue;
+            }
+            for row in crate::artefact::read_jsonl::<StageTime>(&path, false)? {
+                let cols = index_to_subset(table.len(), m, row.index)
+                    .with_context(|| format!("{}: candidate {}", path.display(), row.index))?;
+                let family = family_of(&table.names_of(&cols));
+                let e = by.entry(family).or_insert_with(|| FamilyTime {
+                    stage: format!("stage {k}"),
+                    family,
+                    candidates: 0,
+                    lps: 0,
+                    seconds: 0.0,
+                    failures: 0,
+                });
+                e.candidates += (look == 0) as u64;
+                e.lps += row.n;
+                e.seconds += row.seconds;
+                e.failures += row.failures;
+            }
         }
         out.extend(by.into_values());
     }
@@ -142,6 +150,8 @@ mod tests {
         let stage0 = row(0, 100, 0.004, 1) + &row(1, 100, 0.001, 0) + &row(2, 100, 0.003, 0);
         std::fs::write(dir.join("stage0.jsonl"), stage0).unwrap();
         std::fs::write(dir.join("stage1.jsonl"), row(1, 400, 0.002, 0)).unwrap();
+        // The early look's second half of stage 1: LPs and time add, the candidate once.
+        std::fs::write(dir.join("stage1.look1.jsonl"), row(1, 400, 0.002, 0)).unwrap();
         let rows = stage_family_times(&dir, &table, 2).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
         assert_eq!(rows.len(), 3);
@@ -153,10 +163,15 @@ mod tests {
         assert!((steep.seconds - 0.007).abs() < 1e-15);
         let later = &rows[2];
         assert_eq!(
-            (later.stage.as_str(), later.family, later.lps),
-            ("stage 1", "exp(±20z)", 400)
+            (
+                later.stage.as_str(),
+                later.family,
+                later.candidates,
+                later.lps
+            ),
+            ("stage 1", "exp(±20z)", 1, 800)
         );
         let text = render(&rows);
-        assert!(text.contains("35.0") && text.contains("70.0%"), "{text}");
+        assert!(text.contains("35.0") && text.contains("58.3%"), "{text}");
     }
 }

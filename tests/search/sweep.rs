@@ -30,6 +30,8 @@ fn config(s: &Scorer, m: usize) -> SweepConfig {
     c.top = 4;
     c.first_sample = 40;
     c.growth = 2;
+    // Every block of ≥ 40 fragments is tested on its first half too (the early look).
+    c.early_look = 20;
     c.pilot = 4;
     c.batch = 3;
     c
@@ -83,6 +85,15 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
         panic!()
     };
     assert!(sum.stages.len() >= min_stages, "{sum:?}");
+    // Stage 0's block (40 fragments) was looked at twice: the second half's statistics exist.
+    assert!(race.join("stage0.look1.jsonl").exists());
+    let (_, plan) = momentlab::search::race::blocks(f.data.fragments().len(), 40, 2);
+    let planned: usize = plan
+        .iter()
+        .map(|r| momentlab::search::race::looks(r.len(), 20).len())
+        .sum();
+    assert!(planned > plan.len());
+    assert_eq!(sum.race.as_ref().unwrap().looks, planned as u64);
     assert!(sum.sampled_share < 1.0, "{sum:?}");
     let race_sum = sum.race.clone().unwrap();
     let mut ex_cfg = cfg.clone();
@@ -209,6 +220,7 @@ fn interrupted_runs_resume_to_the_same_file() {
     run(&cfg, &s, &full);
     let want = file_without_seconds(&full, "results.jsonl");
     let want_stage0 = file_without_seconds(&full, "stage0.jsonl");
+    let want_look = file_without_seconds(&full, "stage0.look1.jsonl");
     // Kill after k batches, once or repeatedly, then resume.
     for k in [1usize, 2, 4, 7, 11] {
         let dir = tmp_path(&format!("resume{k}"));
@@ -231,6 +243,11 @@ fn interrupted_runs_resume_to_the_same_file() {
             want_stage0,
             "k = {k}"
         );
+        assert_eq!(
+            file_without_seconds(&dir, "stage0.look1.jsonl"),
+            want_look,
+            "k = {k}"
+        );
         std::fs::remove_dir_all(dir).unwrap();
     }
     // Torn writes: stop, cut the results and stage files mid-line, resume.
@@ -241,7 +258,12 @@ fn interrupted_runs_resume_to_the_same_file() {
             progress: None,
         };
         assert_eq!(run_sweep(&cfg, &s, &dir, &hooks).unwrap(), Outcome::Stopped);
-        for name in ["results.jsonl", "stage0.jsonl", "stage1.jsonl"] {
+        for name in [
+            "results.jsonl",
+            "stage0.jsonl",
+            "stage0.look1.jsonl",
+            "stage1.jsonl",
+        ] {
             let p = dir.join(name);
             if let Ok(mut bytes) = std::fs::read(&p) {
                 if bytes.len() > cut {
