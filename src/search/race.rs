@@ -281,7 +281,7 @@ pub fn looks(len: usize, early_look: usize) -> Vec<std::ops::Range<usize>> {
     if early_look > 0 && len / 2 >= early_look {
         vec![0..len / 2, len / 2..len]
     } else {
-        vec![0..len]
+        std::iter::once(0..len).collect()
     }
 }
 
