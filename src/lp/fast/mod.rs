@@ -46,6 +46,7 @@
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
+mod band;
 mod linalg;
 mod ortho;
 mod price;
@@ -143,6 +144,12 @@ pub struct FastStats {
     /// Runs ended because the column that had just left the basis would re-enter (rounding
     /// in the duals of an ill-conditioned basis): the certificate decides.
     pub ping_pong: u64,
+    /// Uncertified answers solved again on a band of the grid around the window
+    /// ([`band`]: steep functions resolved in the band's own coordinates).
+    pub band_solves: u64,
+    /// Of which certified on the whole grid (as they stand or after accurate pivots): no
+    /// escalation.
+    pub band_certified: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -237,6 +244,8 @@ pub struct FastSolver {
     lo_rhs: Vec<f64>,
     /// Crossover workspace.
     cross: starts::Crossover,
+    /// Fast solvers on bands of the grid, for windows the whole-grid run cannot certify.
+    bands: band::Bands,
 }
 
 impl FastSolver {
@@ -328,6 +337,10 @@ impl FastSolver {
                 v: vec![0.0; r],
                 ..Default::default()
             },
+            bands: band::Bands {
+                on: true,
+                ..Default::default()
+            },
         };
         solver.set_partial_pricing(true);
         solver
@@ -411,6 +424,7 @@ impl FastSolver {
 
     /// Forget the warm-start basis.
     pub fn reset(&mut self) {
+        self.bands.reset();
         self.warm.basis = None;
         self.warm.last_c.iter_mut().for_each(|v| *v = f64::NAN);
     }
@@ -559,7 +573,7 @@ impl FastSolver {
             self.stats.resumed += 1;
             verdict = self.resume(kf);
         }
-        let legacy = match self.certify_fast(verdict, moments, kf, hint) {
+        let legacy = match self.certify_fast(verdict, moments, kf, zf, hint) {
             Ok(sol) => return Ok(sol),
             Err(legacy) => legacy,
         };
@@ -602,6 +616,7 @@ impl FastSolver {
         verdict: Verdict,
         moments: &[f64],
         kf: usize,
+        zf: f64,
         hint: Option<&[(u32, f64)]>,
     ) -> Result<Solution, Legacy> {
         let legacy = match verdict {
@@ -618,6 +633,21 @@ impl FastSolver {
             Verdict::Infeasible => Legacy::Infeasible,
             Verdict::Failed => Legacy::Reference,
         };
+        // The same LP on a band of the grid around the window (steep functions), certified on
+        // the whole grid, with accurate pivots from it where columns outside the band enter.
+        if let Some(mut basis) = hint.and_then(|h| self.band_basis(moments, kf, zf, h)) {
+            let found = match self.cert.optimal(moments, kf, &basis) {
+                Err(why) => self
+                    .cert
+                    .improve_checked(moments, kf, &mut basis, IMPROVE_STEPS, why),
+                ok => ok,
+            };
+            if let Ok(c) = found {
+                self.stats.band_certified += 1;
+                self.remember_certified(&basis);
+                return Ok(certified(c));
+            }
+        }
         if let Legacy::Answer(fast_basis, why) = &legacy {
             let mut basis = fast_basis.clone();
             let found =

@@ -1,0 +1,167 @@
+//! Band solves: the fast simplex on a window of the grid, for answers the whole-grid run could
+//! not certify (steep functions such as exp(±40z)).
+//!
+//! On the whole grid exp(40z) spans 10^17, and √n·Q resolves it relative to its largest values
+//! only: for a distribution at z ≤ 0.45 the moment b_j ≈ 10⁻¹⁰ max|f_j| is seen to ~10⁻⁶ of
+//! itself, so a weight of −10⁻¹⁵ at z = 1 (inside the absolute tolerance TOL_P) absorbs the
+//! whole row and the "optimal" basis misses the moment by 10⁻³…10⁻¹. Restricted to an interval
+//! [z_s, z_t] of the grid that holds the window's atoms and z_f, the same function spans
+//! e^{40(z_t−z_s)}, the orthonormalised coordinates of that sub-table resolve the row, and the
+//! fast simplex finds the optimum of the LP on the band. That basis is a basis of the whole LP
+//! (same rows, a subset of its columns); the certificate on the WHOLE grid decides whether it
+//! is optimal there (the band optimum is the grid optimum iff no column outside the band has a
+//! negative reduced cost), with accurate pivots from it when it is not.
+
+use super::{FastSolver, Verdict};
+use crate::lp::GridTable;
+use crate::Grid;
+
+/// Band lengths tried, as fractions 1/BAND_DIVS[k] of the grid (longest last).
+const BAND_DIVS: [usize; 3] = [8, 4, 2];
+/// Smallest grid on which bands are used.
+const MIN_GRID: usize = 64;
+/// Grid points of margin around the window's atoms and z_f inside a band.
+const PAD: usize = 2;
+
+/// The band sub-solvers of a table, built on first use: (first grid index, length, solver).
+#[derive(Default)]
+pub(super) struct Bands {
+    pub(super) solvers: Vec<(usize, usize, Box<FastSolver>)>,
+    /// Bands are used (off in the band solvers themselves).
+    pub(super) on: bool,
+}
+
+impl Bands {
+    /// Forget every band solver's warm start (see [`FastSolver::reset`]).
+    pub(super) fn reset(&mut self) {
+        for (_, _, s) in &mut self.solvers {
+            s.reset();
+        }
+    }
+}
+
+/// The shortest band [s, s + len) with len = n/8, n/4 or n/2 and s a multiple of len/2 (or
+/// n − len) that holds [lo, hi]; None when only the whole grid does.
+fn pick_band(n: usize, lo: usize, hi: usize) -> Option<(usize, usize)> {
+    if n < MIN_GRID {
+        return None;
+    }
+    for div in BAND_DIVS {
+        let len = n / div;
+        let step = len / 2;
+        let s = ((lo / step) * step).min(n - len);
+        if s <= lo && hi < s + len {
+            return Some((s, len));
+        }
+    }
+    None
+}
+
+impl FastSolver {
+    /// The optimal basis of the LP restricted to the band that holds `dist`'s atoms and the
+    /// first grid point at or above z_f (grid indices of the whole table), from the band's own
+    /// fast simplex (crossover from `dist`); None when no band applies or the band run does
+    /// not end optimal. Not certified: the caller certifies it on the whole grid.
+    pub(super) fn band_basis(
+        &mut self,
+        moments: &[f64],
+        kf: usize,
+        zf: f64,
+        dist: &[(u32, f64)],
+    ) -> Option<Vec<usize>> {
+        if !self.bands.on {
+            return None;
+        }
+        let n = self.n;
+        let atoms = dist.iter().filter(|e| e.1 > 0.0).map(|e| e.0 as usize);
+        let lo = atoms.clone().min()?.saturating_sub(PAD);
+        let hi = (atoms.max()?.max(kf) + PAD).min(n - 1);
+        let (s, len) = pick_band(n, lo, hi)?;
+        let k = match self.bands.solvers.iter().position(|b| b.0 == s && b.1 == len) {
+            Some(k) => k,
+            None => {
+                let sub = self.band_solver(s, len)?;
+                self.bands.solvers.push((s, len, Box::new(sub)));
+                self.bands.solvers.len() - 1
+            }
+        };
+        self.stats.band_solves += 1;
+        let shifted: Vec<(u32, f64)> = dist
+            .iter()
+            .filter(|e| e.1 > 0.0)
+            .map(|&(i, w)| (i - s as u32, w))
+            .collect();
+        let sub = &mut self.bands.solvers[k].2;
+        if sub.r != self.r {
+            return None;
+        }
+        let basis = sub.band_optimum(moments, zf, &shifted)?;
+        Some(basis.iter().map(|&i| i + s).collect())
+    }
+
+    /// The fast solver on grid points s..s + len of this table (no bands of its own).
+    fn band_solver(&self, s: usize, len: usize) -> Option<FastSolver> {
+        let grid = Grid::from_values(self.table.grid().points()[s..s + len].to_vec()).ok()?;
+        let mut i = s;
+        let table = GridTable::from_fn(&grid, self.m, |_, out| {
+            out.copy_from_slice(self.table.row(i));
+            i += 1;
+        })
+        .ok()?;
+        let mut sub = FastSolver::new(table);
+        sub.bands.on = false;
+        Some(sub)
+    }
+
+    /// The fast simplex from distribution `dist` (indices of this table) to its verdict,
+    /// without certificate or escalation: the optimal basis, or None.
+    fn band_optimum(&mut self, moments: &[f64], zf: f64, dist: &[(u32, f64)]) -> Option<Vec<usize>> {
+        let r = self.r;
+        self.stats.solves += 1;
+        self.last_exact = None;
+        self.accurate = false;
+        self.b_orig.copy_from_slice(moments);
+        let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        let mut total = 0.0;
+        self.c.iter_mut().for_each(|v| *v = 0.0);
+        for &(i, w) in dist {
+            let i = i as usize;
+            total += w;
+            for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
+                *ck += w * ak;
+            }
+        }
+        self.c.iter_mut().for_each(|v| *v /= total);
+        self.c0.copy_from_slice(&self.c);
+        // No certificate pass stands in for the full pricing pass here.
+        self.partial_optimum = false;
+        self.full_pass_skipped = false;
+        match self.attempts(kf, Some(dist)) {
+            Verdict::Optimal if self.basis.iter().all(|&i| i < self.n) => {
+                self.remember_optimal();
+                Some(self.basis.clone())
+            }
+            _ => None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pick_band;
+
+    #[test]
+    fn bands_hold_the_window() {
+        assert_eq!(pick_band(32, 0, 3), None);
+        assert_eq!(pick_band(1024, 140, 180), Some((128, 128)));
+        assert_eq!(pick_band(1024, 140, 260), Some((128, 256)));
+        assert_eq!(pick_band(1024, 100, 200), Some((0, 256)));
+        assert_eq!(pick_band(1024, 1000, 1023), Some((896, 128)));
+        assert_eq!(pick_band(1024, 200, 700), None);
+        for (lo, hi) in [(0, 0), (5, 500), (511, 513), (900, 1023)] {
+            if let Some((s, len)) = pick_band(1024, lo, hi) {
+                assert!(s <= lo && hi < s + len && s + len <= 1024);
+            }
+        }
+    }
+}
