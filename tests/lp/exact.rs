@@ -64,6 +64,8 @@ struct Certificate {
     min_reduced_cost: f64,
     /// Σ_{z_i < z_f} x_i of the basic solution (exact, rounded).
     g: f64,
+    /// The columns with a negative reduced cost (exact, rounded).
+    negative: Vec<(usize, f64)>,
 }
 
 impl Certificate {
@@ -118,11 +120,16 @@ fn certify_rhs(table: &GridTable, bbar: Vec<BigRational>, zf: f64, basis: &[usiz
     };
     let den = BigRational::from_integer(&d * &scale);
     let mut min_d: Option<BigRational> = None;
+    let mut negative = Vec::new();
     for j in 0..n {
         let a = col(j);
         let mut num = BigInt::from(cost(j)) * &d * &scale;
         for k in 0..=m {
             num -= &yi[k] * as_int(a[k]);
+        }
+        if num.is_negative() {
+            let v = BigRational::new(num.clone(), &d * &scale);
+            negative.push((j, v.to_f64().expect("finite")));
         }
         if min_d.as_ref().is_none_or(|v| num < *v.numer()) {
             min_d = Some(BigRational::new_raw(num, BigInt::one()));
@@ -157,6 +164,7 @@ fn certify_rhs(table: &GridTable, bbar: Vec<BigRational>, zf: f64, basis: &[usiz
         min_weight: f(&min_w),
         min_reduced_cost: f(&min_d),
         g: f(&g),
+        negative,
     }
 }
 
@@ -527,4 +535,135 @@ fn clustered_window_at_n4096_does_not_ping_pong() {
         "basis {basis:?}: {c:?}"
     );
     assert!((sol.g - c.g).abs() <= 1e-9, "G {} exact {}", sol.g, c.g);
+}
+
+/// Steep exponentials (exp(±40z) span 10^17 on [0, 1]) under realistic windows: Gaussian kernels
+/// over 1–3 planar clusters (flat receivers, tight clusters; `bench::kernels`) and the
+/// adversarial corpus's exponential tables. With band solves every answer is certified and
+/// the basis it ends on passes the exact rational check (reduced costs ≥ −1e-9 over the whole
+/// grid bound G_B − G* by 1e-9, G equals the exact G of the basis within 1e-9, the support
+/// reproduces the moments to 1e-9); G equals the escalation's
+/// (bands off) within 1e-9; and the escalations drop at least fourfold.
+#[test]
+fn steep_exponential_windows_are_certified_without_escalation() {
+    use momentlab::lp::support_reproduces;
+    let grid = Grid::uniform(1024).unwrap();
+    let tables: Vec<(&str, GridTable)> = vec![
+        (
+            "exp(40z), tanh(10(z-0.5))",
+            GridTable::from_fn(&grid, 2, |z, o| {
+                (o[0], o[1]) = ((40.0 * z).exp(), (10.0 * (z - 0.5)).tanh())
+            })
+            .unwrap(),
+        ),
+        (
+            "z, z^2, exp(40z), exp(-40z)",
+            GridTable::from_fn(&grid, 4, |z, o| {
+                o.copy_from_slice(&[z, z * z, (40.0 * z).exp(), (-40.0 * z).exp()])
+            })
+            .unwrap(),
+        ),
+    ];
+    let mut groups: Vec<(String, GridTable, Vec<(Vec<(u32, f64)>, f64)>)> = Vec::new();
+    for (name, table) in tables {
+        let probs = problems(&grid, 4, 150, 5).unwrap();
+        let list = probs.into_iter().map(|p| (p.dist, p.zf)).collect();
+        groups.push((name.to_string(), table, list));
+    }
+    for g in corpus::adversarial(6, false, 7).unwrap() {
+        if g.name.contains("exp") && g.table.n() >= 256 {
+            let list = g
+                .problems
+                .iter()
+                .flat_map(|p| p.zf.iter().map(|&zf| (p.dist.clone(), zf)))
+                .collect();
+            groups.push((g.name.clone(), g.table.clone(), list));
+        }
+    }
+    let (mut esc_on, mut esc_off, mut checked, mut solved) = (0u64, 0u64, 0usize, 0usize);
+    let mut ill_posed = 0usize;
+    for (name, table, list) in &groups {
+        let mut on = FastSolver::new(table.clone());
+        let mut off = FastSolver::new(table.clone());
+        off.set_band_solves(false);
+        for (dist, zf) in list {
+            let b = momentlab::lp::distribution_moments(table, dist).unwrap();
+            let before = on.stats().band_certified;
+            let a = on.solve_distribution(dist, *zf).unwrap();
+            let o = off.solve_distribution(dist, *zf).unwrap();
+            assert_eq!(a.status, Status::Optimal, "{name} zf {zf}: {a:?}");
+            assert_eq!(o.status, Status::Optimal, "{name} zf {zf}: {o:?}");
+            assert!(
+                (a.g - o.g).abs() <= 1e-9,
+                "{name} zf {zf}: G {} vs {}",
+                a.g,
+                o.g
+            );
+            solved += 1;
+            // Certified from a band solve: the basis (the next warm start) checked exactly.
+            if on.stats().band_certified > before {
+                if let Some(basis) = on.warm_basis().map(<[usize]>::to_vec) {
+                    if basis.len() == table.m() + 1 {
+                        let c = certify(table, &b, *zf, &basis);
+                        // Weak duality (Σ w_i = 1, and the caps w_i ≤ u_i = min(1, b_j / f_j(z_i))
+                        // of the positive rows): G_B − G* ≤ min(|min_i d_i|, Σ_{d_i<0} u_i |d_i|).
+                        let cap = |i: usize| {
+                            (0..table.m())
+                                .filter(|&j| (0..table.n()).all(|k| table.row(k)[j] > 0.0))
+                                .map(|j| b[j] / table.row(i)[j])
+                                .fold(1.0f64, f64::min)
+                        };
+                        let capped: f64 = c.negative.iter().map(|&(i, d)| -d * cap(i)).sum();
+                        let gap = capped.min(-c.min_reduced_cost.min(0.0));
+                        assert!(gap <= 1e-9, "{name} zf {zf}: gap {gap:e}, {c:?}");
+                        // G of the basis. Where its exact weights on the f64 moments are
+                        // negative beyond rounding (flat receivers and clusters under power
+                        // rows: neighbouring points, G not determined to 1e-9 by f64 moments,
+                        // see docs/lp.md) the certificate judges the positive support instead:
+                        // counted as ill-posed, G checked against the escalation's only.
+                        let dropped = -c.min_weight.min(0.0);
+                        if dropped <= 1e-12 {
+                            assert!(
+                                (c.g - a.g).abs() <= 1e-9 + dropped,
+                                "{name} zf {zf}: {} vs {c:?}",
+                                a.g
+                            );
+                        } else {
+                            ill_posed += 1;
+                        }
+                        // (The exact weights of a degenerate vertex can be ±1e-26 on columns
+                        // where a row reaches 1e34: the certificate judges the positive support,
+                        // and so does `support_reproduces`.)
+                        assert!(support_reproduces(table, &b, &a, 1e-9), "{name}: {a:?}");
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        eprintln!(
+            "{name}: escalations {} with band solves, {} without ({} band-certified)",
+            on.stats().escalations,
+            off.stats().escalations,
+            on.stats().band_certified
+        );
+        esc_on += on.stats().escalations;
+        esc_off += off.stats().escalations;
+    }
+    eprintln!(
+        "steep windows: {solved} solved, {checked} band bases checked exactly ({ill_posed} \
+         ill-posed), escalations {esc_on} vs {esc_off}"
+    );
+    assert!(
+        10 * ill_posed <= checked,
+        "{ill_posed} of {checked} ill-posed"
+    );
+    assert!(
+        esc_off >= 60,
+        "the set must exercise the escalation: {esc_off}"
+    );
+    assert!(
+        4 * esc_on <= esc_off,
+        "escalations {esc_on} with band solves vs {esc_off}"
+    );
+    assert!(checked >= 50, "{checked}");
 }

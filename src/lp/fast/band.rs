@@ -77,7 +77,12 @@ impl FastSolver {
         let lo = atoms.clone().min()?.saturating_sub(PAD);
         let hi = (atoms.max()?.max(kf) + PAD).min(n - 1);
         let (s, len) = pick_band(n, lo, hi)?;
-        let k = match self.bands.solvers.iter().position(|b| b.0 == s && b.1 == len) {
+        let k = match self
+            .bands
+            .solvers
+            .iter()
+            .position(|b| b.0 == s && b.1 == len)
+        {
             Some(k) => k,
             None => {
                 let sub = self.band_solver(s, len)?;
@@ -115,7 +120,12 @@ impl FastSolver {
 
     /// The fast simplex from distribution `dist` (indices of this table) to its verdict,
     /// without certificate or escalation: the optimal basis, or None.
-    fn band_optimum(&mut self, moments: &[f64], zf: f64, dist: &[(u32, f64)]) -> Option<Vec<usize>> {
+    fn band_optimum(
+        &mut self,
+        moments: &[f64],
+        zf: f64,
+        dist: &[(u32, f64)],
+    ) -> Option<Vec<usize>> {
         let r = self.r;
         self.stats.solves += 1;
         self.last_exact = None;

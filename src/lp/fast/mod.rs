@@ -422,6 +422,12 @@ impl FastSolver {
         }
     }
 
+    /// Enable or disable band solves (on by default): an uncertified whole-grid optimum is
+    /// solved again on a band of the grid around the window before escalation ([`band`]).
+    pub fn set_band_solves(&mut self, on: bool) {
+        self.bands.on = on;
+    }
+
     /// Forget the warm-start basis.
     pub fn reset(&mut self) {
         self.bands.reset();
