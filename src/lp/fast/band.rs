@@ -11,8 +11,14 @@
 //! (same rows, a subset of its columns); the certificate on the WHOLE grid decides whether it
 //! is optimal there (the band optimum is the grid optimum iff no column outside the band has a
 //! negative reduced cost), with accurate pivots from it when it is not.
+//!
+//! On a steep table ([`is_steep`]) a distribution start goes to its band first (measured on
+//! the stacks corpus with z, z², exp(±40z): 45 → 21 µs mean against trying the whole grid
+//! first); elsewhere the band is tried only after the whole-grid optimum failed to certify,
+//! before the accurate pivots and the escalation.
 
-use super::{FastSolver, Verdict};
+use super::{FastSolver, Verdict, IMPROVE_STEPS};
+use crate::lp::certify::Certified;
 use crate::lp::GridTable;
 use crate::Grid;
 
@@ -29,6 +35,26 @@ pub(super) struct Bands {
     pub(super) solvers: Vec<(usize, usize, Box<FastSolver>)>,
     /// Bands are used (off in the band solvers themselves).
     pub(super) on: bool,
+    /// The table has a steep function ([`is_steep`]): distribution starts go to the band
+    /// first.
+    pub(super) first: bool,
+    /// The band of the current problem was tried already.
+    pub(super) tried: bool,
+}
+
+/// Ratio max over the grid / max over a half of it above which a function counts as steep.
+const STEEP: f64 = 1e6;
+
+/// Whether some function of `table` is steep: its largest magnitude on one half of the grid is
+/// below 1/[`STEEP`] of its largest on the whole grid (exp(40z): e^−20; z^12: 2^−12 is not).
+pub(super) fn is_steep(table: &GridTable) -> bool {
+    let n = table.n();
+    (0..table.m()).any(|j| {
+        let half =
+            |lo: usize, hi: usize| (lo..hi).fold(0.0f64, |a, i| a.max(table.row(i)[j].abs()));
+        let (a, b) = (half(0, n / 2), half(n / 2, n));
+        a.max(b) > STEEP * a.min(b)
+    })
 }
 
 impl Bands {
@@ -69,9 +95,10 @@ impl FastSolver {
         zf: f64,
         dist: &[(u32, f64)],
     ) -> Option<Vec<usize>> {
-        if !self.bands.on {
+        if !self.bands.on || self.bands.tried {
             return None;
         }
+        self.bands.tried = true;
         let n = self.n;
         let atoms = dist.iter().filter(|e| e.1 > 0.0).map(|e| e.0 as usize);
         let lo = atoms.clone().min()?.saturating_sub(PAD);
@@ -102,6 +129,30 @@ impl FastSolver {
         }
         let basis = sub.band_optimum(moments, zf, &shifted)?;
         Some(basis.iter().map(|&i| i + s).collect())
+    }
+
+    /// The band's optimal basis ([`Self::band_basis`]) certified on the whole grid, as it
+    /// stands or after accurate pivots (columns outside the band entering); it becomes the
+    /// warm start. None when no band applies, it was tried for this problem already, or
+    /// nothing certifies.
+    pub(super) fn band_certified(
+        &mut self,
+        moments: &[f64],
+        kf: usize,
+        zf: f64,
+        dist: &[(u32, f64)],
+    ) -> Option<Certified> {
+        let mut basis = self.band_basis(moments, kf, zf, dist)?;
+        let found = match self.cert.optimal(moments, kf, &basis) {
+            Err(why) => self
+                .cert
+                .improve_checked(moments, kf, &mut basis, IMPROVE_STEPS, why),
+            ok => ok,
+        };
+        let c = found.ok()?;
+        self.stats.band_certified += 1;
+        self.remember_certified(&basis);
+        Some(c)
     }
 
     /// The fast solver on grid points s..s + len of this table (no bands of its own).

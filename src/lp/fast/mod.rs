@@ -339,9 +339,11 @@ impl FastSolver {
             },
             bands: band::Bands {
                 on: true,
+                first: false,
                 ..Default::default()
             },
         };
+        solver.bands.first = band::is_steep(&solver.table);
         solver.set_partial_pricing(true);
         solver
     }
@@ -555,6 +557,14 @@ impl FastSolver {
                 return Ok(certified(c));
             }
         }
+        self.bands.tried = false;
+        if let Some(dist) = hint.filter(|_| self.bands.first && c_given) {
+            // A steep table: the band first (see [`band`]), certified on the whole grid.
+            self.c0.copy_from_slice(&self.c);
+            if let Some(c) = self.band_certified(moments, kf, zf, dist) {
+                return Ok(certified(c));
+            }
+        }
         let mut verdict = if c_given || self.transform(moments) {
             self.c0.copy_from_slice(&self.c);
             self.partial_optimum = true;
@@ -641,18 +651,8 @@ impl FastSolver {
         };
         // The same LP on a band of the grid around the window (steep functions), certified on
         // the whole grid, with accurate pivots from it where columns outside the band enter.
-        if let Some(mut basis) = hint.and_then(|h| self.band_basis(moments, kf, zf, h)) {
-            let found = match self.cert.optimal(moments, kf, &basis) {
-                Err(why) => self
-                    .cert
-                    .improve_checked(moments, kf, &mut basis, IMPROVE_STEPS, why),
-                ok => ok,
-            };
-            if let Ok(c) = found {
-                self.stats.band_certified += 1;
-                self.remember_certified(&basis);
-                return Ok(certified(c));
-            }
+        if let Some(c) = hint.and_then(|h| self.band_certified(moments, kf, zf, h)) {
+            return Ok(certified(c));
         }
         if let Legacy::Answer(fast_basis, why) = &legacy {
             let mut basis = fast_basis.clone();
