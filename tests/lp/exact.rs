@@ -564,7 +564,9 @@ fn steep_exponential_windows_are_certified_without_escalation() {
             .unwrap(),
         ),
     ];
-    let mut groups: Vec<(String, GridTable, Vec<(Vec<(u32, f64)>, f64)>)> = Vec::new();
+    /// (distribution, z_f) pairs of one table.
+    type Windows = Vec<(Vec<(u32, f64)>, f64)>;
+    let mut groups: Vec<(String, GridTable, Windows)> = Vec::new();
     for (name, table) in tables {
         let probs = problems(&grid, 4, 150, 5).unwrap();
         let list = probs.into_iter().map(|p| (p.dist, p.zf)).collect();
