@@ -40,6 +40,9 @@
 //! * **Accuracy.** The final weights are refined against the LP as stated (residual of the
 //!   original system in double-double arithmetic); weights that turn out infeasible trigger a
 //!   rerun in accurate mode (see `finish_optimal`).
+//! * **Band solves** ([`band`]). Where the whole grid cannot resolve a steep function
+//!   (exp(40z) spans 10^17), the LP restricted to a band of the grid around the window is solved
+//!   in the band's own coordinates and its basis certified on the whole grid.
 //! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), then the
 //!   scaled double-double simplex ([`super::scaled`]) and the exact simplex ([`super::exact`]);
 //!   what none of them certifies is `Failed` with the reason. Never an endless loop.
@@ -144,8 +147,9 @@ pub struct FastStats {
     /// Runs ended because the column that had just left the basis would re-enter (rounding
     /// in the duals of an ill-conditioned basis): the certificate decides.
     pub ping_pong: u64,
-    /// Uncertified answers solved again on a band of the grid around the window
-    /// ([`band`]: steep functions resolved in the band's own coordinates).
+    /// Solves on a band of the grid around the window ([`band`]: steep functions resolved in
+    /// the band's own coordinates): every distribution start on a steep table, elsewhere the
+    /// answers the whole-grid run could not certify.
     pub band_solves: u64,
     /// Of which certified on the whole grid (as they stand or after accurate pivots): no
     /// escalation.
