@@ -186,11 +186,13 @@ fn paper(reports: &Path) -> Result<String> {
     Ok(format!("{line}\n"))
 }
 
-/// The full sweeps of reports/search: one row per m from `search_m<m>.md`.
+/// The full sweeps of reports/search: one row per m from `search_m<m>.md`, with the wall time
+/// of the race from `wall_m<m>.json` (scripts/time-search.sh).
 fn sweeps(reports: &Path) -> Result<String> {
     let mut s = String::from(
-        "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. |\n| ---: | ---: | ---: | ---: | --- | ---: |\n",
+        "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. | race wall time |\n| ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
     );
+    let mut host = None;
     let mut notes = Vec::new();
     for m in 2..=4 {
         let file = reports.join(format!("search/search_m{m}.md"));
@@ -227,9 +229,25 @@ fn sweeps(reports: &Path) -> Result<String> {
             .lines()
             .find_map(|l| l.strip_suffix(" candidates are statistically tied for first."))
             .unwrap_or("–");
+        let wall = reports.join(format!("search/wall_m{m}.json"));
+        let wall = if wall.is_file() {
+            let v = read_json(&wall)?;
+            let secs = v.get("seconds").and_then(Value::as_f64);
+            let secs = secs.ok_or_else(|| anyhow!("{}: no seconds", wall.display()))?;
+            host = Some((
+                v.get("threads").and_then(Value::as_u64).unwrap_or(0),
+                v.get("cpu")
+                    .and_then(Value::as_str)
+                    .unwrap_or("?")
+                    .to_string(),
+            ));
+            minutes(secs)
+        } else {
+            "–".to_string()
+        };
         let _ = writeln!(
             s,
-            "| {m} | {count} | {sampled} | {tied} | ({functions}) | {} % ± {} % |",
+            "| {m} | {count} | {sampled} | {tied} | ({functions}) | {} % ± {} % | {wall} |",
             err.first().copied().unwrap_or("?"),
             err.get(1).copied().unwrap_or("?")
         );
@@ -239,10 +257,26 @@ fn sweeps(reports: &Path) -> Result<String> {
             }
         }
     }
+    if let Some((threads, cpu)) = host {
+        let _ = writeln!(
+            s,
+            "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`)."
+        );
+    }
     for n in notes {
         let _ = writeln!(s, "\n{n}.");
     }
     Ok(s)
+}
+
+/// Seconds as "42 s" or "17 min 5 s".
+fn minutes(secs: f64) -> String {
+    let s = secs.round() as u64;
+    if s < 120 {
+        format!("{s} s")
+    } else {
+        format!("{} min {} s", s / 60, s % 60)
+    }
 }
 
 /// The tuned setting per scene and over all scenes (`reports/default/tune/tune.json`): bits per

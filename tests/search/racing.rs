@@ -211,7 +211,10 @@ fn certified_set_contains_the_true_best_at_the_stated_rate() {
         "misses {misses:?}, bound {bound}"
     );
     // The early look does eliminate (blocks of 128 and more are split): 129 in 200 runs.
-    assert!(early >= seeds as usize / 2, "{early} early-look eliminations");
+    assert!(
+        early >= seeds as usize / 2,
+        "{early} early-look eliminations"
+    );
     assert!(
         (misses[0] as f64) <= bound,
         "misses {misses:?}, bound {bound}"
