@@ -177,22 +177,12 @@ impl FastSolver {
         zf: f64,
         dist: &[(u32, f64)],
     ) -> Option<Vec<usize>> {
-        let r = self.r;
         self.stats.solves += 1;
         self.last_exact = None;
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
-        let mut total = 0.0;
-        self.c.iter_mut().for_each(|v| *v = 0.0);
-        for &(i, w) in dist {
-            let i = i as usize;
-            total += w;
-            for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
-                *ck += w * ak;
-            }
-        }
-        self.c.iter_mut().for_each(|v| *v /= total);
+        self.distribution_coordinates(dist);
         self.c0.copy_from_slice(&self.c);
         // No certificate pass stands in for the full pricing pass here.
         self.partial_optimum = false;

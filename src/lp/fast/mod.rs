@@ -491,6 +491,15 @@ impl MomentSolver for FastSolver {
         // Validates the distribution; the moments in the original coordinates serve the
         // reference fallback.
         let moments = super::distribution_moments(&self.table, dist)?;
+        self.distribution_coordinates(dist);
+        self.solve_inner(&moments, zf, Some(dist), true)
+    }
+}
+
+impl FastSolver {
+    /// c = Σ w_i a_i / Σ w_i: the moments of the distribution `dist` (grid index, weight) in the
+    /// orthonormalised coordinates, summed term by term (no cancellation).
+    fn distribution_coordinates(&mut self, dist: &[(u32, f64)]) {
         let r = self.r;
         let mut total = 0.0;
         self.c.iter_mut().for_each(|v| *v = 0.0);
@@ -502,7 +511,6 @@ impl MomentSolver for FastSolver {
             }
         }
         self.c.iter_mut().for_each(|v| *v /= total);
-        self.solve_inner(&moments, zf, Some(dist), true)
     }
 }
 
