@@ -563,6 +563,22 @@ fn steep_exponential_windows_are_certified_without_escalation() {
             })
             .unwrap(),
         ),
+        // Optimal bases with an atom at z = 0 (exp(40z)) or with a weight near 1e-9 there
+        // (exp(−40z)): the bands' end points.
+        (
+            "exp(40z), z, z^2",
+            GridTable::from_fn(&grid, 3, |z, o| {
+                o.copy_from_slice(&[(40.0 * z).exp(), z, z * z])
+            })
+            .unwrap(),
+        ),
+        (
+            "exp(-40z), exp(40z), z",
+            GridTable::from_fn(&grid, 3, |z, o| {
+                o.copy_from_slice(&[(-40.0 * z).exp(), (40.0 * z).exp(), z])
+            })
+            .unwrap(),
+        ),
     ];
     /// (distribution, z_f) pairs of one table.
     type Windows = Vec<(Vec<(u32, f64)>, f64)>;

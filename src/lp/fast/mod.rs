@@ -570,10 +570,11 @@ impl FastSolver {
             }
         }
         self.bands.tried = false;
+        self.bands.failed = None;
         if let Some(dist) = hint.filter(|_| self.bands.first && c_given) {
             // A steep table: the band first (see [`band`]), certified on the whole grid.
             self.c0.copy_from_slice(&self.c);
-            if let Some(c) = self.band_certified(moments, kf, zf, dist) {
+            if let Some(c) = self.band_certified(moments, kf, zf, dist, true) {
                 return Ok(certified(c));
             }
         }
@@ -663,7 +664,7 @@ impl FastSolver {
         };
         // The same LP on a band of the grid around the window (steep functions), certified on
         // the whole grid, with accurate pivots from it where columns outside the band enter.
-        if let Some(c) = hint.and_then(|h| self.band_certified(moments, kf, zf, h)) {
+        if let Some(c) = hint.and_then(|h| self.band_certified(moments, kf, zf, h, false)) {
             return Ok(certified(c));
         }
         if let Legacy::Answer(fast_basis, why) = &legacy {
