@@ -14,8 +14,10 @@
 //! reference, so the best candidate is among the survivors and the candidates removed by the
 //! cap (the *certified set*).
 //!
-//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C_k|⌉, top) stay
-//! (ordered by the stage mean); the others leave *by the cap*, without evidence against them.
+//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C_k|⌉, top) stay,
+//! ordered by their mean over every block they have seen (the same blocks for every candidate of
+//! a stage: all survived the stages before); the others leave *by the cap*, without evidence
+//! against them.
 
 /// Count, Σx and Σx² of a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -223,8 +225,15 @@ pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
 }
 
 /// Decisions for every candidate of a stage (None: stays), `reference` = index of R (it is
-/// never eliminated by confidence). Panics if `reference` is not among `stats`.
-pub fn decide(stats: &[StageStats], reference: u64, rule: &Rule) -> Vec<Option<Elimination>> {
+/// never eliminated by confidence); the cap keeps the smallest `rank` (one per candidate: its
+/// mean error over every block seen). Panics if `reference` is not among `stats` or `rank`
+/// is shorter than `stats`.
+pub fn decide(
+    stats: &[StageStats],
+    rank: &[f64],
+    reference: u64,
+    rule: &Rule,
+) -> Vec<Option<Elimination>> {
     let r = stats
         .iter()
         .find(|s| s.index == reference)
@@ -240,10 +249,8 @@ pub fn decide(stats: &[StageStats], reference: u64, rule: &Rule) -> Vec<Option<E
     let cap = cap(rule.keep, stats.len() as u64, rule.top as u64) as usize;
     if alive.len() > cap {
         alive.sort_by(|&a, &b| {
-            stats[a]
-                .e
-                .mean()
-                .total_cmp(&stats[b].e.mean())
+            rank[a]
+                .total_cmp(&rank[b])
                 .then(stats[a].index.cmp(&stats[b].index))
         });
         for &i in &alive[cap..] {
@@ -393,6 +400,7 @@ mod tests {
             .map(|(k, x)| x + 0.003 * ((k % 5) as f64 - 2.0))
             .collect();
         let s = vec![stats(0, &r, &r), stats(1, &worse, &r), stats(2, &tied, &r)];
+        let means: Vec<f64> = s.iter().map(|c| c.e.mean()).collect();
         let rule = Rule {
             delta: 1e-6,
             bound: Bound::Normal,
@@ -401,14 +409,14 @@ mod tests {
             top: 1,
         };
         assert_eq!(
-            decide(&s, 0, &rule),
+            decide(&s, &means, 0, &rule),
             vec![None, Some(Elimination::Confidence), None]
         );
         let indep = Rule {
             paired: false,
             ..rule
         };
-        assert_eq!(decide(&s, 0, &indep), vec![None, None, None]);
+        assert_eq!(decide(&s, &means, 0, &indep), vec![None, None, None]);
         // Bernstein is valid for any distribution, hence wider: at n = 400 its range term
         // 7·2·ln(2/δ)/(3·399) ≈ 0.17 is far above the gap 0.01, so nothing is eliminated.
         let eb = Rule {
@@ -418,15 +426,26 @@ mod tests {
         let h_eb = half_width(&s[1].d, 1e-6, Bound::Bernstein, 2.0);
         let h_n = half_width(&s[1].d, 1e-6, Bound::Normal, 2.0);
         assert!(h_eb > h_n);
-        assert_eq!(decide(&s, 0, &eb)[1], None);
+        assert_eq!(decide(&s, &means, 0, &eb)[1], None);
         let far: Vec<f64> = r.iter().map(|x| x + 0.3).collect();
         let s2 = vec![stats(0, &r, &r), stats(1, &far, &r)];
-        assert_eq!(decide(&s2, 0, &eb)[1], Some(Elimination::Confidence));
-        // Cap: keep one of three; the survivors by mean are the reference and `tied`.
+        assert_eq!(
+            decide(&s2, &means, 0, &eb)[1],
+            Some(Elimination::Confidence)
+        );
+        // Cap: keep one of three, the smallest rank: the reference by the stage means; by
+        // earlier blocks' evidence (a rank that puts `tied` first), `tied`.
         let cap = Rule { keep: 0.2, ..indep };
-        let d = decide(&s, 0, &cap);
-        assert_eq!(d.iter().filter(|x| x.is_none()).count(), 1);
-        assert_eq!(d[1], Some(Elimination::Cap));
+        let d = decide(&s, &means, 0, &cap);
+        assert_eq!(
+            d,
+            vec![None, Some(Elimination::Cap), Some(Elimination::Cap)]
+        );
+        let d = decide(&s, &[0.52, 0.6, 0.5], 0, &cap);
+        assert_eq!(
+            d,
+            vec![Some(Elimination::Cap), Some(Elimination::Cap), None]
+        );
     }
 
     #[test]

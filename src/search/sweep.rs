@@ -599,7 +599,15 @@ fn race_all(
             } else {
                 race::Rule { keep: 1.0, ..rule }
             };
-            let decisions = race::decide(&stats, reference, &look_rule);
+            // The cap ranks by the mean over every block seen (earlier stages and this one).
+            let rank: Vec<f64> = stats
+                .iter()
+                .map(|c| {
+                    let before = pooled.get(&c.index).map_or((0, 0.0), |p| (p.n, p.sum));
+                    (before.1 + c.e.sum) / (before.0 + c.e.n) as f64
+                })
+                .collect();
+            let decisions = race::decide(&stats, &rank, reference, &look_rule);
             alive.clear();
             for (s, d) in stats.iter().zip(&decisions) {
                 match d {

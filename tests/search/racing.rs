@@ -150,7 +150,16 @@ fn simulate(
             } else {
                 Rule { keep: 1.0, ..rule }
             };
-            let dec = race::decide(&stats, reference, &look_rule);
+            // The cap ranks by the mean over every block seen, as the sweep does.
+            let rank: Vec<f64> = stats
+                .iter()
+                .map(|s| {
+                    let mut all = pooled.get(&s.index).copied().unwrap_or_default();
+                    all.add(&s.e);
+                    all.mean()
+                })
+                .collect();
+            let dec = race::decide(&stats, &rank, reference, &look_rule);
             next.clear();
             for (s, d) in stats.iter().zip(dec) {
                 if last || d.is_some() {
