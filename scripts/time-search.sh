@@ -1,8 +1,9 @@
 #!/bin/sh
 # Time the candidate sweep `momentlab search --m M --no-report` on the embedded default dataset
-# (rendering and sampling included, as a user runs it) and record the wall time, CPU model and
-# thread count in reports/search/wall_m<M>.json, which README's sweep table reads. The rows go to
-# results/search-m<M> (resumed if present: time a fresh folder). Then write the report with
+# (rendering and sampling included, as a user runs it) and record the wall time, the sweep's own
+# time and LP solves (its "sweep done in" line), CPU model and thread count in
+# reports/search/wall_m<M>.json, which README's sweep table and docs/search.md read. The rows go
+# to results/search-m<M> (resumed if present: time a fresh folder). Then write the report with
 # `momentlab search --m M --report-only --out reports/search --force` (docs/search.md).
 # Usage: scripts/time-search.sh M   (from the repository root, after `cargo build --release`)
 set -eu
@@ -12,13 +13,21 @@ if [ -e "results/search-m$m/complete.json" ]; then
     echo "time-search.sh: results/search-m$m is already complete; move it away to time a fresh run" >&2
     exit 1
 fi
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
 start=$(date +%s)
-"$bin" search --m "$m" --no-report
+{ "$bin" search --m "$m" --no-report 2>&1; echo "$?" > "$log.rc"; } | tee "$log"
 end=$(date +%s)
+rc=$(cat "$log.rc")
+rm -f "$log.rc"
+[ "$rc" = 0 ] || { echo "time-search.sh: search failed (exit $rc)" >&2; exit "$rc"; }
+# "search: sweep done in 1291.6 s: … 147902464 LP solves planned …"
+sweep=$(sed -n 's/^search: sweep done in \([0-9.]*\) s:.*/\1/p' "$log" | tail -n 1)
+solves=$(sed -n 's/^search: sweep done in .* \([0-9][0-9]*\) LP solves.*/\1/p' "$log" | tail -n 1)
 cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)
 threads=${RAYON_NUM_THREADS:-$(nproc)}
 out=reports/search/wall_m$m.json
-printf '{\n  "command": "momentlab search --m %s --no-report",\n  "seconds": %s,\n  "cpu": "%s",\n  "threads": %s\n}\n' \
-    "$m" "$((end - start))" "${cpu:-unknown}" "$threads" > "$out.tmp"
+printf '{\n  "command": "momentlab search --m %s --no-report",\n  "seconds": %s,\n  "sweep_seconds": %s,\n  "lp_solves": %s,\n  "cpu": "%s",\n  "threads": %s\n}\n' \
+    "$m" "$((end - start))" "${sweep:-null}" "${solves:-null}" "${cpu:-unknown}" "$threads" > "$out.tmp"
 mv "$out.tmp" "$out"
 echo "$out: $((end - start)) s"

@@ -217,31 +217,30 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
-    let mut reports = Vec::new();
-    for (name, &subject) in names.iter().zip(&subjects) {
-        let bar = Arc::new(Bar::new(&format!("evaluate {name}"), 0));
-        let pb = bar.clone();
-        let opts = EvalOptions {
-            bias,
-            subsample,
-            progress: Some(Arc::new(move |done, total| {
-                pb.set_total(total as u64);
-                pb.set_done(done as u64);
-            })),
-            ..Default::default()
-        };
-        let report = metrics::evaluate_subject(&stacks, subject, &opts)?;
-        bar.finish();
-        if report.fragments == 0 {
-            bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
-        }
-        if !args.json {
-            if !reports.is_empty() {
+    // Every subject on the same fragments, built once (with their PCF reference).
+    let bar = Arc::new(Bar::new(&format!("evaluate {}", names.join(", ")), 0));
+    let pb = bar.clone();
+    let opts = EvalOptions {
+        bias,
+        subsample,
+        progress: Some(Arc::new(move |done, total| {
+            pb.set_total(total as u64);
+            pb.set_done(done as u64);
+        })),
+        ..Default::default()
+    };
+    let reports = metrics::evaluate_subjects(&stacks, &subjects, &opts)?;
+    bar.finish();
+    if reports.iter().any(|r| r.fragments == 0) {
+        bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
+    }
+    if !args.json {
+        for (k, report) in reports.iter().enumerate() {
+            if k > 0 {
                 println!();
             }
-            print_table(&report);
+            print_table(report);
         }
-        reports.push(report);
     }
     if let Some(od) = &pictures_out {
         write_pictures(od, &stacks, &lights, &subjects, &bias, &plan)?;

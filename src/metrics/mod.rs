@@ -724,7 +724,6 @@ struct Partial {
     values: Vec<FragmentValue>,
 }
 
-/// [`evaluate`] for a technique or PCF itself.
 /// Error unless the stacks hold at least one fragment: an empty input has no error to
 /// report (never a 0 % result).
 pub fn require_fragments(stacks: &[DepthStack]) -> Result<()> {
@@ -737,17 +736,33 @@ pub fn require_fragments(stacks: &[DepthStack]) -> Result<()> {
     Ok(())
 }
 
+/// [`evaluate`] for a technique or PCF itself.
 pub fn evaluate_subject(
     stacks: &[DepthStack],
     subject: Subject<'_>,
     opts: &EvalOptions,
 ) -> Result<EvalReport> {
+    let mut reports = evaluate_subjects(stacks, &[subject], opts)?;
+    Ok(reports.remove(0))
+}
+
+/// [`evaluate_subject`] for several subjects on the same fragments: each view's fragments and
+/// their PCF reference (most of the work for a closed form) are built once and shaded by every
+/// subject in turn. One report per subject, in order; each report's `seconds` counts the
+/// shared fragment building once.
+pub fn evaluate_subjects(
+    stacks: &[DepthStack],
+    subjects: &[Subject<'_>],
+    opts: &EvalOptions,
+) -> Result<Vec<EvalReport>> {
     require_fragments(stacks)?;
     opts.bias.validate()?;
     opts.subsample.validate()?;
-    if let Subject::Technique(t) = subject {
-        if t.moment_count() == 0 {
-            bail!("technique {}: no moments", t.name());
+    for subject in subjects {
+        if let Subject::Technique(t) = subject {
+            if t.moment_count() == 0 {
+                bail!("technique {}: no moments", t.name());
+            }
         }
     }
     for s in stacks {
@@ -759,107 +774,136 @@ pub fn evaluate_subject(
         .enumerate()
         .map(|(v, s)| select(s, v, &opts.subsample))
         .collect();
-    let planned: usize = picks.iter().map(|p| p.len()).sum();
+    let picked = start.elapsed().as_secs_f64();
+    let planned: usize = picks.iter().map(|p| p.len()).sum::<usize>() * subjects.len();
     let done = AtomicUsize::new(0);
+    let mut views: Vec<Vec<ViewReport>> = subjects.iter().map(|_| Vec::new()).collect();
+    for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
+        let t0 = Instant::now();
+        let frags = build_fragments(stack, v, &opts.bias, picked);
+        let build = t0.elapsed().as_secs_f64();
+        for (k, &subject) in subjects.iter().enumerate() {
+            let progress = (&done, planned);
+            views[k].push(shade_view(stack, &frags, subject, opts, progress, build));
+        }
+    }
+    Ok(subjects
+        .iter()
+        .zip(views)
+        .map(|(subject, views)| report_of(subject.name(), views, opts, picked))
+        .collect())
+}
+
+/// One view's report for `subject` on its fragments `frags` (built in `build` seconds, counted
+/// in the view's `seconds`); `progress` = (fragments shaded so far, planned in all).
+fn shade_view(
+    stack: &DepthStack,
+    frags: &[Fragment],
+    subject: Subject<'_>,
+    opts: &EvalOptions,
+    (done, planned): (&AtomicUsize, usize),
+    build: f64,
+) -> ViewReport {
+    let t0 = Instant::now();
     let m = match subject {
         Subject::Technique(t) => t.moment_count(),
         Subject::Pcf | Subject::Cdf => 0,
     };
-    let mut views = Vec::with_capacity(stacks.len());
-    for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
-        let t0 = Instant::now();
-        let frags = build_fragments(stack, v, &opts.bias, picked);
-        let shader = ViewShader::new(subject, stack, opts);
-        let t1 = Instant::now();
-        let keep = opts.keep_values;
-        let partials: Vec<Partial> = frags
-            .par_chunks(512)
-            .map_init(
-                || subject.chunk_state(m),
-                |(ev, buf), chunk| {
-                    cold(ev);
-                    let mut p = Partial::default();
-                    let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
-                    for f in chunk {
-                        let (g, trivial, solved) = shader.shade(ev, buf, f);
-                        p.trivial += trivial as usize;
-                        p.solved += solved as usize;
-                        if g.is_finite() {
-                            p.sum += (g - f.pcf).abs();
-                            p.sum_scaled[0] += (g - f.pcf_scaled[0]).abs();
-                            p.sum_scaled[1] += (g - f.pcf_scaled[1]).abs();
-                            p.leak += (f.pcf - g).max(0.0);
-                            if !(-1e-9..=1.0 + 1e-9).contains(&g) {
-                                p.out_of_range += 1;
-                            }
-                        } else {
-                            p.non_finite += 1;
+    let shader = ViewShader::new(subject, stack, opts);
+    let t1 = Instant::now();
+    let keep = opts.keep_values;
+    let partials: Vec<Partial> = frags
+        .par_chunks(512)
+        .map_init(
+            || subject.chunk_state(m),
+            |(ev, buf), chunk| {
+                cold(ev);
+                let mut p = Partial::default();
+                let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
+                for f in chunk {
+                    let (g, trivial, solved) = shader.shade(ev, buf, f);
+                    p.trivial += trivial as usize;
+                    p.solved += solved as usize;
+                    if g.is_finite() {
+                        p.sum += (g - f.pcf).abs();
+                        p.sum_scaled[0] += (g - f.pcf_scaled[0]).abs();
+                        p.sum_scaled[1] += (g - f.pcf_scaled[1]).abs();
+                        p.leak += (f.pcf - g).max(0.0);
+                        if !(-1e-9..=1.0 + 1e-9).contains(&g) {
+                            p.out_of_range += 1;
                         }
-                        if keep {
-                            p.values.push(FragmentValue {
-                                texel: f.texel,
-                                layer: f.layer,
-                                pcf: f.pcf,
-                                g,
-                                trivial,
-                            });
-                        }
+                    } else {
+                        p.non_finite += 1;
                     }
-                    p.unsettled = ev.as_ref().map_or(0, |e| e.unsettled()) - unsettled0;
-                    let d = done.fetch_add(chunk.len(), Ordering::Relaxed) + chunk.len();
-                    if let Some(cb) = &opts.progress {
-                        cb(d, planned);
+                    if keep {
+                        p.values.push(FragmentValue {
+                            texel: f.texel,
+                            layer: f.layer,
+                            pcf: f.pcf,
+                            g,
+                            trivial,
+                        });
                     }
-                    p
-                },
-            )
-            .collect();
-        let shade_seconds = t1.elapsed().as_secs_f64();
-        let mut total = Partial::default();
-        let mut values = Vec::new();
-        for p in partials {
-            total.sum += p.sum;
-            total.sum_scaled[0] += p.sum_scaled[0];
-            total.sum_scaled[1] += p.sum_scaled[1];
-            total.leak += p.leak;
-            total.trivial += p.trivial;
-            total.solved += p.solved;
-            total.non_finite += p.non_finite;
-            total.unsettled += p.unsettled;
-            total.out_of_range += p.out_of_range;
-            values.extend(p.values);
-        }
-        let finite = frags.len() - total.non_finite;
-        let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
-        views.push(ViewReport {
-            sum_abs_error_scaled: total.sum_scaled,
-            error_scaled: total.sum_scaled.map(mean),
-            sum_leak: total.leak,
-            leak: mean(total.leak),
-            scene: stack.meta.scene.clone(),
-            view: stack.meta.view.clone(),
-            width: stack.meta.width,
-            height: stack.meta.height,
-            layers: stack.depth.len(),
-            fragments_total: stack.fragment_count(),
-            fragments: frags.len(),
-            trivial: total.trivial,
-            solved: total.solved,
-            non_finite: total.non_finite,
-            unsettled: total.unsettled,
-            out_of_range: total.out_of_range,
-            sum_abs_error: total.sum,
-            error: if finite > 0 {
-                total.sum / finite as f64
-            } else {
-                0.0
+                }
+                p.unsettled = ev.as_ref().map_or(0, |e| e.unsettled()) - unsettled0;
+                let d = done.fetch_add(chunk.len(), Ordering::Relaxed) + chunk.len();
+                if let Some(cb) = &opts.progress {
+                    cb(d, planned);
+                }
+                p
             },
-            seconds: t0.elapsed().as_secs_f64(),
-            shade_seconds,
-            values: keep.then_some(values),
-        });
+        )
+        .collect();
+    let shade_seconds = t1.elapsed().as_secs_f64();
+    let mut total = Partial::default();
+    let mut values = Vec::new();
+    for p in partials {
+        total.sum += p.sum;
+        total.sum_scaled[0] += p.sum_scaled[0];
+        total.sum_scaled[1] += p.sum_scaled[1];
+        total.leak += p.leak;
+        total.trivial += p.trivial;
+        total.solved += p.solved;
+        total.non_finite += p.non_finite;
+        total.unsettled += p.unsettled;
+        total.out_of_range += p.out_of_range;
+        values.extend(p.values);
     }
-    let seconds = start.elapsed().as_secs_f64();
+    let finite = frags.len() - total.non_finite;
+    let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
+    ViewReport {
+        sum_abs_error_scaled: total.sum_scaled,
+        error_scaled: total.sum_scaled.map(mean),
+        sum_leak: total.leak,
+        leak: mean(total.leak),
+        scene: stack.meta.scene.clone(),
+        view: stack.meta.view.clone(),
+        width: stack.meta.width,
+        height: stack.meta.height,
+        layers: stack.depth.len(),
+        fragments_total: stack.fragment_count(),
+        fragments: frags.len(),
+        trivial: total.trivial,
+        solved: total.solved,
+        non_finite: total.non_finite,
+        unsettled: total.unsettled,
+        out_of_range: total.out_of_range,
+        sum_abs_error: total.sum,
+        error: mean(total.sum),
+        seconds: build + t0.elapsed().as_secs_f64(),
+        shade_seconds,
+        values: keep.then_some(values),
+    }
+}
+
+/// The report over all `views` of one subject (`picked`: seconds spent choosing fragments).
+fn report_of(
+    technique: String,
+    views: Vec<ViewReport>,
+    opts: &EvalOptions,
+    picked: f64,
+) -> EvalReport {
+    let seconds = picked + views.iter().map(|v| v.seconds).sum::<f64>();
     let sum = |f: fn(&ViewReport) -> usize| views.iter().map(f).sum::<usize>();
     let fragments = sum(|v| v.fragments);
     let non_finite = sum(|v| v.non_finite);
@@ -871,8 +915,8 @@ pub fn evaluate_subject(
     let finite = fragments - non_finite;
     let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
     let shade: f64 = views.iter().map(|v| v.shade_seconds).sum();
-    Ok(EvalReport {
-        technique: subject.name(),
+    EvalReport {
+        technique,
         bias: opts.bias,
         subsample: opts.subsample,
         fragments_total: sum(|v| v.fragments_total),
@@ -897,7 +941,7 @@ pub fn evaluate_subject(
             0.0
         },
         views,
-    })
+    }
 }
 
 /// Front-layer shadow maps of one view for pictures: per texel the PCF and the subject's G of

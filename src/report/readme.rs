@@ -61,6 +61,7 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "sweeps" => sweeps(reports),
         "tune" => tune(reports),
         "theta" => theta(reports),
+        "race-times" => race_times(reports),
         _ => bail!("unknown README block '{name}'"),
     }
 }
@@ -188,76 +189,113 @@ fn paper(reports: &Path) -> Result<String> {
 
 /// The full sweeps of reports/search: one row per m from `search_m<m>.md`, with the wall time
 /// of the race from `wall_m<m>.json` (scripts/time-search.sh).
+/// What README and docs/search.md quote of a committed sweep report (search_m<m>.md).
+struct SweepSummary {
+    candidates: String,
+    functions: String,
+    error: String,
+    se: String,
+    sampled: String,
+    tied: String,
+    /// "- b_MSM (LP): …" lines, without the prefix.
+    msm: Vec<String>,
+}
+
+/// reports/search/search_m<m>.md, None when absent.
+fn sweep_summary(reports: &Path, m: usize) -> Result<Option<SweepSummary>> {
+    let file = reports.join(format!("search/search_m{m}.md"));
+    if !file.is_file() {
+        return Ok(None);
+    }
+    let text = read(&file)?;
+    let missing = |what: &str| anyhow!("{}: no {what}", file.display());
+    let w = text
+        .lines()
+        .find_map(|l| l.strip_prefix("The winner of "))
+        .ok_or_else(|| missing("winner line"))?;
+    // "<N> scored candidates is <index> = (<functions>) with <e> % ± <se> %…"
+    let (count, rest) = w
+        .split_once(" scored candidates is ")
+        .ok_or_else(|| missing("candidate count"))?;
+    let open = rest
+        .find("= (")
+        .ok_or_else(|| missing("winner functions"))?;
+    let close = rest
+        .rfind(") with ")
+        .ok_or_else(|| missing("winner error"))?;
+    let err = rest[close + ") with ".len()..]
+        .split(" %")
+        .take(2)
+        .map(|x| x.trim_start_matches(" ± ").trim().to_string())
+        .collect::<Vec<_>>();
+    let sampled = text
+        .split_once("dataset holds ")
+        .and_then(|x| x.1.split_whitespace().next())
+        .ok_or_else(|| missing("sample size"))?;
+    let tied = text
+        .lines()
+        .find_map(|l| l.strip_suffix(" candidates are statistically tied for first."))
+        .unwrap_or("–");
+    Ok(Some(SweepSummary {
+        candidates: count.to_string(),
+        functions: rest[open + 3..close].to_string(),
+        error: err.first().cloned().unwrap_or_else(|| "?".into()),
+        se: err.get(1).cloned().unwrap_or_else(|| "?".into()),
+        sampled: sampled.to_string(),
+        tied: tied.to_string(),
+        msm: text
+            .lines()
+            .filter_map(|l| l.strip_prefix("- b_MSM (LP): "))
+            .map(|x| x.trim_end_matches('.').to_string())
+            .collect(),
+    }))
+}
+
+/// reports/search/wall_m<m>.json (`scripts/time-search.sh M`), None when absent.
+fn sweep_wall(reports: &Path, m: usize) -> Result<Option<(Value, std::path::PathBuf)>> {
+    let file = reports.join(format!("search/wall_m{m}.json"));
+    if !file.is_file() {
+        return Ok(None);
+    }
+    Ok(Some((read_json(&file)?, file)))
+}
+
+/// The host line of the wall-time files: threads and CPU model.
+fn host(v: &Value) -> (u64, String) {
+    (
+        v.get("threads").and_then(Value::as_u64).unwrap_or(0),
+        v.get("cpu")
+            .and_then(Value::as_str)
+            .unwrap_or("?")
+            .to_string(),
+    )
+}
+
 fn sweeps(reports: &Path) -> Result<String> {
     let mut s = String::from(
         "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. | race wall time |\n| ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
     );
-    let mut host = None;
+    let mut hosts = None;
     let mut notes = Vec::new();
     for m in 2..=4 {
-        let file = reports.join(format!("search/search_m{m}.md"));
-        if !file.is_file() {
+        let Some(x) = sweep_summary(reports, m)? else {
             continue;
-        }
-        let text = read(&file)?;
-        let missing = |what: &str| anyhow!("{}: no {what}", file.display());
-        let w = text
-            .lines()
-            .find_map(|l| l.strip_prefix("The winner of "))
-            .ok_or_else(|| missing("winner line"))?;
-        // "<N> scored candidates is <index> = (<functions>) with <e> % ± <se> %…"
-        let (count, rest) = w
-            .split_once(" scored candidates is ")
-            .ok_or_else(|| missing("candidate count"))?;
-        let open = rest
-            .find("= (")
-            .ok_or_else(|| missing("winner functions"))?;
-        let close = rest
-            .rfind(") with ")
-            .ok_or_else(|| missing("winner error"))?;
-        let functions = &rest[open + 3..close];
-        let err = rest[close + ") with ".len()..]
-            .split(" %")
-            .take(2)
-            .map(|x| x.trim_start_matches(" ± ").trim())
-            .collect::<Vec<_>>();
-        let sampled = text
-            .split_once("dataset holds ")
-            .and_then(|x| x.1.split_whitespace().next())
-            .ok_or_else(|| missing("sample size"))?;
-        let tied = text
-            .lines()
-            .find_map(|l| l.strip_suffix(" candidates are statistically tied for first."))
-            .unwrap_or("–");
-        let wall = reports.join(format!("search/wall_m{m}.json"));
-        let wall = if wall.is_file() {
-            let v = read_json(&wall)?;
-            let secs = v.get("seconds").and_then(Value::as_f64);
-            let secs = secs.ok_or_else(|| anyhow!("{}: no seconds", wall.display()))?;
-            host = Some((
-                v.get("threads").and_then(Value::as_u64).unwrap_or(0),
-                v.get("cpu")
-                    .and_then(Value::as_str)
-                    .unwrap_or("?")
-                    .to_string(),
-            ));
-            minutes(secs)
-        } else {
-            "–".to_string()
+        };
+        let wall = match sweep_wall(reports, m)? {
+            Some((v, file)) => {
+                hosts = Some(host(&v));
+                minutes(f(&v, "seconds", &file)?)
+            }
+            None => "–".to_string(),
         };
         let _ = writeln!(
             s,
-            "| {m} | {count} | {sampled} | {tied} | ({functions}) | {} % ± {} % | {wall} |",
-            err.first().copied().unwrap_or("?"),
-            err.get(1).copied().unwrap_or("?")
+            "| {m} | {} | {} | {} | ({}) | {} % ± {} % | {wall} |",
+            x.candidates, x.sampled, x.tied, x.functions, x.error, x.se
         );
-        for l in text.lines() {
-            if let Some(x) = l.strip_prefix("- b_MSM (LP): ") {
-                notes.push(format!("m = {m}: b_MSM (LP) {}", x.trim_end_matches('.')));
-            }
-        }
+        notes.extend(x.msm.iter().map(|l| format!("m = {m}: b_MSM (LP) {l}")));
     }
-    if let Some((threads, cpu)) = host {
+    if let Some((threads, cpu)) = hosts {
         let _ = writeln!(
             s,
             "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`)."
@@ -269,10 +307,46 @@ fn sweeps(reports: &Path) -> Result<String> {
     Ok(s)
 }
 
-/// Seconds as "42 s" or "17 min 5 s".
+/// docs/search.md's table of the committed races' cost: LP solves, the sweep's and the whole
+/// command's wall time (wall_m<M>.json), winner and tie set (search_m<M>.md).
+fn race_times(reports: &Path) -> Result<String> {
+    let mut s = String::from(
+        "| race | LP solves | sweep | whole command | winner | error | tied |\n| --- | ---: | ---: | ---: | --- | ---: | ---: |\n",
+    );
+    let mut hosts = None;
+    for m in 2..=4 {
+        let (Some(x), Some((v, file))) = (sweep_summary(reports, m)?, sweep_wall(reports, m)?)
+        else {
+            continue;
+        };
+        hosts = Some(host(&v));
+        let solves = f(&v, "lp_solves", &file)?;
+        let _ = writeln!(
+            s,
+            "| m = {m} | {:.1} M | {} | {} | ({}) | {} % | {} |",
+            solves / 1e6,
+            minutes(f(&v, "sweep_seconds", &file)?),
+            minutes(f(&v, "seconds", &file)?),
+            x.functions,
+            x.error,
+            x.tied
+        );
+    }
+    if let Some((threads, cpu)) = hosts {
+        let _ = writeln!(
+            s,
+            "\n{threads} threads ({cpu}); reports/search/wall_m<M>.json, written by `scripts/time-search.sh M`."
+        );
+    }
+    Ok(s)
+}
+
+/// Seconds as "42 s", "68.5 s" (a fraction, below two minutes) or "17 min 5 s".
 fn minutes(secs: f64) -> String {
     let s = secs.round() as u64;
-    if s < 120 {
+    if s < 120 && secs.fract() != 0.0 {
+        format!("{secs:.1} s")
+    } else if s < 120 {
         format!("{s} s")
     } else {
         format!("{} min {} s", s / 60, s % 60)

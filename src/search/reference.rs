@@ -9,7 +9,7 @@ use super::results::{ranking, Row};
 use super::score::bound_curve;
 use super::tieset::tie_set;
 use super::{Dataset, FunctionTable, Scorer};
-use crate::metrics::{self, Bias, EvalOptions};
+use crate::metrics::{self, Bias, EvalOptions, Subject};
 use crate::stack::DepthStack;
 use anyhow::{Context, Result};
 use serde::Serialize;
@@ -176,21 +176,29 @@ pub fn closed_form_references(stacks: &[DepthStack], bias: &Bias) -> Result<Vec<
         bias: *bias,
         ..EvalOptions::default()
     };
-    let mut out = Vec::new();
-    for (name, label, m) in CLOSED_FORMS {
-        let t = crate::technique::by_name(name)?;
-        let r = metrics::evaluate(stacks, t.as_ref(), &opts)
-            .with_context(|| format!("evaluating {name}"))?;
-        out.push(Reference {
+    let techniques = CLOSED_FORMS
+        .iter()
+        .map(|(name, _, _)| crate::technique::by_name(name))
+        .collect::<Result<Vec<_>>>()?;
+    let subjects: Vec<Subject> = techniques
+        .iter()
+        .map(|t| Subject::Technique(t.as_ref()))
+        .collect();
+    // One pass over the fragments and their PCF reference for all closed forms.
+    let reports = metrics::evaluate_subjects(stacks, &subjects, &opts)
+        .context("evaluating the closed-form references")?;
+    Ok(CLOSED_FORMS
+        .iter()
+        .zip(reports)
+        .map(|((_, label, m), r)| Reference {
             label: label.to_string(),
-            m,
+            m: *m,
             error: r.error,
             stderr: 0.0,
             closed_form: true,
             diff: None,
-        });
-    }
-    Ok(out)
+        })
+        .collect())
 }
 
 /// A reference value with its rank among the scored candidates of the same m.

@@ -288,6 +288,58 @@ fn pcf_as_a_technique_has_error_zero() {
     assert!(nonzero > 100);
 }
 
+/// Several subjects on the same fragments (built once) report what each reports alone: the
+/// same errors, counts and per-view figures, in the order given.
+#[test]
+fn subjects_evaluated_together_equal_each_alone() {
+    let mut r = rng(14);
+    let stacks: Vec<_> = (0..4)
+        .map(|i| {
+            let (w, h) = (r.gen_range(5..30), r.gen_range(5..30));
+            random_stack(&mut r, &format!("v{i}"), w, h)
+        })
+        .collect();
+    let vsm = plain_vsm();
+    let snapped = test_vsm(Some(Grid::uniform(64).unwrap()), Some((0.4, 0.45)));
+    let subjects = [
+        Subject::Technique(&vsm),
+        Subject::Pcf,
+        Subject::Technique(&snapped),
+        Subject::Cdf,
+    ];
+    let opts = EvalOptions {
+        subsample: Subsample::Stride(2),
+        ..EvalOptions::default()
+    };
+    let together = metrics::evaluate_subjects(&stacks, &subjects, &opts).unwrap();
+    assert_eq!(together.len(), subjects.len());
+    for (subject, t) in subjects.iter().zip(&together) {
+        let alone = metrics::evaluate_subject(&stacks, *subject, &opts).unwrap();
+        assert_eq!(t.technique, alone.technique);
+        assert_eq!(t.error.to_bits(), alone.error.to_bits(), "{}", t.technique);
+        assert_eq!(t.error_scaled, alone.error_scaled);
+        assert_eq!(t.leak.to_bits(), alone.leak.to_bits());
+        let counts = |e: &metrics::EvalReport| {
+            (
+                e.fragments,
+                e.trivial,
+                e.solved,
+                e.non_finite,
+                e.out_of_range,
+            )
+        };
+        assert_eq!(counts(t), counts(&alone), "{}", t.technique);
+        for (a, b) in t.views.iter().zip(&alone.views) {
+            assert_eq!(a.sum_abs_error.to_bits(), b.sum_abs_error.to_bits());
+            assert_eq!((a.fragments, a.trivial), (b.fragments, b.trivial));
+        }
+    }
+    // The NaN band of the snapped technique is counted there only.
+    assert!(together[2].non_finite > 0);
+    assert_eq!(together[0].non_finite, 0);
+    assert_eq!(together[1].error, 0.0);
+}
+
 #[test]
 fn evaluate_equals_brute_force_for_a_closed_form_technique() {
     let mut r = rng(13);

@@ -152,7 +152,46 @@ fn one_changed_number_in_an_artefact_fails_the_check() {
     v["rows"][0]["ours_gain_bits"] = serde_json::json!(g + 0.001);
     std::fs::write(&f, serde_json::to_string(&v).unwrap()).unwrap();
     assert_ne!(readme::render("theta", &tmp).unwrap(), block("theta"));
+    // The m = 4 race's sweep time, one second more.
+    let docs = std::fs::read_to_string(root().join("docs/search.md")).unwrap();
+    let docs_blocks = readme::blocks(&docs).unwrap();
+    let times = &docs_blocks.iter().find(|b| b.0 == "race-times").unwrap().1;
+    let f = tmp.join("search/wall_m4.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&f).unwrap()).unwrap();
+    let t = v["sweep_seconds"].as_f64().unwrap();
+    v["sweep_seconds"] = serde_json::json!(t + 1.0);
+    std::fs::write(&f, serde_json::to_string(&v).unwrap()).unwrap();
+    assert_ne!(&readme::render("race-times", &tmp).unwrap(), times);
     std::fs::remove_dir_all(&tmp).ok();
+}
+
+/// docs/search.md's generated block of the committed races' cost equals what reports/search
+/// renders (`MOMENTLAB_UPDATE_README=1` rewrites it).
+#[test]
+fn docs_search_race_times_equal_the_artefacts() {
+    let path = root().join("docs/search.md");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let reports = root().join("reports");
+    if std::env::var("MOMENTLAB_UPDATE_README").as_deref() == Ok("1") {
+        let new = readme::splice(&text, |n| readme::render(n, &reports)).unwrap();
+        std::fs::write(&path, new).unwrap();
+        eprintln!("docs/search.md: generated blocks rewritten");
+        return;
+    }
+    let blocks = readme::blocks(&text).unwrap();
+    assert!(
+        blocks.iter().any(|b| b.0 == "race-times"),
+        "docs/search.md has no race-times block"
+    );
+    for (name, body) in &blocks {
+        assert_eq!(
+            body,
+            &readme::render(name, &reports).unwrap(),
+            "docs/search.md block '{name}' differs from what reports/ renders; run \
+             MOMENTLAB_UPDATE_README=1 cargo test --release --test project docs_search"
+        );
+    }
 }
 
 /// README outside generated blocks, fenced code, code spans and link targets.
