@@ -1,8 +1,9 @@
 #!/bin/sh
 # Time the candidate sweep `momentlab search --m M --no-report` on the embedded default dataset
 # (rendering and sampling included, as a user runs it) and record the wall time, the sweep's own
-# time and LP solves (its "sweep done in" line), CPU model and thread count in
-# reports/search/wall_m<M>.json, which README's sweep table and docs/search.md read. The rows go
+# time and LP solves (its "sweep done in" line), the wall time `--plan` predicted just before on
+# the same machine, CPU model and thread count in reports/search/wall_m<M>.json, which README's
+# sweep table and docs/search.md read. The rows go
 # to results/search-m<M> (resumed if present: time a fresh folder). Then write the report with
 # `momentlab search --m M --report-only --out reports/search --force` (docs/search.md).
 # Usage: scripts/time-search.sh M   (from the repository root, after `cargo build --release`)
@@ -15,6 +16,8 @@ if [ -e "results/search-m$m/complete.json" ]; then
 fi
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
+# "plan: * racing (keep 0.25, at most)   157.9 M   1.234   26 min 1 s"
+plan=$("$bin" search --m "$m" --plan | sed -n 's/^plan: \* racing (keep [^)]*) *[0-9.]* [kMG]* *[0-9.]* *//p')
 start=$(date +%s)
 { "$bin" search --m "$m" --no-report 2>&1; echo "$?" > "$log.rc"; } | tee "$log"
 end=$(date +%s)
@@ -27,7 +30,7 @@ solves=$(sed -n 's/^search: sweep done in .* \([0-9][0-9]*\) LP solves.*/\1/p' "
 cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -n 1)
 threads=${RAYON_NUM_THREADS:-$(nproc)}
 out=reports/search/wall_m$m.json
-printf '{\n  "command": "momentlab search --m %s --no-report",\n  "seconds": %s,\n  "sweep_seconds": %s,\n  "lp_solves": %s,\n  "cpu": "%s",\n  "threads": %s\n}\n' \
-    "$m" "$((end - start))" "${sweep:-null}" "${solves:-null}" "${cpu:-unknown}" "$threads" > "$out.tmp"
+printf '{\n  "command": "momentlab search --m %s --no-report",\n  "seconds": %s,\n  "sweep_seconds": %s,\n  "lp_solves": %s,\n  "plan": "%s",\n  "cpu": "%s",\n  "threads": %s\n}\n' \
+    "$m" "$((end - start))" "${sweep:-null}" "${solves:-null}" "${plan:-?}" "${cpu:-unknown}" "$threads" > "$out.tmp"
 mv "$out.tmp" "$out"
 echo "$out: $((end - start)) s"

@@ -311,7 +311,7 @@ fn sweeps(reports: &Path) -> Result<String> {
 /// command's wall time (wall_m<M>.json), winner and tie set (search_m<M>.md).
 fn race_times(reports: &Path) -> Result<String> {
     let mut s = String::from(
-        "| race | LP solves | sweep | whole command | winner | error | tied |\n| --- | ---: | ---: | ---: | --- | ---: | ---: |\n",
+        "| race | LP solves | sweep | whole command | `--plan` (vs the command) | winner | error | tied |\n| --- | ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
     );
     let mut hosts = None;
     for m in 2..=4 {
@@ -321,12 +321,18 @@ fn race_times(reports: &Path) -> Result<String> {
         };
         hosts = Some(host(&v));
         let solves = f(&v, "lp_solves", &file)?;
+        let secs = f(&v, "seconds", &file)?;
+        let plan = v.get("plan").and_then(Value::as_str);
+        let plan = match plan.and_then(|p| Some((p, parse_duration(p)?))) {
+            Some((p, planned)) => format!("{p} ({:+.0} %)", 100.0 * (planned / secs - 1.0)),
+            None => "–".to_string(),
+        };
         let _ = writeln!(
             s,
-            "| m = {m} | {:.1} M | {} | {} | ({}) | {} % | {} |",
+            "| m = {m} | {:.1} M | {} | {} | {plan} | ({}) | {} % | {} |",
             solves / 1e6,
             minutes(f(&v, "sweep_seconds", &file)?),
-            minutes(f(&v, "seconds", &file)?),
+            minutes(secs),
             x.functions,
             x.error,
             x.tied
@@ -339,6 +345,24 @@ fn race_times(reports: &Path) -> Result<String> {
         );
     }
     Ok(s)
+}
+
+/// Seconds of a duration printed by `search --plan`: "45 s", "26 min 1 s", "2 h 5 min".
+fn parse_duration(text: &str) -> Option<f64> {
+    let words: Vec<&str> = text.split_whitespace().collect();
+    if words.is_empty() || !words.len().is_multiple_of(2) {
+        return None;
+    }
+    words.chunks(2).try_fold(0.0, |acc, w| {
+        let x: f64 = w[0].parse().ok()?;
+        let unit = match w[1] {
+            "h" => 3600.0,
+            "min" => 60.0,
+            "s" => 1.0,
+            _ => return None,
+        };
+        Some(acc + x * unit)
+    })
 }
 
 /// Seconds as "42 s", "68.5 s" (a fraction, below two minutes) or "17 min 5 s".
@@ -521,6 +545,16 @@ mod tests {
         );
         assert_eq!(outside_blocks(&s), "a 1\n\nb\n\n");
         assert!(blocks("<!-- generated:z -->\nno end").is_err());
+    }
+
+    #[test]
+    fn plan_durations_parse() {
+        assert_eq!(parse_duration("45 s"), Some(45.0));
+        assert_eq!(parse_duration("26 min 1 s"), Some(1561.0));
+        assert_eq!(parse_duration("2 h 5 min"), Some(7500.0));
+        assert_eq!(parse_duration("?"), None);
+        assert_eq!(parse_duration("5 days"), None);
+        assert_eq!(parse_duration(""), None);
     }
 
     #[test]
