@@ -211,8 +211,8 @@ impl FastSolver {
         dist: &[(u32, f64)],
         first: bool,
     ) -> Option<Certified> {
+        // `bands.failed` was cleared when the problem started (`solve_inner`).
         if let Some(band) = self.band_of(kf, dist) {
-            self.bands.failed = None;
             let tiers = usize::from(first)..END_GROWTH.len();
             if let Some(c) = self.band_tiers(moments, kf, zf, dist, band, tiers) {
                 return Some(c);
