@@ -211,3 +211,57 @@ fn adversarial_corpus_is_certified() {
         "{ill_posed} of {solves} ill-posed"
     );
 }
+
+/// A table with a dependent function (f₃ = 2f₁ − f₂/4 + 1/2, exactly on the grid up to
+/// rounding): moments of a random distribution are answered as without f₃ (the same G as the
+/// table [f₁, f₂], an independent solve); the same moments with b₃ moved by a relative 1e-6…1e-1
+/// are `infeasible` (certified by the dependency's Farkas ray), never optimal.
+#[test]
+fn dependent_function_decides_consistency() {
+    let grid = Grid::uniform(257).unwrap();
+    let f = |z: f64| [z, (3.0 * z).exp() / 20.0];
+    let dep = GridTable::from_fn(&grid, 3, |z, o| {
+        let [a, b] = f(z);
+        o.copy_from_slice(&[a, b, 2.0 * a - b / 4.0 + 0.5]);
+    })
+    .unwrap();
+    let indep = GridTable::from_fn(&grid, 2, |z, o| o.copy_from_slice(&f(z))).unwrap();
+    let mut s = FastSolver::new(dep.clone());
+    let mut t = FastSolver::new(indep.clone());
+    assert_eq!(s.rank(), 3);
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    let (mut optimal, mut infeasible) = (0, 0);
+    for _ in 0..1000 {
+        let k = rng.gen_range(1..=4);
+        let mut dist: Vec<(u32, f64)> = (0..k)
+            .map(|_| (rng.gen_range(0..257u32), rng.gen_range(0.05..1.0)))
+            .collect();
+        dist.sort_by_key(|e| e.0);
+        dist.dedup_by_key(|e| e.0);
+        let total: f64 = dist.iter().map(|e| e.1).sum();
+        dist.iter_mut().for_each(|e| e.1 /= total);
+        let zf = rng.gen_range(0.0..=1.0);
+        let b = distribution_moments(&dep, &dist).unwrap();
+        let sol = s.solve(&b, zf).unwrap();
+        let want = t.solve(&b[..2], zf).unwrap();
+        assert_eq!(
+            (sol.status, want.status),
+            (Status::Optimal, Status::Optimal)
+        );
+        assert!(
+            (sol.g - want.g).abs() <= 1e-9,
+            "{b:?} {zf}: {} vs {}",
+            sol.g,
+            want.g
+        );
+        optimal += 1;
+        let mut bad = b.clone();
+        let rel = 10f64.powf(rng.gen_range(-6.0..-1.0));
+        bad[2] += if rng.gen_bool(0.5) { rel } else { -rel } * bad[2].abs().max(1.0);
+        let sol = s.solve(&bad, zf).unwrap();
+        assert_eq!(sol.status, Status::Infeasible, "{bad:?} {zf}: {sol:?}");
+        assert!(sol.g.is_nan() && sol.support.is_empty());
+        infeasible += 1;
+    }
+    assert_eq!((optimal, infeasible), (1000, 1000));
+}

@@ -10,7 +10,8 @@
 //!   so that the first coordinate is 1 and every coordinate has RMS 1 over the grid) and moment
 //!   vectors c = √n · R^{-T} b̄. This keeps bases such as exp(20z) next to z numerically sane.
 //!   Numerically dependent functions (relative residual < 1e-10) are dropped and their moment
-//!   is checked for consistency instead.
+//!   is checked for consistency instead; an inconsistent one is `Infeasible` when the
+//!   dependency, as a Farkas ray over every row, certifies it (`inconsistency_ray`).
 //! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
 //!   subgrid, the neighbours of z_f and of the support, the fine window around the best) with
 //!   the blocked SIMD kernels of [`super::pricing`] (greatest improvement on the coarse
@@ -584,6 +585,15 @@ impl FastSolver {
             self.full_pass_skipped = false;
             self.attempts(kf, hint)
         } else {
+            // A dependent function's moment contradicts the others: its dependency is the
+            // Farkas ray, checked on every row (the usual certifier holds the kept rows only).
+            if let Some(y) = self.inconsistency_ray(moments) {
+                let mut all = Certifier::new(&self.table, (0..=self.m).collect());
+                if all.infeasible(moments, &y).is_ok() {
+                    self.stats.infeasible += 1;
+                    return Ok(Solution::infeasible());
+                }
+            }
             Verdict::Infeasible
         };
         self.partial_optimum = false;
@@ -876,13 +886,23 @@ mod tests {
         // below 1/2 with mean 3/8 puts 3/4 at 1/2 and 1/4 at 0 (1/2 is not below z_f).
         let sol = s.solve(&[0.375, 0.75], 0.5).unwrap();
         assert_eq!((sol.status, sol.g), (Status::Optimal, 0.25));
-        // Inconsistent (b₂ ≠ 2b₁): no distribution has these moments. The certificates work on
-        // the independent rows, so no Farkas ray proves it: `failed` with the reason, never an
-        // answer.
+        // Inconsistent (b₂ ≠ 2b₁): no distribution has these moments. The dependency
+        // y = ±(e₂ − 2e₁) is the Farkas ray: y·ā_i = 0 on every grid point, y·b̄ = ∓0.05.
+        let infeasible = s.stats().infeasible;
         let bad = s.solve(&[0.375, 0.7], 0.5).unwrap();
-        assert_eq!(bad.status, Status::Failed);
+        assert_eq!(bad.status, Status::Infeasible);
         assert!(bad.g.is_nan() && bad.support.is_empty());
-        assert!(bad.reason.is_some_and(|r| !r.is_empty()));
+        assert_eq!(s.stats().infeasible, infeasible + 1);
+        let y = s.inconsistency_ray(&[0.375, 0.7]).unwrap();
+        for (got, want) in y.iter().zip([0.0, -2.0, 1.0]) {
+            assert!((got - want).abs() < 1e-14, "{y:?}");
+        }
+        // Consistent to the tolerance: no ray, and the LP is solved on the kept rows.
+        assert!(s.inconsistency_ray(&[0.375, 0.75 + 1e-12]).is_none());
+        // An inconsistency far below the certificate's tolerance-widened moment space but
+        // above the consistency check's: `failed` or `infeasible`, never an optimum.
+        let near = s.solve(&[0.375, 0.75 + 3e-8], 0.5).unwrap();
+        assert_ne!(near.status, Status::Optimal);
     }
 
     /// Another z_f for the same moments starts from the last optimal basis (primal feasible):

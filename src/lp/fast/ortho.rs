@@ -107,3 +107,47 @@ impl FastSolver {
         true
     }
 }
+
+impl FastSolver {
+    /// For moments a dependent function contradicts ([`Self::transform`] false): the ray
+    /// y = ±(e_j − Σ_t a_t e_{k_t}) over the rows 0..=m of the first such function j, where
+    /// M_j ≈ Σ_t a_t M_{k_t} expresses its column through the kept functions k_t
+    /// (R_kept a = R_{·,j}, back substitution). y·ā_i is the dependency's residual on the grid,
+    /// y·b̄ the moments' inconsistency; the sign makes y·b̄ negative, so y is a Farkas ray
+    /// when the inconsistency exceeds the residual ([`crate::lp::certify`] decides).
+    pub(super) fn inconsistency_ray(&self, moments: &[f64]) -> Option<Vec<f64>> {
+        let (r, mm) = (self.r, self.m + 1);
+        let mut kept_fn = vec![0usize; r];
+        for (j, t) in self.kept.iter().enumerate() {
+            if let Some(t) = *t {
+                kept_fn[t] = j;
+            }
+        }
+        let bbar = |j: usize| if j == 0 { 1.0 } else { moments[j - 1] };
+        for j in (0..mm).filter(|&j| self.kept[j].is_none()) {
+            let rj = &self.rcoef[j * r..(j + 1) * r];
+            let mut a = vec![0.0; r];
+            for t in (0..r).rev() {
+                let mut acc = rj[t];
+                for s in t + 1..r {
+                    acc -= self.rcoef[kept_fn[s] * r + t] * a[s];
+                }
+                a[t] = acc / self.rcoef[kept_fn[t] * r + t];
+            }
+            let mut y = vec![0.0; mm];
+            y[j] = 1.0;
+            for t in 0..r {
+                y[kept_fn[t]] -= a[t];
+            }
+            let yb: f64 = (0..mm).map(|k| y[k] * bbar(k)).sum();
+            let scale = self.fscale[j].max(bbar(j).abs()).max(1e-300);
+            if yb.abs() > TOL_DEP * scale {
+                if yb > 0.0 {
+                    y.iter_mut().for_each(|v| *v = -*v);
+                }
+                return Some(y);
+            }
+        }
+        None
+    }
+}
