@@ -29,6 +29,7 @@
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 13
 
 use super::dense::{inv_pow2, residual2, DdLu, Lu};
+use super::ratio;
 use super::row_kernels;
 use super::GridTable;
 
@@ -595,56 +596,20 @@ impl Certifier {
             self.tmp[t] *= self.colscale[t];
         }
         let amax = self.tmp.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        // Bland's ratio test (no tolerance, ties to the smallest grid index) or Harris's two
+        // passes with weights below TOL_WEIGHT as ties; pivots below 1e-9·max|α| never leave.
         let pick = if self.bland {
-            self.ratio_bland(basis, amax)
+            ratio::harris(&self.xraw, &self.tmp, 1e-9 * amax, 0.0, Some(basis))
         } else {
-            self.ratio_harris(amax)
+            ratio::harris(&self.xraw, &self.tmp, 1e-9 * amax, TOL_WEIGHT, None)
         };
         match pick {
-            Some((t, _)) => {
+            Some(t) => {
                 basis[t] = q;
                 true
             }
             None => false,
         }
-    }
-
-    /// Harris's two-pass ratio test on the column in `tmp` (weights in `xraw`, entries below
-    /// [`TOL_WEIGHT`] read as 0): the bound θ_max = min_t (x_t + tol)/α_t over pivots
-    /// α_t > 1e-9·max|α|, then the largest pivot among the rows with x_t/α_t ≤ θ_max. Tiny pivots
-    /// on weights that are rounding-level negative would move the point by x_t/α_t.
-    fn ratio_harris(&self, amax: f64) -> Option<(usize, f64)> {
-        let r = self.rows.len();
-        let x = |t: usize| self.xraw[t].max(0.0);
-        let ok = |t: usize| self.tmp[t] > 1e-9 * amax;
-        let bound = (0..r)
-            .filter(|&t| ok(t))
-            .map(|t| (x(t) + TOL_WEIGHT) / self.tmp[t])
-            .fold(f64::INFINITY, f64::min);
-        (0..r)
-            .filter(|&t| ok(t) && x(t) / self.tmp[t] <= bound)
-            .max_by(|&a, &b| self.tmp[a].total_cmp(&self.tmp[b]))
-            .map(|t| (t, x(t) / self.tmp[t]))
-    }
-
-    /// Bland's ratio test: the smallest ratio, ties to the smallest grid index.
-    fn ratio_bland(&self, basis: &[usize], amax: f64) -> Option<(usize, f64)> {
-        let r = self.rows.len();
-        let mut pick: Option<(usize, f64)> = None;
-        for t in 0..r {
-            let a = self.tmp[t];
-            if a > 1e-9 * amax {
-                let ratio = self.xraw[t].max(0.0) / a;
-                let better = match pick {
-                    None => true,
-                    Some((p, r0)) => ratio < r0 || (ratio == r0 && basis[t] < basis[p]),
-                };
-                if better {
-                    pick = Some((t, ratio));
-                }
-            }
-        }
-        pick
     }
 
     /// u_i = min(1, min_j b_j / f_j(z_i)) over the sign-definite rows: every exactly feasible

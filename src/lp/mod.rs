@@ -18,6 +18,7 @@ mod exact;
 mod fast;
 mod ortho;
 mod pricing;
+mod ratio;
 mod reference;
 mod row_kernels;
 mod scaled;

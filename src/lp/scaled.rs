@@ -20,6 +20,7 @@
 
 use super::certify::Certifier;
 use super::dense::{inv_pow2, Dd, DdLu};
+use super::ratio;
 use super::row_kernels;
 
 const TOL_D: f64 = 1e-11;
@@ -346,41 +347,22 @@ impl ScaledSimplex {
         best.0
     }
 
-    /// Leaving position: Harris' two passes, the largest pivot among the near-minimal ratios.
+    /// Leaving position: Harris' two passes ([`ratio::harris`]), the largest pivot among the
+    /// near-minimal ratios (Bland: the smallest basis index).
     fn ratio(&self, bland: bool, phase1: bool) -> Option<usize> {
         let r = self.r;
         let amax = self.alpha.iter().fold(0.0f64, |a, v| a.max(v.abs()));
         let tol = TOL_PIV * amax.max(1.0);
-        let mut bound = f64::INFINITY;
-        for t in 0..r {
-            if self.alpha[t] > tol {
-                bound = bound.min((self.x[t].max(0.0) + HARRIS) / self.alpha[t]);
-            }
-        }
-        let mut pick: Option<usize> = None;
         // In phase 2 a zero-level artificial left in the basis must not become positive: it
         // blocks.
         if !phase1 {
-            for t in 0..r {
-                if self.basis[t] >= self.n && self.alpha[t].abs() > tol {
-                    return Some(t);
-                }
+            if let Some(t) = (0..r).find(|&t| self.basis[t] >= self.n && self.alpha[t].abs() > tol)
+            {
+                return Some(t);
             }
         }
-        for t in 0..r {
-            let a = self.alpha[t];
-            if a > tol && self.x[t].max(0.0) / a <= bound {
-                let better = match pick {
-                    None => true,
-                    Some(p) if bland => self.basis[t] < self.basis[p],
-                    Some(p) => a > self.alpha[p],
-                };
-                if better {
-                    pick = Some(t);
-                }
-            }
-        }
-        pick
+        let keys = bland.then_some(&self.basis[..]);
+        ratio::harris(&self.x, &self.alpha, tol, HARRIS, keys)
     }
 
     /// Column q replaces the basic column at position l (the next factorisation recomputes x).
