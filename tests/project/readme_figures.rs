@@ -341,3 +341,40 @@ fn readme_is_short_and_its_layout_matches_src() {
         rest = &after[e + 1..];
     }
 }
+
+/// docs/lp.md's table "Where the code is" names every file of src/lp/ once, and only those.
+#[test]
+fn docs_lp_layout_lists_every_file_of_src_lp() {
+    let text = std::fs::read_to_string(root().join("docs/lp.md")).unwrap();
+    let start = text
+        .find("## Where the code is (src/lp/)")
+        .expect("docs/lp.md has its layout section");
+    let section = &text[start..];
+    let section = &section[..section[3..].find("\n## ").map_or(section.len(), |e| e + 3)];
+    let mut listed: Vec<String> = section
+        .lines()
+        .filter_map(|l| l.strip_prefix("| `"))
+        .filter_map(|l| l.split('`').next())
+        .map(str::to_string)
+        .collect();
+    listed.sort();
+    let mut files = Vec::new();
+    let mut dirs = vec![root().join("src/lp")];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                dirs.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let rel = p
+                    .strip_prefix(root())
+                    .unwrap()
+                    .to_string_lossy()
+                    .to_string();
+                files.push(rel);
+            }
+        }
+    }
+    files.sort();
+    assert_eq!(listed, files, "docs/lp.md's layout table against src/lp/");
+}
