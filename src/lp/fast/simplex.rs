@@ -9,6 +9,7 @@ use super::{
     TOL_PIV, TOL_P_LOOSE,
 };
 use crate::lp::pricing::dantzig::price;
+use crate::lp::ratio::harris;
 
 /// Phase-2 cost (mass below z_f) taken as zero: the run ends there.
 const ZERO_COST: f64 = 1e-13;
@@ -527,45 +528,13 @@ impl FastSolver {
         Ok(Outcome::Retry)
     }
 
-    /// Ratio test (Harris two-pass; Bland: smallest basis index among ties) for the entering
-    /// column in `alpha`: the leaving basis position, None for an unbounded direction
-    /// (impossible for this LP, whose objective is ≥ 0: numerical trouble).
+    /// Ratio test ([`crate::lp::ratio::harris`]: Harris's two passes, the largest pivot among
+    /// the near-minimal ratios; Bland: the smallest basis index) for the entering column in
+    /// `alpha`: the leaving basis position, None for an unbounded direction (impossible for
+    /// this LP, whose objective is ≥ 0: numerical trouble).
     fn ratio_test(&self, bland: bool) -> Option<usize> {
-        let r = self.r;
-        let mut theta_max = f64::INFINITY;
-        let mut first = usize::MAX;
-        for t in 0..r {
-            let a = self.alpha[t];
-            if a > TOL_PIV {
-                let v = (self.x[t].max(0.0) + TOL_P) / a;
-                if v < theta_max {
-                    theta_max = v;
-                    first = t;
-                }
-            }
-        }
-        if !theta_max.is_finite() {
-            return None;
-        }
-        let mut l = usize::MAX;
-        let mut best = 0.0;
-        for t in 0..r {
-            let a = self.alpha[t];
-            // x_t / a ≤ θ_max, without a division (a > 0); the row that set θ_max always
-            // qualifies (the product can round below x_t where x_t ≫ TOL_P).
-            if a > TOL_PIV && (t == first || self.x[t].max(0.0) <= theta_max * a) {
-                let better = if bland {
-                    l == usize::MAX || self.basis[t] < self.basis[l]
-                } else {
-                    a > best
-                };
-                if better {
-                    best = a;
-                    l = t;
-                }
-            }
-        }
-        Some(l)
+        let keys = bland.then_some(&self.basis[..]);
+        harris(&self.x, &self.alpha, TOL_PIV, TOL_P, keys)
     }
 
     /// Pivot column q into basis position l (reduced cost dq), counting degenerate steps;
