@@ -1,12 +1,15 @@
 //! The ratio test of the primal simplex, shared by the fast solver's loop, the scaled
 //! double-double simplex and the certificate's accurate pivots.
 
+#![allow(clippy::needless_range_loop)] // x, alpha and the keys are indexed together
+
 /// Harris's two-pass ratio test: the leaving row for the entering column α = B⁻¹a_q at basic
 /// weights `x` (negative weights read as 0). Pass 1: θ_max = min over pivots α_t > `piv` of
 /// (x_t + `tol`)/α_t. Pass 2: among the rows with x_t/α_t ≤ θ_max, the largest pivot α_t, or
 /// with `bland` = Some(keys) the smallest key. With tol = 0 and keys this is Bland's ratio test
 /// itself (the smallest ratio, ties to the smallest key). None when no α_t exceeds `piv` (an
 /// unbounded direction).
+#[inline]
 pub(super) fn harris(
     x: &[f64],
     alpha: &[f64],
@@ -14,22 +17,28 @@ pub(super) fn harris(
     tol: f64,
     bland: Option<&[usize]>,
 ) -> Option<usize> {
-    let pivots = || (0..alpha.len()).filter(|&t| alpha[t] > piv);
-    let theta = pivots()
-        .map(|t| (x[t].max(0.0) + tol) / alpha[t])
-        .fold(f64::INFINITY, f64::min);
-    let mut pick: Option<usize> = None;
-    for t in pivots().filter(|&t| x[t].max(0.0) / alpha[t] <= theta) {
-        let better = match (pick, bland) {
-            (None, _) => true,
-            (Some(p), Some(keys)) => keys[t] < keys[p],
-            (Some(p), None) => alpha[t] > alpha[p],
-        };
-        if better {
-            pick = Some(t);
+    let r = alpha.len();
+    let mut theta = f64::INFINITY;
+    for t in 0..r {
+        if alpha[t] > piv {
+            theta = theta.min((x[t].max(0.0) + tol) / alpha[t]);
         }
     }
-    pick
+    let mut pick = usize::MAX;
+    for t in 0..r {
+        let a = alpha[t];
+        if a > piv && x[t].max(0.0) / a <= theta {
+            let better = pick == usize::MAX
+                || match bland {
+                    Some(keys) => keys[t] < keys[pick],
+                    None => a > alpha[pick],
+                };
+            if better {
+                pick = t;
+            }
+        }
+    }
+    (pick != usize::MAX).then_some(pick)
 }
 
 #[cfg(test)]
