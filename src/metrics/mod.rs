@@ -395,7 +395,10 @@ fn select(stack: &DepthStack, view: usize, sub: &Subsample) -> Vec<(usize, usize
     out
 }
 
-fn build_fragments(
+/// The fragments (layer, texel) of `picked` (as [`fragments`] returns them, in that order),
+/// their PCF computed for these alone: a caller that needs the reference of a few fragments
+/// of a stack does not pay for all of them.
+pub fn fragments_at(
     stack: &DepthStack,
     view: usize,
     bias: &Bias,
@@ -418,7 +421,7 @@ fn build_fragments(
                 slope(stack.dzdv[layer][texel]),
             );
             let p = pcf_at(&front, &kern, texel % w, texel / w, z, du, dv, bias, eps);
-            let zf = z - bias.technique_offset(du, dv);
+            let zf = technique_depth(stack, layer, texel, bias);
             Fragment {
                 view,
                 texel,
@@ -437,7 +440,22 @@ fn build_fragments(
 /// fragment. Panics on a malformed stack; call [`check_stack`] first for user data.
 pub fn fragments(stack: &DepthStack, view_index: usize, bias: &Bias) -> Vec<Fragment> {
     let picked = select(stack, view_index, &Subsample::All);
-    build_fragments(stack, view_index, bias, &picked)
+    fragments_at(stack, view_index, bias, &picked)
+}
+
+/// Every fragment of a stack as (layer, texel), in the order of [`fragments`].
+pub fn fragment_positions(stack: &DepthStack) -> Vec<(usize, usize)> {
+    select(stack, 0, &Subsample::All)
+}
+
+/// The depth a technique sees at fragment (layer, texel): z_f − ε′ ([`Bias::technique_offset`]).
+pub fn technique_depth(stack: &DepthStack, layer: usize, texel: usize, bias: &Bias) -> f64 {
+    let z = stack.depth[layer][texel] as f64;
+    let (du, dv) = (
+        slope(stack.dzdu[layer][texel]),
+        slope(stack.dzdv[layer][texel]),
+    );
+    z - bias.technique_offset(du, dv)
 }
 
 /// Like [`fragments`] but only a subsample.
@@ -448,7 +466,7 @@ pub fn fragments_subsampled(
     sub: &Subsample,
 ) -> Vec<Fragment> {
     let picked = select(stack, view_index, sub);
-    build_fragments(stack, view_index, bias, &picked)
+    fragments_at(stack, view_index, bias, &picked)
 }
 
 /// Index of the grid point nearest to z (ties to the lower point; outside the grid: an end).
@@ -780,7 +798,7 @@ pub fn evaluate_subjects(
     let mut views: Vec<Vec<ViewReport>> = subjects.iter().map(|_| Vec::new()).collect();
     for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
         let t0 = Instant::now();
-        let frags = build_fragments(stack, v, &opts.bias, picked);
+        let frags = fragments_at(stack, v, &opts.bias, picked);
         let build = t0.elapsed().as_secs_f64();
         for (k, &subject) in subjects.iter().enumerate() {
             let progress = (&done, planned);
@@ -982,7 +1000,7 @@ pub fn layer_shadows(
         bias: *bias,
         ..Default::default()
     };
-    let frags = build_fragments(stack, 0, bias, &picked);
+    let frags = fragments_at(stack, 0, bias, &picked);
     let shader = ViewShader::new(subject, stack, &opts);
     let m = shader.maps.len();
     let gs: Vec<f64> = frags

@@ -329,7 +329,9 @@ impl Dataset {
     /// The sweep dataset of depth stacks, built with kernel/metrics exactly as
     /// [`metrics::evaluate`] treats a grid technique ([`Technique::depth_grid`]):
     ///
-    /// * fragments, their PCF and biased depth z_f − ε′ from [`metrics::fragments`] (same bias);
+    /// * fragments and their biased depth z_f − ε′ as [`metrics::fragments`] gives them (same
+    ///   bias), PCF ([`metrics::fragments_at`]) only for the trivial fragments (their error) and
+    ///   the kept ones;
     /// * the front map ([`kernel::front_map`]) snapped to the grid, the depth distribution of a
     ///   texel from [`kernel::depth_distribution`] with [`Gaussian::paper`] (9×9, σ = 2.4,
     ///   clamped edges) over the snapped depths, z_f snapped with [`metrics::snap_index`];
@@ -359,8 +361,9 @@ impl Dataset {
         let kern = Gaussian::paper();
         let z = grid.points();
         let mut b = DatasetBuilder::new(grid);
-        // (view, layer) -> (texel, zf index, pcf) of the non-trivial fragments.
-        type Stratum = Vec<(u32, u32, f64)>;
+        // (view, layer) -> (texel, zf index) of the non-trivial fragments. PCF is computed only
+        // where it is used: the trivial fragments (their error) and the kept ones.
+        type Stratum = Vec<(u32, u32)>;
         let mut strata: BTreeMap<(u32, u32), Stratum> = BTreeMap::new();
         let mut fronts = Vec::with_capacity(stacks.len());
         for (v, s) in stacks.iter().enumerate() {
@@ -373,18 +376,22 @@ impl Dataset {
                 .map(|&d| metrics::snap(grid, d))
                 .collect();
             let min_map = kernel::min_filter(&snapped, w, h, kern.radius());
-            for f in metrics::fragments(s, v, bias) {
-                let zi = metrics::snap_index(grid, f.zf);
-                if min_map[f.texel] >= z[zi] {
-                    b.data.trivial_count += 1;
-                    b.data.trivial_error += f.pcf;
+            let mut trivial = Vec::new();
+            for (layer, texel) in metrics::fragment_positions(s) {
+                let zi = metrics::snap_index(grid, metrics::technique_depth(s, layer, texel, bias));
+                if min_map[texel] >= z[zi] {
+                    trivial.push((layer, texel));
                 } else {
-                    strata.entry((view, f.layer as u32)).or_default().push((
-                        f.texel as u32,
-                        zi as u32,
-                        f.pcf,
-                    ));
+                    strata
+                        .entry((view, layer as u32))
+                        .or_default()
+                        .push((texel as u32, zi as u32));
                 }
+            }
+            // Summed in fragment order, as the fragments come.
+            for f in metrics::fragments_at(s, v, bias, &trivial) {
+                b.data.trivial_count += 1;
+                b.data.trivial_error += f.pcf;
             }
             fronts.push(snapped);
         }
@@ -395,8 +402,8 @@ impl Dataset {
         let pop = population.max(1) as u128;
         let offset: u128 = rng.gen_range(0..pop as u64) as u128;
         let mut before = 0u128;
-        // (view, texel, layer, zf index, pcf) of the kept fragments.
-        let mut kept: Vec<(u32, u32, u32, u32, f64)> = Vec::new();
+        // (view, texel, layer, zf index) of the kept fragments.
+        let mut kept: Vec<(u32, u32, u32, u32)> = Vec::new();
         for (&(view, layer), members) in strata.iter_mut() {
             let upto = before + members.len() as u128;
             let quota = |n: u128| (cap as u128 * n + offset) / pop;
@@ -407,16 +414,25 @@ impl Dataset {
                 let j = rng.gen_range(i..members.len());
                 members.swap(i, j);
             }
-            kept.extend(
-                members[..k]
-                    .iter()
-                    .map(|&(t, zi, pcf)| (view, t, layer, zi, pcf)),
-            );
+            kept.extend(members[..k].iter().map(|&(t, zi)| (view, t, layer, zi)));
+        }
+        // The kept fragments' PCF, one batch per view.
+        let mut pcf_of: HashMap<(u32, u32, u32), f64> = HashMap::with_capacity(kept.len());
+        for (v, s) in stacks.iter().enumerate() {
+            let picked: Vec<(usize, usize)> = kept
+                .iter()
+                .filter(|f| f.0 as usize == v)
+                .map(|f| (f.2 as usize, f.1 as usize))
+                .collect();
+            for f in metrics::fragments_at(s, v, bias, &picked) {
+                pcf_of.insert((v as u32, f.texel as u32, f.layer as u32), f.pcf);
+            }
         }
         // Distributions in (view, texel) order: neighbouring ids are neighbouring texels.
         kept.sort_by_key(|f| (f.0, f.1, f.2));
         let mut dist_of: HashMap<(u32, u32), u32> = HashMap::new();
-        for &(view, t, layer, zi, pcf) in &kept {
+        for &(view, t, layer, zi) in &kept {
+            let pcf = pcf_of[&(view, t, layer)];
             let d = match dist_of.get(&(view, t)) {
                 Some(&d) => d,
                 None => {

@@ -225,6 +225,34 @@ fn capped_sample_is_stratified_and_seeded() {
     assert_eq!(s.trivial_count(), full.trivial_count());
     assert_eq!(s.trivial_error(), full.trivial_error());
     assert_eq!(s.total_count(), full.total_count());
+    // PCF is computed only for the trivial and the kept fragments: bit for bit what
+    // `metrics::fragments` gives for them, and the trivial error is the sum, in fragment
+    // order, over the fragments the unsampled dataset does not hold.
+    let mut reference = std::collections::HashMap::new();
+    let mut trivial_error = 0.0;
+    let nontrivial: std::collections::HashSet<(u32, u32, u32)> = full
+        .fragments()
+        .iter()
+        .map(|f| (f.view, f.texel, f.layer))
+        .collect();
+    for (v, st) in stacks.iter().enumerate() {
+        for f in metrics::fragments(st, v, &bias) {
+            let key = (v as u32, f.texel as u32, f.layer as u32);
+            if !nontrivial.contains(&key) {
+                trivial_error += f.pcf;
+            }
+            reference.insert(key, f.pcf);
+        }
+    }
+    assert_eq!(full.trivial_error().to_bits(), trivial_error.to_bits());
+    for d in [&full, &s] {
+        for f in d.fragments() {
+            assert_eq!(
+                f.pcf.to_bits(),
+                reference[&(f.view, f.texel, f.layer)].to_bits()
+            );
+        }
+    }
     let kept = s.fragments().len();
     // Systematic allocation: exactly the cap, ⌊p N_h⌋ or ⌈p N_h⌉ per stratum.
     let strata = |d: &Dataset| {
