@@ -90,8 +90,8 @@ pub struct Opts {
     #[arg(long, default_value_t = crate::search::config::DEFAULT_EARLY_LOOK)]
     pub early_look: usize,
     /// Budget cap per stage: of the candidates not eliminated by confidence, at most
-    /// max(⌈keep·|C|⌉, top) stay (by the stage mean); the others leave "by the cap" and are
-    /// reported as such (1 = no cap).
+    /// max(⌈keep·|C|⌉, top) stay, C the candidates at the stage's last look (by their mean over
+    /// every block seen); the others leave "by the cap" and are reported as such (1 = no cap).
     #[arg(long, default_value_t = 0.25, value_parser = fraction, allow_negative_numbers = true)]
     pub keep: f64,
     /// Confidence of the elimination tests, for all stages and candidates together

@@ -344,7 +344,7 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
         let _ = writeln!(
             s,
             "Budget: the sweep's sample of {} non-trivial fragments (`--max-fragments`) and a cap of \
-             max(⌈{}·|C|⌉, top) candidates per stage. Tests: {} bound, {}, confidence {c:.0} % for all \
+             max(⌈{}·|C|⌉, top) candidates per stage (C: the candidates at the stage's last look). Tests: {} bound, {}, confidence {c:.0} % for all \
              eliminations together (Bonferroni over the {} looks of the stages, the candidates of each stage and the shards; \
              a stage block whose halves hold at least `--early-look` fragments is tested on its first half by confidence only, then on the whole block).\n",
             r.fragment_budget,

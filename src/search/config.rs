@@ -49,7 +49,8 @@ pub struct SweepConfig {
     /// on its first half, by confidence only (0: never; [`super::race::looks`]).
     #[serde(default)]
     pub early_look: usize,
-    /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage.
+    /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage, C the candidates at
+    /// the stage's last look.
     pub keep: f64,
     /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
     pub confidence: f64,

@@ -14,7 +14,8 @@
 //! reference, so the best candidate is among the survivors and the candidates removed by the
 //! cap (the *certified set*).
 //!
-//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C_k|⌉, top) stay,
+//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C′_k|⌉, top) stay,
+//! C′_k the candidates tested at the stage's last look (after an early look, its survivors),
 //! ordered by their mean over every block they have seen (the same blocks for every candidate of
 //! a stage: all survived the stages before); the others leave *by the cap*, without evidence
 //! against them.
@@ -203,7 +204,7 @@ pub struct Rule {
     /// Paired differences (true) or independent intervals: c is worse when its lower bound is
     /// above the reference's upper bound, each at δ/2 (for comparison only).
     pub paired: bool,
-    /// Cap: at most max(⌈keep·|C|⌉, top) candidates stay.
+    /// Cap: at most max(⌈keep·|C|⌉, top) of the |C| candidates tested stay.
     pub keep: f64,
     pub top: usize,
 }

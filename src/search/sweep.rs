@@ -12,7 +12,8 @@
 //! differences d = e_c − e_R. c leaves *by confidence* when μ_c − μ_R > 0 at confidence
 //! 1 − δ, δ = (1 − `confidence`) / (stages · candidates · shards) (Bonferroni over the planned
 //! stages, the stage's candidates and the shards; [`super::race`]). Of the rest, at most
-//! max(⌈keep·|C|⌉, top) stay (by the stage mean): the others leave *by the cap*, the budget,
+//! max(⌈keep·|C′|⌉, top) stay, C′ the candidates at the stage's last look (by their mean over
+//! every block seen): the others leave *by the cap*, the budget,
 //! without evidence, and are marked so. Racing stops when one candidate is left (resolved) or
 //! the fragments run out (the fragment budget bound); the survivors are then completed on the
 //! fragments they have not seen (the pilot block, unused blocks), so they are scored on every
@@ -120,7 +121,8 @@ pub struct StageLog {
     /// Per-test error probability δ and the matching normal quantile z_{1−δ}.
     pub delta: f64,
     pub z: f64,
-    /// Candidates allowed to stay by the cap.
+    /// Candidates allowed to stay by the cap: max(⌈keep·|C′|⌉, top), C′ the candidates tested at
+    /// the stage's last look (those left after the early look).
     pub cap: u64,
     pub confidence_eliminated: u64,
     /// Of those, eliminated at the early look (on the first half of the block).
@@ -654,7 +656,7 @@ fn race_all(
             reference,
             delta,
             z: race::normal_quantile(1.0 - delta),
-            cap: race::cap(cfg.keep, cur.len() as u64, cfg.top as u64),
+            cap: race::cap(cfg.keep, cur.len() as u64 - early, cfg.top as u64),
             confidence_eliminated: conf,
             early_eliminated: early,
             cap_eliminated: cap,

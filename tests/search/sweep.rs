@@ -7,7 +7,7 @@ use crate::common::tmp_path;
 use momentlab::search::race::Elimination;
 use momentlab::search::{
     merge_dirs, read_rows, run_sweep, Dataset, FunctionTable, Hooks, Outcome, Row, Scorer,
-    SweepConfig,
+    SweepConfig, SweepSummary,
 };
 use momentlab::Grid;
 use std::path::Path;
@@ -96,6 +96,7 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     assert_eq!(sum.race.as_ref().unwrap().looks, planned as u64);
     assert!(sum.sampled_share < 1.0, "{sum:?}");
     let race_sum = sum.race.clone().unwrap();
+    check_stage_logs(&cfg, &sum);
     let mut ex_cfg = cfg.clone();
     ex_cfg.exhaustive = true;
     let ex = tmp_path(&format!("exhaustive{}", cfg.keep));
@@ -164,6 +165,35 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     assert!((direct - e0.error.unwrap()).abs() < 1e-12);
     for d in [race, ex] {
         std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// Each stage's log adds up: its survivors (the next stage's candidates, or the fully scored
+/// ones after the last stage) are its candidates less both kinds of elimination, and the cap is
+/// the one applied at the last look, to the early look's survivors (with `keep` 1 the default
+/// race's stage 2 has 9 candidates, 5 leave at the early look and the cap is 4, not 9); a binding
+/// cap keeps exactly its number.
+fn check_stage_logs(cfg: &SweepConfig, sum: &SweepSummary) {
+    let race = sum.race.as_ref().unwrap();
+    for (k, st) in race.stages.iter().enumerate() {
+        let survivors = race
+            .stages
+            .get(k + 1)
+            .map_or(sum.full, |next| next.candidates);
+        assert_eq!(
+            survivors,
+            st.candidates - st.confidence_eliminated - st.cap_eliminated,
+            "{st:?}"
+        );
+        let tested = st.candidates - st.early_eliminated;
+        assert_eq!(
+            st.cap,
+            momentlab::search::race::cap(cfg.keep, tested, cfg.top as u64)
+        );
+        assert!(survivors <= st.cap, "{st:?}");
+        if st.cap_eliminated > 0 {
+            assert_eq!(survivors, st.cap, "{st:?}");
+        }
     }
 }
 
