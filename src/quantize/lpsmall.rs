@@ -71,6 +71,33 @@ fn pivot(t: &mut [Vec<f64>], basis: &mut [usize], r: usize, j: usize) {
     basis[r] = j;
 }
 
+/// The leaving row for entering column `j`: the least ratio x_i/α_i over the rows with
+/// α_i = t[i][j] > `piv`, x_i = t[i][last] as it stands (a slightly negative x_i gives a
+/// negative ratio), rows scanned in order and a ratio within 10⁻¹⁵ (absolute) of the best so
+/// far counting as a tie, resolved to the smallest basic index. None when no α_i exceeds `piv`.
+///
+/// This is not the crate's ratio test (`lp::ratio::harris`, whose tol = 0 case with keys is
+/// Bland's): that one reads x_i < 0 as 0 and has no absolute window, so on degenerate θ row
+/// LPs it picks other rows, and the seeded θ₄ search (`momentlab theta --m 4 --restarts 4
+/// --hops 10 --hop-sigma 0.3`) then ends at another θ₄ (entries differ by up to 2·10⁻³).
+fn leaving_row(t: &[Vec<f64>], basis: &[usize], j: usize, piv: f64) -> Option<usize> {
+    let rhs = t[0].len() - 1;
+    let mut best: Option<(f64, usize, usize)> = None;
+    for (i, row) in t.iter().enumerate() {
+        if row[j] > piv {
+            let ratio = row[rhs] / row[j];
+            let better = match best {
+                None => true,
+                Some((br, _, bb)) => ratio < br - 1e-15 || (ratio <= br + 1e-15 && basis[i] < bb),
+            };
+            if better {
+                best = Some((ratio, i, basis[i]));
+            }
+        }
+    }
+    best.map(|(_, i, _)| i)
+}
+
 /// Simplex iterations (Bland's rule) minimising cost over columns < `allowed`.
 fn run(
     t: &mut [Vec<f64>],
@@ -79,7 +106,6 @@ fn run(
     allowed: usize,
     tol: f64,
 ) -> Option<()> {
-    let rhs = t[0].len() - 1;
     for _ in 0..100_000 {
         // reduced costs r_j = cost_j − Σ_i cost_{B_i} t[i][j]
         let entering = (0..allowed).find(|&j| {
@@ -97,22 +123,8 @@ fn run(
         let Some(j) = entering else {
             return Some(());
         };
-        let mut best: Option<(f64, usize, usize)> = None;
-        for (i, row) in t.iter().enumerate() {
-            if row[j] > tol {
-                let ratio = row[rhs] / row[j];
-                let better = match best {
-                    None => true,
-                    Some((br, _, bb)) => {
-                        ratio < br - 1e-15 || (ratio <= br + 1e-15 && basis[i] < bb)
-                    }
-                };
-                if better {
-                    best = Some((ratio, i, basis[i]));
-                }
-            }
-        }
-        let (_, r, _) = best?; // unbounded direction in the dual: primal infeasible
+        // unbounded direction in the dual: primal infeasible
+        let r = leaving_row(t, basis, j, tol)?;
         pivot(t, basis, r, j);
     }
     None
@@ -138,6 +150,26 @@ mod tests {
         }
         let s = model.solve().ok()?;
         Some(x.iter().zip(c).map(|(v, &ci)| ci * s.value(*v)).sum())
+    }
+
+    #[test]
+    fn leaving_row_takes_the_least_raw_ratio_with_an_absolute_tie_window() {
+        // Tableau rows [α_i, x_i], entering column 0.
+        let rows = |v: &[[f64; 2]]| v.iter().map(|r| r.to_vec()).collect::<Vec<_>>();
+        // Ratios 1e-16 and 0 tie (within 1e-15): the smaller basic index leaves.
+        let t = rows(&[[1.0, 1e-16], [1.0, 0.0]]);
+        assert_eq!(leaving_row(&t, &[3, 7], 0, 1e-11), Some(0));
+        assert_eq!(leaving_row(&t, &[7, 3], 0, 1e-11), Some(1));
+        // A negative x_i counts as it is: ratio −1.6e-15 is below 1e-16 − 1e-15.
+        let t = rows(&[[1.0, 1e-16], [0.125, -2e-16]]);
+        assert_eq!(leaving_row(&t, &[3, 7], 0, 1e-11), Some(1));
+        // Ties are against the best so far: 0 (key 3), 0.8e-15 (key 2), 1.6e-15 (key 1).
+        let t = rows(&[[1.0, 0.0], [1.0, 0.8e-15], [1.0, 1.6e-15]]);
+        assert_eq!(leaving_row(&t, &[3, 2, 1], 0, 1e-11), Some(2));
+        // Entries at or below the pivot tolerance never leave.
+        let t = rows(&[[1e-12, 0.0], [-1.0, 0.0], [2.0, 1.0]]);
+        assert_eq!(leaving_row(&t, &[0, 1, 2], 0, 1e-11), Some(2));
+        assert_eq!(leaving_row(&t[..2], &[0, 1], 0, 1e-11), None);
     }
 
     #[test]
