@@ -1,5 +1,7 @@
 //! The ratio test of the primal simplex, shared by the fast solver's loop, the scaled
-//! double-double simplex and the certificate's accurate pivots.
+//! double-double simplex and the certificate's accurate pivots. The exact simplex (exact.rs)
+//! compares its ratios exactly by cross-multiplying integers, and the θ search's tableau
+//! simplex (`quantize::lpsmall`) ties ratios within an absolute window; neither uses it.
 
 #![allow(clippy::needless_range_loop)] // x, alpha and the keys are indexed together
 
