@@ -62,6 +62,7 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "tune" => tune(reports),
         "theta" => theta(reports),
         "race-times" => race_times(reports),
+        "race-orders" => race_orders(reports),
         _ => bail!("unknown README block '{name}'"),
     }
 }
@@ -342,6 +343,70 @@ fn race_times(reports: &Path) -> Result<String> {
         let _ = writeln!(
             s,
             "\n{threads} threads ({cpu}); reports/search/wall_m<M>.json, written by `scripts/time-search.sh M`."
+        );
+    }
+    Ok(s)
+}
+
+/// docs/search.md's table of one race run in several fragment orders (`--race-seed`): stage
+/// sizes, LP solves against their mean, winner and tie set, from
+/// reports/search/race_orders_m<M>.json (`scripts/race-orders.sh M SEED…`).
+fn race_orders(reports: &Path) -> Result<String> {
+    let mut s = String::from(
+        "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied |\n| --- | ---: | --- | ---: | ---: | --- | ---: |\n",
+    );
+    for m in 2..=4 {
+        let file = reports.join(format!("search/race_orders_m{m}.json"));
+        if !file.is_file() {
+            continue;
+        }
+        let v = read_json(&file)?;
+        let orders = v
+            .get("orders")
+            .and_then(Value::as_array)
+            .filter(|o| !o.is_empty())
+            .ok_or_else(|| anyhow!("{}: no orders", file.display()))?;
+        let solves = orders
+            .iter()
+            .map(|o| f(o, "lp_solves", &file))
+            .collect::<Result<Vec<f64>>>()?;
+        let mean = solves.iter().sum::<f64>() / solves.len() as f64;
+        for (o, lp) in orders.iter().zip(&solves) {
+            let stages: Vec<String> = o
+                .get("stages")
+                .and_then(Value::as_array)
+                .ok_or_else(|| anyhow!("{}: an order without stages", file.display()))?
+                .iter()
+                .filter_map(|st| st.get(0).and_then(Value::as_u64).map(|c| c.to_string()))
+                .collect();
+            let names: Vec<&str> = o
+                .get("winner_functions")
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_str).collect())
+                .unwrap_or_default();
+            let _ = writeln!(
+                s,
+                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | ({}) | {:.0} |",
+                f(o, "race_seed", &file)?,
+                stages.join(", "),
+                lp / 1e6,
+                100.0 * (lp / mean - 1.0),
+                names.join(", "),
+                f(o, "tied", &file)?
+            );
+        }
+        let (lo, hi) = solves
+            .iter()
+            .fold((f64::INFINITY, 0.0f64), |(a, b), &x| (a.min(x), b.max(x)));
+        let _ = writeln!(
+            s,
+            "\nm = {m}: {} orders, LP solves {:.2}–{:.2} M (mean {:.2} M, {:+.0} % to {:+.0} %); reports/search/race_orders_m{m}.json, written by `scripts/race-orders.sh {m} SEED…`.",
+            solves.len(),
+            lo / 1e6,
+            hi / 1e6,
+            mean / 1e6,
+            100.0 * (lo / mean - 1.0),
+            100.0 * (hi / mean - 1.0)
         );
     }
     Ok(s)
