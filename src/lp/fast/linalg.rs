@@ -97,6 +97,75 @@ pub(super) fn invert(lu: &mut crate::linalg::Lu, a: &[f64], inv: &mut [f64], r: 
     true
 }
 
+/// The basis inverse B⁻¹ (row-major r × r) of the fast simplex: a fresh factorisation of a
+/// basis, kept up to date by pivots (product-form updates), and whether it is still exactly the
+/// fresh factorisation of the basis it was computed for.
+pub(super) struct BasisInverse {
+    /// B⁻¹, row-major: `inv[t*r + k]`.
+    pub(super) inv: Vec<f64>,
+    /// B itself, column t = a_{B_t} (the factorisation's input).
+    bmat: Vec<f64>,
+    lu: crate::linalg::Lu,
+    /// The basis of the last fresh factorisation.
+    factored: Vec<usize>,
+    /// `inv` is that factorisation (no pivot since, and it held no artificial column).
+    fresh: bool,
+}
+
+impl BasisInverse {
+    pub(super) fn new(r: usize) -> BasisInverse {
+        BasisInverse {
+            inv: vec![0.0; r * r],
+            bmat: vec![0.0; r * r],
+            lu: Default::default(),
+            factored: vec![usize::MAX; r],
+            fresh: false,
+        }
+    }
+
+    /// Factorise B = [a_{B_0} … a_{B_{r−1}}] (`column(i)` = a_i) and invert it: false when a
+    /// pivot is below 1e-12 or ‖B‖_F·‖B⁻¹‖_F ≥ `max_cond` (weights from such a basis carry
+    /// errors of cond·ε). The result counts as fresh unless the basis holds `artificial`.
+    pub(super) fn factor<'a>(
+        &mut self,
+        basis: &[usize],
+        column: impl Fn(usize) -> &'a [f64],
+        artificial: usize,
+        max_cond: f64,
+    ) -> bool {
+        let r = basis.len();
+        for (t, &bt) in basis.iter().enumerate() {
+            for (k, &v) in column(bt)[..r].iter().enumerate() {
+                self.bmat[k * r + t] = v;
+            }
+        }
+        let bnorm = norm(&self.bmat);
+        let ok = invert(&mut self.lu, &self.bmat, &mut self.inv, r)
+            && bnorm * norm(&self.inv) < max_cond;
+        self.factored.copy_from_slice(basis);
+        self.fresh = ok && !basis.contains(&artificial);
+        ok
+    }
+
+    /// `inv` is the fresh factorisation of exactly `basis`.
+    pub(super) fn is_fresh_for(&self, basis: &[usize]) -> bool {
+        self.fresh && basis == self.factored
+    }
+
+    /// out = B⁻¹ v.
+    #[inline]
+    pub(super) fn apply(&self, v: &[f64], out: &mut [f64]) {
+        mat_vec(&self.inv, v, out, self.factored.len())
+    }
+
+    /// Column q replaces basis position l: the pivot update with α = B⁻¹ a_q.
+    #[inline]
+    pub(super) fn pivot(&mut self, alpha: &[f64], l: usize) {
+        pivot_rows(&mut self.inv, alpha, l, self.factored.len());
+        self.fresh = false;
+    }
+}
+
 /// Least squares min ‖A w − c‖ for the column-major r × k matrix `a` (k ≤ r) by modified
 /// Gram–Schmidt with reorthogonalisation, using the scratch `q` (r·k) and `rm` (k·k); false if
 /// the columns are numerically dependent.

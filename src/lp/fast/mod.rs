@@ -193,10 +193,6 @@ pub struct FastSolver {
     condition: f64,
     /// Rounding-error bound on the weights of the last solve.
     last_bound: f64,
-    /// The basis of the last successful factorisation, and whether `binv` is still exactly
-    /// that factorisation (no pivot since, no artificial column).
-    factored: Vec<usize>,
-    factored_ok: bool,
     /// The crossover has just left a basic feasible solution with its (updated) inverse.
     crossed: bool,
     /// The warm start carried from one problem to the next.
@@ -213,10 +209,8 @@ pub struct FastSolver {
     c: Vec<f64>,
     u: Vec<f64>,
     basis: Vec<usize>,
-    binv: Vec<f64>,
-    bmat: Vec<f64>,
-    /// Factorisation workspace of the basis inverse.
-    lu: crate::linalg::Lu,
+    /// B⁻¹ of `basis`, by factorisation and pivot updates.
+    binv: linalg::BasisInverse,
     x: Vec<f64>,
     y: Vec<f64>,
     alpha: Vec<f64>,
@@ -284,8 +278,6 @@ impl FastSolver {
             b0,
             condition,
             last_bound: 0.0,
-            factored: vec![usize::MAX; r],
-            factored_ok: false,
             crossed: false,
             warm: starts::WarmStart {
                 basis: None,
@@ -299,9 +291,7 @@ impl FastSolver {
             c: vec![0.0; r],
             u: vec![0.0; r],
             basis: vec![0; r],
-            binv: vec![0.0; r * r],
-            bmat: vec![0.0; r * r],
-            lu: Default::default(),
+            binv: linalg::BasisInverse::new(r),
             x: vec![0.0; r],
             y: vec![0.0; r],
             alpha: vec![0.0; r],

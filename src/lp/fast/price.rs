@@ -87,7 +87,7 @@ impl FastSolver {
             // A reduced cost this large comes from the dual polynomial extrapolating the basis
             // (an end of the grid): the coarse point of greatest improvement enters instead.
             let basis = gi_pricing::Basis {
-                binv: &self.binv,
+                binv: &self.binv.inv,
                 x: &self.x,
                 tol_d: TOL_D,
                 tol_piv: TOL_PIV,

@@ -2,7 +2,7 @@
 //! (double-double), iterative refinement against it, the least-squares polish of an optimal
 //! basis, and the rescue of an ill-conditioned basis from a small support.
 
-use super::linalg::{complete_basis, least_squares, mat_vec, norm};
+use super::linalg::{complete_basis, least_squares, norm};
 use super::{FastSolver, Outcome, ART, TOL_P};
 use crate::lp::dense::{two_prod, two_sum};
 
@@ -172,7 +172,7 @@ impl FastSolver {
             for k in 0..r {
                 self.u[k] *= sn;
             }
-            mat_vec(&self.binv, &self.u, &mut self.alpha, r);
+            self.binv.apply(&self.u, &mut self.alpha);
             for t in 0..r {
                 self.x[t] += self.alpha[t];
             }

@@ -2,7 +2,7 @@
 //! iteration (pricing, optimality checks of either phase, Harris ratio test, pivot), degenerate
 //! perturbation, and the bounded "refactorise, else rescue, else fail" recovery.
 
-use super::linalg::{invert, mat_vec, norm, pivot_rows};
+use super::linalg::norm;
 use super::price::price_bland;
 use super::{
     FastSolver, Outcome, ART, DEGENERATE_LIMIT, MAX_COND, REFACTOR_EVERY, TOL_D, TOL_INF, TOL_P,
@@ -51,16 +51,6 @@ enum Jump {
 }
 
 impl FastSolver {
-    /// Column i of the transformed LP (i == ART: the artificial column).
-    #[inline]
-    fn column(&self, i: usize) -> &[f64] {
-        if i == ART {
-            &self.art
-        } else {
-            &self.rows[i * self.r..(i + 1) * self.r]
-        }
-    }
-
     /// Recompute the basis inverse from scratch (Gauss–Jordan, partial pivoting) and
     /// x = B⁻¹ c. False if the basis is numerically singular.
     pub(super) fn refactor(&mut self) -> bool {
@@ -73,30 +63,24 @@ impl FastSolver {
 
     /// Basis inverse only (see [`Self::refactor`]); false if numerically singular.
     pub(super) fn factor(&mut self) -> bool {
-        let r = self.r;
-        // bmat[k][t] = a_{B_t}[k]
-        for t in 0..r {
-            let bt = self.basis[t];
-            for k in 0..r {
-                let v = self.column(bt)[k];
-                self.bmat[k * r + t] = v;
+        let (r, rows, art) = (self.r, &self.rows, &self.art);
+        let column = |i: usize| {
+            if i == ART {
+                &art[..]
+            } else {
+                &rows[i * r..(i + 1) * r]
             }
-        }
-        let bnorm = norm(&self.bmat);
+        };
         // Numerically singular for our purposes: weights from such a basis carry errors of
         // cond·ε > 1e-4; the caller rebuilds a well-conditioned basis instead.
-        let ok = invert(&mut self.lu, &self.bmat, &mut self.binv, r)
-            && bnorm * norm(&self.binv) < MAX_COND;
-        self.factored.copy_from_slice(&self.basis);
-        self.factored_ok = ok && !self.basis.contains(&ART);
-        ok
+        self.binv.factor(&self.basis, column, ART, MAX_COND)
     }
 
     /// x = B⁻¹ c with two steps of iterative refinement.
     fn basic_solution(&mut self) {
         let r = self.r;
         {
-            mat_vec(&self.binv, &self.c, &mut self.x, r);
+            self.binv.apply(&self.c, &mut self.x);
             // Two steps of iterative refinement: x += B⁻¹ (c − B x). The explicit inverse of an
             // ill-conditioned basis (neighbouring grid points) is accurate to cond·ε only.
             for _ in 0..2 {
@@ -116,7 +100,7 @@ impl FastSolver {
                     }
                 }
                 // self.y is free here as scratch.
-                mat_vec(&self.binv, &self.alpha, &mut self.y, r);
+                self.binv.apply(&self.alpha, &mut self.y);
                 for t in 0..r {
                     self.x[t] += self.y[t];
                 }
@@ -140,7 +124,7 @@ impl FastSolver {
                 (bt < kf) as u8 as f64
             };
             if cost != 0.0 {
-                let row = &self.binv[t * r..(t + 1) * r];
+                let row = &self.binv.inv[t * r..(t + 1) * r];
                 for (yk, bk) in self.y.iter_mut().zip(row) {
                     *yk += cost * bk;
                 }
@@ -152,7 +136,7 @@ impl FastSolver {
     pub(super) fn run(&mut self, kf: usize, bland_always: bool) -> Outcome {
         if std::mem::take(&mut self.crossed) {
             // Straight from the crossover: B⁻¹ and x = B⁻¹c are up to date.
-        } else if self.factored_ok && self.basis == self.factored {
+        } else if self.binv.is_fresh_for(&self.basis) {
             // B⁻¹ is still the fresh factorisation of this basis (the warm start after a
             // problem that ended on it): only the weights are new.
             self.basic_solution();
@@ -563,8 +547,8 @@ impl FastSolver {
     /// alpha = B⁻¹ a_j.
     pub(super) fn load_alpha(&mut self, j: usize) {
         let r = self.r;
-        let col = &self.rows[j * r..(j + 1) * r];
-        mat_vec(&self.binv, col, &mut self.alpha, r);
+        self.binv
+            .apply(&self.rows[j * r..(j + 1) * r], &mut self.alpha);
     }
 
     /// Exchange basis position l for column q with step theta (alpha already loaded).
@@ -578,8 +562,7 @@ impl FastSolver {
 
     /// Basis change only: column q replaces position l in B⁻¹ (alpha = B⁻¹ a_q loaded).
     pub(super) fn exchange(&mut self, l: usize, q: usize) {
-        pivot_rows(&mut self.binv, &self.alpha, l, self.r);
-        self.factored_ok = false;
+        self.binv.pivot(&self.alpha, l);
         if self.basis[l] != ART {
             self.set_basic(self.basis[l], false);
         }

@@ -172,7 +172,8 @@ impl FastSolver {
 
     /// After a certified fast optimum: its basis is the next warm start.
     pub(super) fn remember_optimal(&mut self) {
-        self.last_bound = f64::EPSILON * self.condition * norm(&self.binv) * (1.0 + norm(&self.c));
+        self.last_bound =
+            f64::EPSILON * self.condition * norm(&self.binv.inv) * (1.0 + norm(&self.c));
         if self.warm.on {
             match &mut self.warm.basis {
                 Some(wb) => wb.copy_from_slice(&self.basis),
