@@ -319,3 +319,55 @@ pub(super) fn max_volume_rows(rows: &[f64], n: usize, r: usize) -> Vec<usize> {
     }
     chosen
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Columns of a 3-row LP: a_i = (1, i, i²) for i = 0..4, and an "artificial" (index 9).
+    fn column(i: usize) -> &'static [f64] {
+        const COLS: [[f64; 3]; 5] = [
+            [1.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0],
+            [1.0, 2.0, 4.0],
+            [1.0, 3.0, 9.0],
+            [1.0, 4.0, 16.0],
+        ];
+        const ART: [f64; 3] = [0.0, 0.0, 1.0];
+        if i == 9 {
+            &ART
+        } else {
+            &COLS[i]
+        }
+    }
+
+    #[test]
+    fn basis_inverse_factors_updates_and_knows_when_it_is_fresh() {
+        let mut b = BasisInverse::new(3);
+        // B = [a_0 a_1 a_2] = [[1,1,1],[0,1,2],[0,1,4]]: B⁻¹ = [[1,-1.5,0.5],[0,2,-1],[0,-0.5,0.5]].
+        assert!(b.factor(&[0, 1, 2], column, 9, 1e12));
+        let want = [1.0, -1.5, 0.5, 0.0, 2.0, -1.0, 0.0, -0.5, 0.5];
+        for (g, w) in b.inv.iter().zip(want) {
+            assert!((g - w).abs() < 1e-15, "{:?}", b.inv);
+        }
+        assert!(b.is_fresh_for(&[0, 1, 2]));
+        assert!(!b.is_fresh_for(&[0, 1, 3]));
+        // a_3 replaces position 1: the update equals a fresh inverse of [a_0 a_3 a_2].
+        let mut alpha = [0.0; 3];
+        b.apply(column(3), &mut alpha);
+        assert_eq!(alpha, [1.0, -3.0, 3.0]); // a_3 = a_0 − 3a_1 + 3a_2
+        b.pivot(&alpha, 1);
+        assert!(!b.is_fresh_for(&[0, 3, 2]));
+        let mut fresh = BasisInverse::new(3);
+        assert!(fresh.factor(&[0, 3, 2], column, 9, 1e12));
+        for (u, f) in b.inv.iter().zip(&fresh.inv) {
+            assert!((u - f).abs() < 1e-14, "{:?} vs {:?}", b.inv, fresh.inv);
+        }
+        // A basis with the artificial column is factorised but never counts as fresh.
+        assert!(b.factor(&[0, 1, 9], column, 9, 1e12));
+        assert!(!b.is_fresh_for(&[0, 1, 9]));
+        // Singular (a repeated column) and too ill-conditioned bases are refused.
+        assert!(!b.factor(&[0, 1, 1], column, 9, 1e12));
+        assert!(!b.factor(&[0, 1, 2], column, 9, 10.0));
+    }
+}
