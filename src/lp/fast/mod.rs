@@ -64,8 +64,8 @@ use super::pricing::ColumnTable;
 use super::scaled::{Found, ScaledSimplex};
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
-use linalg::{max_volume_rows, norm};
-use ortho::{orthonormalise, r_condition, Ortho};
+use linalg::max_volume_rows;
+use ortho::{orthonormalise, Ortho};
 
 /// Primal feasibility tolerance on weights (which sum to 1).
 const TOL_P: f64 = 1e-10;
@@ -179,18 +179,10 @@ pub struct FastSolver {
     m: usize,
     /// Numerical rank of [1, b_1..b_m] on the grid (= number of rows of the transformed LP).
     r: usize,
-    /// Transformed columns, row-major: rows[i*r + k] = a_i[k].
-    rows: Vec<f64>,
-    /// For function j (0 = constant): coefficients R[k][j], k < r, at rcoef[j*r + k].
-    rcoef: Vec<f64>,
-    /// For function j: its position among the kept (independent) functions, if kept.
-    kept: Vec<Option<usize>>,
-    /// For function j: max |M_j| over the grid (scale of the consistency check).
-    fscale: Vec<f64>,
+    /// The orthonormalised coordinates of the table (columns a_i, R, kept functions).
+    ortho: Ortho,
     /// Well-conditioned cold-start basis.
     b0: Vec<usize>,
-    /// cond_F of [1, b_1..b_m] on the grid (via R).
-    condition: f64,
     /// Rounding-error bound on the weights of the last solve.
     last_bound: f64,
     /// The crossover has just left a basic feasible solution with its (updated) inverse.
@@ -232,8 +224,6 @@ pub struct FastSolver {
     /// Duals and weights before the last verification refactorisation.
     yold: Vec<f64>,
     xold: Vec<f64>,
-    /// max_i ‖a_i‖₂.
-    amax: f64,
     /// The column tables and the partial-pricing state.
     pricing: price::Pricing,
     /// Least-squares workspace of the polish and the rescue.
@@ -253,30 +243,22 @@ impl FastSolver {
         let n = table.n();
         let m = table.m();
         let mm = m + 1;
-        let Ortho {
-            r,
-            rows,
-            cols,
-            rcoef,
-            kept,
-            fscale,
-        } = orthonormalise(&table);
-        let b0 = max_volume_rows(&rows, n, r);
-        let amax = (0..n)
-            .map(|i| norm(&rows[i * r..(i + 1) * r]))
-            .fold(0.0, f64::max);
-        let condition = r_condition(&rcoef, &kept, r);
+        let (ortho, cols) = orthonormalise(&table);
+        let r = ortho.r;
+        let b0 = max_volume_rows(&ortho.rows, n, r);
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
-        let cert_rows: Vec<usize> = (0..mm).filter(|&j| kept[j].is_some()).collect();
+        let cert_rows: Vec<usize> = (0..mm).filter(|&j| ortho.kept[j].is_some()).collect();
+        let oscale = ortho
+            .fscale
+            .iter()
+            .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
+            .collect();
         let mut solver = FastSolver {
             n,
             m,
             r,
-            rows,
-            rcoef,
-            kept,
+            ortho,
             b0,
-            condition,
             last_bound: 0.0,
             crossed: false,
             warm: starts::WarmStart {
@@ -305,7 +287,6 @@ impl FastSolver {
             x_backup: vec![0.0; r],
             yold: vec![0.0; r],
             xold: vec![0.0; r],
-            amax,
             pricing: price::Pricing {
                 is_basic: vec![false; n],
                 stride: 1,
@@ -321,12 +302,8 @@ impl FastSolver {
                 r: vec![0.0; r * r],
                 w: vec![0.0; r],
             },
-            oscale: fscale
-                .iter()
-                .map(|&f| if f > 0.0 { 1.0 / f } else { 1.0 })
-                .collect(),
+            oscale,
             lo_rhs: vec![0.0; mm],
-            fscale,
             table,
             cross: starts::Crossover {
                 v: vec![0.0; r],
@@ -440,7 +417,7 @@ impl FastSolver {
     /// Condition number (Frobenius) of the n × (m+1) matrix [1, b_1(z), …, b_m(z)] on the grid.
     /// Above ~1e8 the candidate is numerically rank-deficient for double precision.
     pub fn condition(&self) -> f64 {
-        self.condition
+        self.ortho.condition
     }
 
     /// A first-order bound on how far the weights (and G) of the last optimal solve can move
@@ -497,7 +474,7 @@ impl FastSolver {
         for &(i, w) in dist {
             let i = i as usize;
             total += w;
-            for (ck, ak) in self.c.iter_mut().zip(&self.rows[i * r..(i + 1) * r]) {
+            for (ck, ak) in self.c.iter_mut().zip(&self.ortho.rows[i * r..(i + 1) * r]) {
                 *ck += w * ak;
             }
         }
@@ -569,7 +546,7 @@ impl FastSolver {
                 return Ok(certified(c));
             }
         }
-        let mut verdict = if c_given || self.transform(moments) {
+        let mut verdict = if c_given || self.ortho.transform(moments, &mut self.u, &mut self.c) {
             self.c0.copy_from_slice(&self.c);
             self.partial_optimum = true;
             self.full_pass_skipped = false;
@@ -577,7 +554,7 @@ impl FastSolver {
         } else {
             // A dependent function's moment contradicts the others: its dependency is the
             // Farkas ray, checked on every row (the usual certifier holds the kept rows only).
-            if let Some(y) = self.inconsistency_ray(moments) {
+            if let Some(y) = self.ortho.inconsistency_ray(moments) {
                 let mut all = Certifier::new(&self.table, (0..=self.m).collect());
                 if all.infeasible(moments, &y).is_ok() {
                     self.stats.infeasible += 1;
@@ -866,6 +843,45 @@ mod tests {
         assert_eq!(s.solve(&[0.5, 0.3125], 1.5).unwrap().g, 1.0);
     }
 
+    /// The orthonormalised coordinates on {0, 1/2, 1} with (z, z²): orthonormal rows
+    /// (Σ_i a_i a_iᵀ = n I), and c = transform(b̄) = Σ_i w_i a_i for the distribution
+    /// w = (1/4, 1/2, 1/4) whose moments are b = (1/2, 3/8).
+    #[test]
+    fn orthonormal_coordinates_and_transformed_moments() {
+        let s = solver(3, 2, |z, o| (o[0], o[1]) = (z, z * z));
+        let o = &s.ortho;
+        assert_eq!((o.r, o.kept.clone()), (3, vec![Some(0), Some(1), Some(2)]));
+        for k in 0..3 {
+            for l in 0..3 {
+                let g: f64 = (0..3).map(|i| o.rows[i * 3 + k] * o.rows[i * 3 + l]).sum();
+                assert!(
+                    (g - if k == l { 3.0 } else { 0.0 }).abs() < 1e-14,
+                    "{k} {l}: {g}"
+                );
+            }
+        }
+        let (mut u, mut c) = ([0.0; 3], [0.0; 3]);
+        assert!(o.transform(&[0.5, 0.375], &mut u, &mut c));
+        let w = [0.25, 0.5, 0.25];
+        for k in 0..3 {
+            let want: f64 = (0..3).map(|i| w[i] * o.rows[i * 3 + k]).sum();
+            assert!((c[k] - want).abs() < 1e-14, "{c:?}");
+        }
+        assert!(o.inconsistency_ray(&[0.5, 0.375]).is_none());
+        assert!(o.condition >= 1.0 && o.condition.is_finite());
+        // max_i ‖a_i‖: a_i = √n Q_i, and Σ_i ‖a_i‖² = n·r.
+        let norms: Vec<f64> = (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|k| o.rows[i * 3 + k].powi(2))
+                    .sum::<f64>()
+                    .sqrt()
+            })
+            .collect();
+        assert_eq!(o.amax, norms.iter().cloned().fold(0.0, f64::max));
+        assert!((norms.iter().map(|v| v * v).sum::<f64>() - 9.0).abs() < 1e-13);
+    }
+
     /// (z, 2z) has rank 2 with the constant: the second moment is checked for consistency
     /// (b₂ = 2b₁) instead of being a row of the LP.
     #[test]
@@ -883,12 +899,12 @@ mod tests {
         assert_eq!(bad.status, Status::Infeasible);
         assert!(bad.g.is_nan() && bad.support.is_empty());
         assert_eq!(s.stats().infeasible, infeasible + 1);
-        let y = s.inconsistency_ray(&[0.375, 0.7]).unwrap();
+        let y = s.ortho.inconsistency_ray(&[0.375, 0.7]).unwrap();
         for (got, want) in y.iter().zip([0.0, -2.0, 1.0]) {
             assert!((got - want).abs() < 1e-14, "{y:?}");
         }
         // Consistent to the tolerance: no ray, and the LP is solved on the kept rows.
-        assert!(s.inconsistency_ray(&[0.375, 0.75 + 1e-12]).is_none());
+        assert!(s.ortho.inconsistency_ray(&[0.375, 0.75 + 1e-12]).is_none());
         // An inconsistency far below the certificate's tolerance-widened moment space but
         // above the consistency check's: `failed` or `infeasible`, never an optimum.
         let near = s.solve(&[0.375, 0.75 + 3e-8], 0.5).unwrap();

@@ -40,7 +40,7 @@ impl FastSolver {
         }
         for a in 0..k {
             let bt = self.basis[self.ls.sup[a]];
-            self.ls.a[a * r..(a + 1) * r].copy_from_slice(&self.rows[bt * r..(bt + 1) * r]);
+            self.ls.a[a * r..(a + 1) * r].copy_from_slice(&self.ortho.rows[bt * r..(bt + 1) * r]);
         }
         let w = &mut self.ls.w[..k];
         if !least_squares(
@@ -117,7 +117,7 @@ impl FastSolver {
             .map(|&t| (self.basis[t], self.x[t]))
             .collect();
         let cols: Vec<usize> = support.iter().map(|&(i, _)| i).collect();
-        let Some(full) = complete_basis(&self.rows, self.n, r, &cols) else {
+        let Some(full) = complete_basis(&self.ortho.rows, self.n, r, &cols) else {
             return false;
         };
         self.mark_basic(false);
@@ -161,7 +161,7 @@ impl FastSolver {
             }
             // u = √n R⁻ᵀ ρ (forward substitution, every function kept).
             for j in 0..mm {
-                let coef = &self.rcoef[j * r..(j + 1) * r];
+                let coef = &self.ortho.rcoef[j * r..(j + 1) * r];
                 let mut acc = self.lo_rhs[j];
                 for k in 0..j {
                     acc -= coef[k] * self.u[k];

@@ -63,7 +63,7 @@ impl FastSolver {
 
     /// Basis inverse only (see [`Self::refactor`]); false if numerically singular.
     pub(super) fn factor(&mut self) -> bool {
-        let (r, rows, art) = (self.r, &self.rows, &self.art);
+        let (r, rows, art) = (self.r, &self.ortho.rows, &self.art);
         let column = |i: usize| {
             if i == ART {
                 &art[..]
@@ -93,7 +93,7 @@ impl FastSolver {
                     let col = if bt == ART {
                         &self.art[..]
                     } else {
-                        &self.rows[bt * r..(bt + 1) * r]
+                        &self.ortho.rows[bt * r..(bt + 1) * r]
                     };
                     for (ak, ck) in self.alpha.iter_mut().zip(col) {
                         *ak -= ck * xt;
@@ -192,7 +192,7 @@ impl FastSolver {
             if self.x[t] < -TOL_P {
                 let bt = self.basis[t];
                 for k in 0..r {
-                    self.art[k] -= self.rows[bt * r + k];
+                    self.art[k] -= self.ortho.rows[bt * r + k];
                 }
             }
         }
@@ -302,7 +302,7 @@ impl FastSolver {
             let dt = 1e-7 * (1.0 + t as f64 / r as f64);
             self.x[t] += dt;
             for k in 0..r {
-                self.c[k] += dt * self.rows[bt * r + k];
+                self.c[k] += dt * self.ortho.rows[bt * r + k];
             }
         }
         st.perturbed = true;
@@ -411,7 +411,7 @@ impl FastSolver {
             .map(|(a, b)| (a - b) * (a - b))
             .sum::<f64>()
             .sqrt();
-        if dy * self.amax > 0.5 * TOL_D || dq < -0.5 * TOL_D {
+        if dy * self.ortho.amax > 0.5 * TOL_D || dq < -0.5 * TOL_D {
             return Err(Jump::Next);
         }
         Ok(())
@@ -548,7 +548,7 @@ impl FastSolver {
     pub(super) fn load_alpha(&mut self, j: usize) {
         let r = self.r;
         self.binv
-            .apply(&self.rows[j * r..(j + 1) * r], &mut self.alpha);
+            .apply(&self.ortho.rows[j * r..(j + 1) * r], &mut self.alpha);
     }
 
     /// Exchange basis position l for column q with step theta (alpha already loaded).

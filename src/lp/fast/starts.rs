@@ -173,7 +173,7 @@ impl FastSolver {
     /// After a certified fast optimum: its basis is the next warm start.
     pub(super) fn remember_optimal(&mut self) {
         self.last_bound =
-            f64::EPSILON * self.condition * norm(&self.binv.inv) * (1.0 + norm(&self.c));
+            f64::EPSILON * self.ortho.condition * norm(&self.binv.inv) * (1.0 + norm(&self.c));
         if self.warm.on {
             match &mut self.warm.basis {
                 Some(wb) => wb.copy_from_slice(&self.basis),
@@ -205,7 +205,7 @@ impl FastSolver {
                 basis.push(i);
             }
         }
-        let rows = &self.rows;
+        let rows = &self.ortho.rows;
         complete_basis(rows, self.n, self.r, &basis)
     }
 
@@ -271,7 +271,7 @@ impl FastSolver {
             }
             if w > 0.0 {
                 let k = self.cross.dist.len();
-                let a = &self.rows[i * r..(i + 1) * r];
+                let a = &self.ortho.rows[i * r..(i + 1) * r];
                 let mut nrm = 0.0;
                 for (c, &ac) in a.iter().enumerate() {
                     self.cross.a[c * stride + k] = ac;
@@ -312,7 +312,7 @@ impl FastSolver {
             }
             let i = self.cross.dist[best].0;
             let v = &mut self.cross.v;
-            v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
+            v.copy_from_slice(&self.ortho.rows[i * r..(i + 1) * r]);
             for _pass in 0..2 {
                 for u in self.cross.u.chunks(r) {
                     let h = dot(v, u);
@@ -367,7 +367,7 @@ impl FastSolver {
                 continue;
             }
             let v = &mut self.cross.v;
-            v.copy_from_slice(&self.rows[i * r..(i + 1) * r]);
+            v.copy_from_slice(&self.ortho.rows[i * r..(i + 1) * r]);
             let n0 = norm(v);
             for _pass in 0..2 {
                 for u in self.cross.u.chunks(r) {
