@@ -1,7 +1,7 @@
 #!/bin/sh
 # How a race's cost depends on its fragment order: run `momentlab search --m M --race-seed S
 # --no-report` for each seed S (rows in results/search-m<M>-order<S>, resumed if present) and
-# record per order the stage sizes, LP solves, winner and tie-set size in
+# record per order the stage sizes, LP solves, winner and tie set in
 # reports/search/race_orders_m<M>.json, which docs/search.md ("Sizing a run") cites.
 # Usage: scripts/race-orders.sh M SEED...   (from the repository root, after `cargo build --release`)
 set -eu
@@ -23,11 +23,12 @@ for s in seeds:
     d = f"results/search-m{m}-order{s}"
     c = json.load(open(f"{d}/complete.json"))
     w = c["race"]["winner"]
-    rows = (json.loads(l) for l in open(f"{d}/results.jsonl"))
+    rows = [json.loads(l) for l in open(f"{d}/results.jsonl")]
     names = next(r["functions"] for r in rows if r["index"] == w)
+    tied = sorted(r["index"] for r in rows if r.get("tied"))
     orders.append({"command": f"momentlab search --m {m} --race-seed {s} --results {d} --no-report",
                    "race_seed": int(s), "stages": c["stages"], "lp_solves": c["lp_solves"],
-                   "winner": w, "winner_functions": names, "tied": c["race"]["tied"]})
+                   "winner": w, "winner_functions": names, "tied": c["race"]["tied"], "tied_indices": tied})
 doc = {"script": "scripts/race-orders.sh " + " ".join([m] + seeds), "orders": orders}
 open(out, "w").write(json.dumps(doc, indent=2) + "\n")
 PY

@@ -349,11 +349,12 @@ fn race_times(reports: &Path) -> Result<String> {
 }
 
 /// docs/search.md's table of one race run in several fragment orders (`--race-seed`): stage
-/// sizes, LP solves against their mean, winner and tie set, from
+/// sizes, LP solves against their mean, winner, tie set and how many of its candidates the first
+/// order's tie set holds, from
 /// reports/search/race_orders_m<M>.json (`scripts/race-orders.sh M SEED…`).
 fn race_orders(reports: &Path) -> Result<String> {
     let mut s = String::from(
-        "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied |\n| --- | ---: | --- | ---: | ---: | --- | ---: |\n",
+        "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | --- | ---: | ---: |\n",
     );
     for m in 2..=4 {
         let file = reports.join(format!("search/race_orders_m{m}.json"));
@@ -371,6 +372,13 @@ fn race_orders(reports: &Path) -> Result<String> {
             .map(|o| f(o, "lp_solves", &file))
             .collect::<Result<Vec<f64>>>()?;
         let mean = solves.iter().sum::<f64>() / solves.len() as f64;
+        let tied_of = |o: &Value| -> Vec<u64> {
+            o.get("tied_indices")
+                .and_then(Value::as_array)
+                .map(|a| a.iter().filter_map(Value::as_u64).collect())
+                .unwrap_or_default()
+        };
+        let first = tied_of(&orders[0]);
         for (o, lp) in orders.iter().zip(&solves) {
             let stages: Vec<String> = o
                 .get("stages")
@@ -386,13 +394,14 @@ fn race_orders(reports: &Path) -> Result<String> {
                 .unwrap_or_default();
             let _ = writeln!(
                 s,
-                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | ({}) | {:.0} |",
+                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | ({}) | {:.0} | {} |",
                 f(o, "race_seed", &file)?,
                 stages.join(", "),
                 lp / 1e6,
                 100.0 * (lp / mean - 1.0),
                 names.join(", "),
-                f(o, "tied", &file)?
+                f(o, "tied", &file)?,
+                tied_of(o).iter().filter(|i| first.contains(i)).count()
             );
         }
         let (lo, hi) = solves
