@@ -353,14 +353,18 @@ fn race_times(reports: &Path) -> Result<String> {
 /// order's tie set holds, from
 /// reports/search/race_orders_m<M>.json (`scripts/race-orders.sh M SEED…`).
 fn race_orders(reports: &Path) -> Result<String> {
-    let mut s = String::from(
-        "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | --- | ---: | ---: |\n",
-    );
+    let mut s = String::new();
     for m in 2..=4 {
         let file = reports.join(format!("search/race_orders_m{m}.json"));
         if !file.is_file() {
             continue;
         }
+        if !s.is_empty() {
+            s.push('\n');
+        }
+        s.push_str(
+            "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | --- | ---: | ---: |\n",
+        );
         let v = read_json(&file)?;
         let orders = v
             .get("orders")
@@ -398,7 +402,7 @@ fn race_orders(reports: &Path) -> Result<String> {
                 f(o, "race_seed", &file)?,
                 stages.join(", "),
                 lp / 1e6,
-                100.0 * (lp / mean - 1.0),
+                percent(lp / mean),
                 names.join(", "),
                 f(o, "tied", &file)?,
                 tied_of(o).iter().filter(|i| first.contains(i)).count()
@@ -414,11 +418,16 @@ fn race_orders(reports: &Path) -> Result<String> {
             lo / 1e6,
             hi / 1e6,
             mean / 1e6,
-            100.0 * (lo / mean - 1.0),
-            100.0 * (hi / mean - 1.0)
+            percent(lo / mean),
+            percent(hi / mean)
         );
     }
     Ok(s)
+}
+
+/// 100·(ratio − 1) rounded to a whole percent, without a negative zero.
+fn percent(ratio: f64) -> f64 {
+    (100.0 * (ratio - 1.0)).round() + 0.0
 }
 
 /// Seconds of a duration printed by `search --plan`: "45 s", "26 min 1 s", "2 h 5 min".
