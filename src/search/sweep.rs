@@ -45,13 +45,16 @@ use super::results::{
     append_jsonl, read_json, read_jsonl, write_json, Row, COMPLETE_FILE, CONFIG_FILE, RESULTS_FILE,
 };
 
+mod racing;
+
 /// Statistics of the survivors on the fragments they had not seen (completion block).
 const FINAL_FILE: &str = "final.jsonl";
 use super::config::SweepConfig;
-use super::race::{self, Bound, Elimination, Moments, StageStats};
+use super::race::{Bound, Moments, StageStats};
 use super::Scorer;
 use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
+use racing::Race;
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
@@ -385,7 +388,8 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
             None,
         )
     } else {
-        let r = trystv!(race_all(&ctx, cfg, &mut w, dir, &mut done, &active, &names));
+        let race = Race::new(&ctx, cfg, dir, &active, &names);
+        let r = trystv!(race.run(&mut w, &mut done));
         (r.lp_solves, r.summary.tied, r.stage_sizes, Some(r.summary))
     };
 
@@ -486,268 +490,6 @@ fn exhaustive(
     Ok(Ok(()))
 }
 
-/// The outcome of [`race_all`].
-struct Raced {
-    lp_solves: u64,
-    stage_sizes: Vec<(u64, u64)>,
-    summary: RaceSummary,
-}
-
-/// Racing with elimination by evidence (module docs), then the survivors on every fragment.
-#[allow(clippy::too_many_arguments)]
-fn race_all(
-    ctx: &Ctx,
-    cfg: &SweepConfig,
-    w: &mut Writer,
-    dir: &Path,
-    done: &mut BTreeSet<u64>,
-    active: &[u64],
-    names: &dyn Fn(u64) -> Vec<String>,
-) -> Result<Result<Raced, Stopped>> {
-    let data = ctx.scorer.data();
-    let results = dir.join(RESULTS_FILE);
-    let nontrivial = data.fragments().len() as u64;
-    let scale = if data.total_count() == 0 {
-        0.0
-    } else {
-        data.nontrivial_population() as f64 / data.total_count() as f64
-    };
-    let order = data.stratified_order(cfg.seed);
-    let (pilot_range, plan) = race::blocks(order.len(), cfg.first_sample, cfg.growth);
-    let planned_looks: usize = plan
-        .iter()
-        .map(|r| race::looks(r.len(), cfg.early_look).len())
-        .sum();
-    let sorted = |ids: &[u32]| {
-        let mut b = ids.to_vec();
-        b.sort_unstable();
-        b
-    };
-    let alpha = 1.0 - cfg.confidence;
-    let mut cur: Vec<u64> = active.to_vec();
-    let mut lp_solves = 0u64;
-    let mut stage_sizes = Vec::new();
-    let mut logs: Vec<StageLog> = Vec::new();
-    let mut pooled: HashMap<u64, StageRow> = HashMap::new();
-    // Per block seen by the survivors: its reference and every candidate's statistics.
-    let mut history: Vec<(u64, HashMap<u64, StageRow>)> = Vec::new();
-    let mut leader: Option<u64> = None;
-    let mut used = 0u64;
-    let mut run = 0usize;
-    let (mut n_conf, mut n_cap) = (0u64, 0u64);
-    for (k, range) in plan.iter().enumerate() {
-        if cur.len() <= 1 {
-            break;
-        }
-        let block = &order[range.clone()];
-        let reference = match leader {
-            Some(l) => l,
-            None => {
-                let pilot_block = sorted(&order[pilot_range.clone()]);
-                used += pilot_block.len() as u64;
-                let p = cfg.pilot.clamp(1, cur.len());
-                lp_solves += (p * pilot_block.len()) as u64;
-                pilot_best(ctx, &cur, p, &pilot_block)?
-            }
-        };
-        stage_sizes.push((cur.len() as u64, block.len() as u64));
-        used += block.len() as u64;
-        let delta = race::stage_delta(alpha, planned_looks, cur.len(), cfg.shard[1]);
-        let rule = race::Rule {
-            delta,
-            bound: cfg.bound,
-            paired: cfg.paired,
-            keep: cfg.keep,
-            top: cfg.top,
-        };
-        // Looks: the first half by confidence only, then the survivors on the whole block.
-        let looks = race::looks(block.len(), cfg.early_look);
-        let mut alive = cur.clone();
-        let mut acc: HashMap<u64, StageRow> = HashMap::new();
-        let mut left: Vec<(StageStats, Elimination)> = Vec::new();
-        let mut early = 0u64;
-        for (j, part) in looks.iter().enumerate() {
-            let last = j + 1 == looks.len();
-            let ids = sorted(&block[part.clone()]);
-            let path = stage_file(dir, k, j);
-            let label = format!(
-                "stage {k}{}: {} candidates × {} fragments",
-                if looks.len() > 1 {
-                    format!(", look {}/{}", j + 1, looks.len())
-                } else {
-                    String::new()
-                },
-                alive.len(),
-                ids.len()
-            );
-            let stored = match score_block(ctx, w, &path, &alive, reference, &ids, label)? {
-                Ok(s) => s,
-                Err(Stopped) => return Ok(Err(Stopped)),
-            };
-            lp_solves += ((alive.len() + 1) * ids.len()) as u64;
-            let stats: Vec<StageStats> = alive
-                .iter()
-                .map(|i| {
-                    let r = stored
-                        .get(i)
-                        .with_context(|| format!("{}: candidate {i} missing", path.display()))?;
-                    let a = acc.entry(*i).or_insert_with(|| StageRow::empty(*i));
-                    a.add(r);
-                    Ok(a.stats())
-                })
-                .collect::<Result<_>>()?;
-            let look_rule = if last {
-                rule
-            } else {
-                race::Rule { keep: 1.0, ..rule }
-            };
-            // The cap ranks by the mean over every block seen (earlier stages and this one).
-            let rank: Vec<f64> = stats
-                .iter()
-                .map(|c| {
-                    let before = pooled.get(&c.index).map_or((0, 0.0), |p| (p.n, p.sum));
-                    (before.1 + c.e.sum) / (before.0 + c.e.n) as f64
-                })
-                .collect();
-            let decisions = race::decide(&stats, &rank, reference, &look_rule);
-            alive.clear();
-            for (s, d) in stats.iter().zip(&decisions) {
-                match d {
-                    None => alive.push(s.index),
-                    Some(e) => {
-                        early += !last as u64;
-                        left.push((*s, *e));
-                    }
-                }
-            }
-        }
-        let next = alive;
-        let mut out = Vec::new();
-        let (mut conf, mut cap) = (0u64, 0u64);
-        for i in &cur {
-            pooled
-                .entry(*i)
-                .or_insert_with(|| StageRow::empty(*i))
-                .add(&acc[i]);
-        }
-        for (s, e) in &left {
-            conf += (*e == Elimination::Confidence) as u64;
-            cap += (*e == Elimination::Cap) as u64;
-            if !done.contains(&s.index) {
-                let mut row = pooled_row(&pooled[&s.index], data, names, nontrivial);
-                row.stage = k;
-                row.eliminated = Some(*e);
-                row.versus = Some(reference);
-                row.diff = Some(s.d.mean() * scale);
-                row.diff_se = Some(s.d.se() * scale);
-                out.push(row);
-            }
-        }
-        out.sort_by_key(|r| r.index);
-        for batch in out.chunks(1000) {
-            if let Err(Stopped) = w.append(&results, batch)? {
-                return Ok(Err(Stopped));
-            }
-            done.extend(batch.iter().map(|r| r.index));
-        }
-        logs.push(StageLog {
-            candidates: cur.len() as u64,
-            fragments: block.len() as u64,
-            reference,
-            delta,
-            z: race::normal_quantile(1.0 - delta),
-            cap: race::cap(cfg.keep, cur.len() as u64 - early, cfg.top as u64),
-            confidence_eliminated: conf,
-            early_eliminated: early,
-            cap_eliminated: cap,
-        });
-        n_conf += conf;
-        n_cap += cap;
-        history.push((reference, acc));
-        cur = next;
-        leader = best_of(&cur, &pooled);
-        run = k + 1;
-    }
-
-    // --- survivors: complete on every fragment they have not seen ---------------------------------
-    let mut rest: Vec<u32> = Vec::new();
-    if run > 0 {
-        rest.extend_from_slice(&order[pilot_range.clone()]);
-        for r in &plan[run..] {
-            rest.extend_from_slice(&order[r.clone()]);
-        }
-    } else {
-        rest.extend_from_slice(&order);
-    }
-    let rest = sorted(&rest);
-    if let (Some(reference), false) = (leader.or(cur.first().copied()), rest.is_empty()) {
-        let path = dir.join(FINAL_FILE);
-        let label = format!("final: {} candidates × {} fragments", cur.len(), rest.len());
-        let stored = match score_block(ctx, w, &path, &cur, reference, &rest, label)? {
-            Ok(s) => s,
-            Err(Stopped) => return Ok(Err(Stopped)),
-        };
-        lp_solves += ((cur.len() + 1) * rest.len()) as u64;
-        for i in &cur {
-            let r = stored
-                .get(i)
-                .with_context(|| format!("{}: candidate {i} missing", path.display()))?;
-            pooled
-                .entry(*i)
-                .or_insert_with(|| StageRow::empty(*i))
-                .add(r);
-        }
-        history.push((reference, stored));
-    }
-    let winner = best_of(&cur, &pooled);
-    let mut rows = Vec::new();
-    for &i in cur.iter().filter(|i| !done.contains(i)) {
-        let mut row = pooled_row(&pooled[&i], data, names, nontrivial);
-        let w_ = winner.expect("survivors have a winner");
-        let parts: Vec<(u64, f64, f64)> = history
-            .iter()
-            .map(|(_, m)| {
-                let (c, b) = (m[&i].stats().d, m[&w_].stats().d);
-                (c.n, c.mean() - b.mean(), c.se() + b.se())
-            })
-            .collect();
-        let (d, se) = race::pooled(&parts);
-        row.stage = run;
-        row.tied = true;
-        row.versus = Some(w_);
-        row.diff = Some(d * scale);
-        row.diff_se = Some(if i == w_ { 0.0 } else { se * scale });
-        rows.push(row);
-    }
-    for batch in rows.chunks(1000) {
-        if let Err(Stopped) = w.append(&results, batch)? {
-            return Ok(Err(Stopped));
-        }
-        done.extend(batch.iter().map(|r| r.index));
-    }
-    let resolved = cur.len() == 1;
-    Ok(Ok(Raced {
-        lp_solves,
-        stage_sizes,
-        summary: RaceSummary {
-            confidence: cfg.confidence,
-            bound: cfg.bound,
-            paired: cfg.paired,
-            pilot_fragments: if run > 0 { pilot_range.len() as u64 } else { 0 },
-            stages: logs,
-            looks: planned_looks as u64,
-            fragment_budget: nontrivial,
-            fragments_used: if run > 0 { used } else { nontrivial },
-            resolved,
-            budget_bound: cur.len() > 1,
-            tied: cur.len() as u64,
-            winner,
-            confidence_eliminated: n_conf,
-            cap_eliminated: n_cap,
-        },
-    }))
-}
-
 /// The statistics file of look `j` of racing stage `k`: `stage{k}.jsonl` for the first (or
 /// only) look, `stage{k}.look{j}.jsonl` for the second.
 pub fn stage_file(dir: &Path, k: usize, j: usize) -> std::path::PathBuf {
@@ -767,14 +509,6 @@ fn pilot_best(ctx: &Ctx, cur: &[u64], p: usize, block: &[u32]) -> Result<u64> {
         .min_by(|&a, &b| sums[a].total_cmp(&sums[b]).then(a.cmp(&b)))
         .expect("p ≥ 1");
     Ok(pilots[best])
-}
-
-/// The candidate of `cur` with the smallest pooled mean (ties: smallest index).
-fn best_of(cur: &[u64], pooled: &HashMap<u64, StageRow>) -> Option<u64> {
-    cur.iter().copied().min_by(|a, b| {
-        let (ma, mb) = (pooled[a].stats().e.mean(), pooled[b].stats().e.mean());
-        ma.total_cmp(&mb).then(a.cmp(b))
-    })
 }
 
 /// Score `cands` on `block` with paired differences to `reference`, resumably into `path`
