@@ -14,10 +14,11 @@ pub mod out;
 pub use input::{read_bytes, read_input, read_text, Limit};
 pub use out::{check_name, safe_name, DirLock, OutDir, LOCK_FILE};
 
-use anyhow::{Context, Result};
+use anyhow::{anyhow, Context, Result};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::fs;
+use std::os::unix::fs::OpenOptionsExt;
 use std::path::Path;
 
 /// Write `value` as pretty JSON (with a final newline) to `path`, atomically, replacing an
@@ -47,10 +48,18 @@ pub fn read_jsonl<T: DeserializeOwned>(path: &Path, repair: bool) -> Result<Vec<
     let text = read_bytes(path, Limit::ROWS)?;
     let keep = text.iter().rposition(|&c| c == b'\n').map_or(0, |p| p + 1);
     if keep < text.len() && repair {
+        // Cut the file itself, never what a symbolic link in its place points at.
         let f = fs::OpenOptions::new()
             .write(true)
+            .custom_flags(libc::O_NOFOLLOW)
             .open(path)
-            .with_context(|| format!("repairing {}", path.display()))?;
+            .map_err(|e| match e.raw_os_error() {
+                Some(libc::ELOOP) => anyhow!(
+                    "{}: is a symbolic link; refusing to repair through it",
+                    path.display()
+                ),
+                _ => anyhow!("repairing {}: {e}", path.display()),
+            })?;
         f.set_len(keep as u64)
             .with_context(|| format!("repairing {}", path.display()))?;
     }
@@ -100,6 +109,28 @@ mod tests {
         fs::write(&p, "1\nx\n3\n").unwrap();
         let e = read_jsonl::<u32>(&p, true).unwrap_err();
         assert!(format!("{e:#}").contains("x.jsonl:2"), "{e:#}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A results file that is a link to a file elsewhere is never cut through the link.
+    #[test]
+    fn repair_does_not_follow_a_symbolic_link() {
+        let dir = std::env::temp_dir().join(format!("momentlab-jsonl-link-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(dir.join("out")).unwrap();
+        let outside = dir.join("outside.jsonl");
+        fs::write(&outside, "1\n2\n3").unwrap();
+        let link = dir.join("out/results.jsonl");
+        std::os::unix::fs::symlink(&outside, &link).unwrap();
+        let e = format!("{:#}", read_jsonl::<u32>(&link, true).unwrap_err());
+        assert!(e.contains("symbolic link"), "{e}");
+        assert_eq!(
+            fs::read(&outside).unwrap().len(),
+            5,
+            "the outside file was cut"
+        );
+        // Read-only use still reads the whole lines.
+        assert_eq!(read_jsonl::<u32>(&link, false).unwrap(), vec![1, 2]);
         fs::remove_dir_all(&dir).unwrap();
     }
 

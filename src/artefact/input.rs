@@ -30,6 +30,8 @@ impl Limit {
     pub const SCENE: Limit = Limit::new(16 << 20, "scene file");
     /// Mesh files referenced by scenes (OBJ and the like).
     pub const MESH: Limit = Limit::new(1 << 30, "mesh file");
+    /// A deep OpenEXR image (read whole before decoding).
+    pub const DEEP: Limit = Limit::new(4 << 30, "deep OpenEXR image");
     /// Basis catalogs.
     pub const CATALOG: Limit = Limit::new(16 << 20, "catalog");
     /// Configuration, summary and marker files written by momentlab itself.

@@ -384,7 +384,13 @@ fn put_atomically(
     let target = dir.join(file);
     let (tmp, mut f) = loop {
         let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
-        let short: String = file.chars().take(100).collect();
+        // At most 64 bytes of the name: the temporary name stays within NAME_MAX (255 bytes)
+        // for every output name the writer accepts.
+        let mut cut = file.len().min(64);
+        while !file.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        let short = &file[..cut];
         let tmp = dir.join(format!(".{short}.{}.{n}.tmp", std::process::id()));
         match fs::OpenOptions::new()
             .write(true)

@@ -4,6 +4,7 @@
 
 use super::mesh::load_mesh;
 pub use super::mesh::load_obj_bytes;
+use crate::stack::check_plain_name;
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -350,25 +351,6 @@ impl std::str::FromStr for LightDesc {
 /// Largest |coordinate| of a scene vertex (world units): depths and their differences stay
 /// well inside f64 and the f32 depth maps keep their resolution.
 pub const MAX_COORD: f64 = 1e9;
-
-/// A scene or light name becomes part of a file name (`<scene>_<light>.exr`): it must be a
-/// plain name — not empty, no '/', '\\', control characters or leading '.'.
-pub fn check_plain_name(what: &str, name: &str) -> Result<()> {
-    let bad = name.is_empty()
-        || name.starts_with('.')
-        || name.len() > 100
-        || name
-            .chars()
-            .any(|c| c == '/' || c == '\\' || c.is_control());
-    if bad {
-        bail!(
-            "{what} name '{}' is not a plain name (1 to 100 bytes; no '/', '\\', control \
-             characters or leading '.')",
-            name.escape_debug()
-        );
-    }
-    Ok(())
-}
 
 /// A transform must be invertible with a finite, not vanishing scale: |det A| in
 /// [1e-30, 1e30] and every entry finite (scale 0 or 1e300 are errors, not an empty stack).

@@ -10,6 +10,7 @@
 //! stored raw. Every offset, size and count is checked before use, and allocations are bounded
 //! by the file's length, so a corrupt file is a one-line error.
 
+use crate::artefact::{input, Limit};
 use anyhow::{anyhow, bail, Context, Result};
 
 pub use super::MAX_SIDE;
@@ -736,17 +737,16 @@ pub fn read_deep_stack(
     path: &std::path::Path,
     sort: bool,
 ) -> Result<(super::DepthStack, DeepStats)> {
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let img = read_deep(&bytes).context("deep OpenEXR")?;
     let side_path = super::sidecar_path(path);
-    let text = match std::fs::read_to_string(&side_path) {
-        Ok(t) => t,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => bail!(
+    if std::fs::symlink_metadata(&side_path).is_err() {
+        bail!(
             "missing sidecar {} (a deep image needs at least {{\"light_dir\": [x, y, z]}})",
             side_path.display()
-        ),
-        Err(e) => return Err(e).with_context(|| format!("reading {}", side_path.display())),
-    };
+        );
+    }
+    let text = input::read_text(&side_path, Limit::SIDECAR).context("reading sidecar")?;
+    let bytes = input::read_bytes(path, Limit::DEEP)?;
+    let img = read_deep(&bytes).context("deep OpenEXR")?;
     let side: DeepSidecar = serde_json::from_str(&text)
         .with_context(|| format!("malformed sidecar {}", side_path.display()))?;
     let stem = path

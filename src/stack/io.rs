@@ -174,8 +174,9 @@ fn read_inner(path: &Path) -> Result<DepthStack> {
 pub fn is_deep_file(path: &Path) -> Result<bool> {
     use std::io::Read;
     let mut head = Vec::with_capacity(8);
-    std::fs::File::open(path)
-        .and_then(|f| f.take(8).read_to_end(&mut head))
+    let (f, _) = input::open_regular(path)?;
+    f.take(8)
+        .read_to_end(&mut head)
         .with_context(|| format!("reading {}", path.display()))?;
     Ok(super::deep::is_deep_exr(&head))
 }

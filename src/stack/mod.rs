@@ -130,6 +130,26 @@ impl DepthStack {
     }
 }
 
+/// A scene or light (view) name becomes part of a file name (`<scene>_<light>.exr`, the
+/// pictures): it must be a plain name — not empty, no '/', '\\', control characters or leading
+/// '.', at most 100 bytes.
+pub fn check_plain_name(what: &str, name: &str) -> Result<()> {
+    let bad = name.is_empty()
+        || name.starts_with('.')
+        || name.len() > 100
+        || name
+            .chars()
+            .any(|c| c == '/' || c == '\\' || c.is_control());
+    if bad {
+        bail!(
+            "{what} name '{}' is not a plain name (1 to 100 bytes; no '/', '\\', control \
+             characters or leading '.')",
+            name.escape_debug()
+        );
+    }
+    Ok(())
+}
+
 /// Checks every invariant of a depth stack; the error names the first violation (layer, texel
 /// x/y). Invariants: width, height ≥ 1; `layers` ≥ 1 and equal to the number of depth, dzdu and
 /// dzdv channels, each of width·height values; near < far finite; light_dir finite and of unit
@@ -149,6 +169,8 @@ pub fn validate(stack: &DepthStack) -> Result<()> {
     if m.light_dir.iter().any(|c| !c.is_finite()) {
         bail!("light_dir is not finite: {:?}", m.light_dir);
     }
+    check_plain_name("scene", &m.scene)?;
+    check_plain_name("view", &m.view)?;
     let norm = m.light_dir.iter().map(|c| c * c).sum::<f64>().sqrt();
     if (norm - 1.0).abs() > 1e-3 {
         bail!(

@@ -296,3 +296,39 @@ fn corrupt_deep_files_are_one_line_errors() {
         }
     }
 }
+
+/// The sidecar of a deep image is read like any other: at most 1 MiB, a regular file (a FIFO
+/// is refused, not waited on), and its scene name must be a plain file-name part.
+#[test]
+fn deep_sidecars_are_bounded_regular_files_with_plain_names() {
+    let dir = tmp("sidecar");
+    let exr = dir.join("d.exr");
+    std::fs::copy(fixtures().join("deep_none.exr"), &exr).unwrap();
+    let side = dir.join("d.json");
+    let base: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fixtures().join("deep_none.json")).unwrap())
+            .unwrap();
+    let mut big = base.clone();
+    big["comment"] = serde_json::Value::String("x".repeat(2 << 20));
+    std::fs::write(&side, big.to_string()).unwrap();
+    let e = format!("{:#}", stack::read(&exr).unwrap_err());
+    assert!(
+        e.contains("d.json") && e.contains("1 MiB limit for a sidecar"),
+        "{e}"
+    );
+    std::fs::remove_file(&side).unwrap();
+    let fifo = std::ffi::CString::new(side.to_str().unwrap()).unwrap();
+    // SAFETY: a valid NUL-terminated path.
+    assert_eq!(unsafe { libc::mkfifo(fifo.as_ptr(), 0o600) }, 0);
+    let e = format!("{:#}", stack::read(&exr).unwrap_err());
+    assert!(e.contains("not a regular file"), "{e}");
+    std::fs::remove_file(&side).unwrap();
+    let mut escape = base;
+    escape["scene"] = serde_json::Value::String("../../ESCAPE".into());
+    std::fs::write(&side, escape.to_string()).unwrap();
+    let e = format!("{:#}", stack::read(&exr).unwrap_err());
+    assert!(
+        e.contains("scene name '../../ESCAPE' is not a plain name"),
+        "{e}"
+    );
+}
