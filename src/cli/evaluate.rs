@@ -71,10 +71,10 @@ pub struct Args {
     /// Only views whose "scene/view" name contains this string.
     #[arg(long)]
     pub only: Option<String>,
-    /// PCF bias ε (finite, ≥ 0).
+    /// PCF bias ε (in [0, 1]).
     #[arg(long, default_value_t = Bias::default().pcf_epsilon, value_parser = non_negative, allow_negative_numbers = true)]
     pub pcf_epsilon: f64,
-    /// PCF receiver-plane slope scale s (finite, ≥ 0).
+    /// PCF receiver-plane slope scale s (in [0, 1000]).
     #[arg(long, default_value_t = Bias::default().slope_scale, value_parser = non_negative, allow_negative_numbers = true)]
     pub slope_scale: f64,
     /// Receiver plane of the PCF test per tap: "lower" (the lower of the fragment's and the
@@ -82,10 +82,10 @@ pub struct Args {
     /// "fragment" (the fragment's own tangent plane only).
     #[arg(long, default_value = "lower", value_parser = metrics::Receiver::parse)]
     pub pcf_receiver: metrics::Receiver,
-    /// Constant part of the technique bias ε′ (finite, ≥ 0).
+    /// Constant part of the technique bias ε′ (in [0, 1]).
     #[arg(long, default_value_t = Bias::default().technique_epsilon, value_parser = non_negative, allow_negative_numbers = true)]
     pub technique_epsilon: f64,
-    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|; finite, ≥ 0).
+    /// Slope part of the technique bias ε′, in texels (times |dz/du| + |dz/dv|; in [0, 1000]).
     #[arg(long, default_value_t = Bias::default().technique_slope_scale, value_parser = non_negative, allow_negative_numbers = true)]
     pub technique_slope_scale: f64,
 }
@@ -251,6 +251,14 @@ pub fn run(args: Args) -> Result<()> {
             all => serde_json::to_string_pretty(all)?,
         };
         println!("{text}");
+    }
+    if let Some(r) = reports.iter().find(|r| r.error.is_nan()) {
+        bail!(
+            "{}: all {} outputs are non-finite, so no error can be given (check the bias \
+             and the technique's parameters)",
+            r.technique,
+            r.non_finite
+        );
     }
     Ok(())
 }

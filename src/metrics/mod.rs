@@ -82,6 +82,9 @@ impl Receiver {
 /// sensitivity): ε/3 and 3ε.
 pub const EPSILON_FACTORS: [f64; 2] = [1.0 / 3.0, 3.0];
 
+/// Largest slope scale of a bias, in texels (times |dz/du| + |dz/dv|).
+pub const MAX_SLOPE_SCALE: f64 = 1e3;
+
 impl Default for Bias {
     fn default() -> Self {
         Bias {
@@ -95,16 +98,22 @@ impl Default for Bias {
 }
 
 impl Bias {
-    /// Rejects non-finite or negative values with a one-line error.
+    /// Rejects values outside their range with a one-line error: the constants in [0, 1]
+    /// (depths lie in [0, 1], so a larger offset moves every test past the depth range), the
+    /// slope scales in [0, [`MAX_SLOPE_SCALE`]] texels.
     pub fn validate(&self) -> Result<()> {
-        for (name, v) in [
-            ("pcf_epsilon", self.pcf_epsilon),
-            ("slope_scale", self.slope_scale),
-            ("technique_epsilon", self.technique_epsilon),
-            ("technique_slope_scale", self.technique_slope_scale),
+        for (name, v, max) in [
+            ("pcf_epsilon", self.pcf_epsilon, 1.0),
+            ("slope_scale", self.slope_scale, MAX_SLOPE_SCALE),
+            ("technique_epsilon", self.technique_epsilon, 1.0),
+            (
+                "technique_slope_scale",
+                self.technique_slope_scale,
+                MAX_SLOPE_SCALE,
+            ),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
-                bail!("bias: {name} must be finite and >= 0, got {v}");
+            if !(v.is_finite() && (0.0..=max).contains(&v)) {
+                bail!("bias: {name} must be in [0, {max}], got {v:?}");
             }
         }
         Ok(())
@@ -572,7 +581,8 @@ pub struct ViewReport {
     pub out_of_range: usize,
     /// Σ |G − PCF| over the finite fragments.
     pub sum_abs_error: f64,
-    /// Mean |G − PCF| over the finite fragments (0 when there are none).
+    /// Mean |G − PCF| over the finite fragments (0 without fragments, NaN when every output
+    /// was non-finite).
     pub error: f64,
     /// Σ |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`].
     pub sum_abs_error_scaled: [f64; 2],
@@ -888,7 +898,7 @@ fn shade_view(
         values.extend(p.values);
     }
     let finite = frags.len() - total.non_finite;
-    let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
+    let mean = |x: f64| finite_mean(x, finite, frags.len());
     ViewReport {
         sum_abs_error_scaled: total.sum_scaled,
         error_scaled: total.sum_scaled.map(mean),
@@ -914,6 +924,16 @@ fn shade_view(
     }
 }
 
+/// Mean of a sum over the `finite` of `fragments` fragments: 0 for no fragments, NaN when
+/// every output was non-finite (no error is known, and none is reported as perfect).
+fn finite_mean(sum: f64, finite: usize, fragments: usize) -> f64 {
+    match (finite, fragments) {
+        (_, 0) => 0.0,
+        (0, _) => f64::NAN,
+        _ => sum / finite as f64,
+    }
+}
+
 /// The report over all `views` of one subject (`picked`: seconds spent choosing fragments).
 fn report_of(
     technique: String,
@@ -931,7 +951,7 @@ fn report_of(
         std::array::from_fn(|k| views.iter().map(|v| v.sum_abs_error_scaled[k]).sum());
     let sum_leak: f64 = views.iter().map(|v| v.sum_leak).sum();
     let finite = fragments - non_finite;
-    let mean = |x: f64| if finite > 0 { x / finite as f64 } else { 0.0 };
+    let mean = |x: f64| finite_mean(x, finite, fragments);
     let shade: f64 = views.iter().map(|v| v.shade_seconds).sum();
     EvalReport {
         technique,
@@ -1026,4 +1046,52 @@ pub fn layer_shadows(
         out.g[f.texel] = g;
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// No fragments: 0; every output non-finite: NaN (never a perfect score); else the mean
+    /// over the finite ones.
+    #[test]
+    fn means_over_finite_outputs() {
+        assert_eq!(finite_mean(0.0, 0, 0), 0.0);
+        assert!(finite_mean(0.0, 0, 5).is_nan());
+        assert_eq!(finite_mean(3.0, 4, 6), 0.75);
+    }
+
+    #[test]
+    fn biases_beyond_the_depth_range_are_refused() {
+        let ok = Bias::default();
+        assert!(ok.validate().is_ok());
+        for bad in [
+            Bias {
+                technique_epsilon: 1e300,
+                ..ok
+            },
+            Bias {
+                pcf_epsilon: 1.5,
+                ..ok
+            },
+            Bias {
+                slope_scale: f64::INFINITY,
+                ..ok
+            },
+            Bias {
+                technique_slope_scale: 1e4,
+                ..ok
+            },
+            Bias {
+                pcf_epsilon: -1e-9,
+                ..ok
+            },
+        ] {
+            let e = bad.validate().unwrap_err().to_string();
+            assert!(
+                e.starts_with("bias: ") && e.contains("must be in [0, "),
+                "{e}"
+            );
+        }
+    }
 }

@@ -156,6 +156,25 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             "not in 2..=65536",
         ),
         (args(&["stability", "--inputs", "0"]), None, 2, "--inputs"),
+        // A bias beyond the depth range made every output non-finite (scored as 0 % error).
+        (
+            args(&[
+                "evaluate",
+                "--technique",
+                "hamburger4",
+                "--technique-epsilon",
+                "1e300",
+            ]),
+            None,
+            1,
+            "technique_epsilon must be in [0, 1], got 1e300",
+        ),
+        (
+            args(&["evaluate", "--technique", "vsm", "--slope-scale", "1e9"]),
+            None,
+            1,
+            "slope_scale must be in [0, 1000]",
+        ),
         (args(&["search", "--grid", "1e11"]), None, 2, "--grid"),
         (
             args(&["search", "--grid", "100000000000"]),
