@@ -148,7 +148,22 @@ pub fn merge(files: &[&Path], od: &OutDir) -> Result<Written> {
         seconds += v["seconds"].as_f64().unwrap_or(0.0);
         let sw: Vec<Sweep> = serde_json::from_value(v["sweeps"].clone())
             .with_context(|| format!("--merge: {}: sweeps", f.display()))?;
-        all.extend(sw);
+        for s in sw {
+            // One sweep per technique and storage: a file given twice, or two studies of the
+            // same setting, would be counted twice.
+            if all
+                .iter()
+                .any(|a| a.technique == s.technique && a.config == s.config)
+            {
+                bail!(
+                    "--merge: {} repeats the sweep of {} with {} (a file given twice?)",
+                    f.display(),
+                    s.technique,
+                    s.config
+                );
+            }
+            all.push(s);
+        }
     }
     let (stacks, views, stride) = head.context("--merge: no files")?;
     let alphas = all.first().map(|s| s.alphas.clone()).unwrap_or_default();
@@ -199,4 +214,49 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
     };
     print!("{}", study(&s, &od)?.markdown);
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A file given twice to `--merge` is refused instead of counting its sweeps twice.
+    #[test]
+    fn merge_refuses_a_sweep_given_twice() {
+        let dir = std::env::temp_dir().join(format!("momentlab-qmerge-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let sweep = |config: &str| Sweep {
+            technique: "vsm".into(),
+            config: config.into(),
+            alphas: vec![1e-3],
+            errors: vec![0.1],
+            deviation: vec![0.0],
+            non_finite: vec![0],
+            best_alpha: 1e-3,
+            best_error: 0.1,
+            fragments: 10,
+        };
+        let file = |name: &str, config: &str| {
+            let p = dir.join(name);
+            let v = serde_json::json!({"stacks": "s", "views": 1, "stride": 1, "seconds": 1.0,
+                "sweeps": [sweep(config)]});
+            std::fs::write(&p, v.to_string()).unwrap();
+            p
+        };
+        let (a, b) = (file("a.json", "16-bit"), file("b.json", "32-bit"));
+        let od = OutDir::new(dir.join("out"), false).unwrap();
+        let Err(e) = merge(&[&a, &a], &od) else {
+            panic!("a file given twice was merged")
+        };
+        let e = format!("{e:#}");
+        assert!(e.contains("repeats the sweep of vsm with 16-bit"), "{e}");
+        assert!(!dir.join("out").join("quantize.json").exists());
+        assert!(merge(&[&a, &b], &od).is_ok());
+        let merged: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("out/quantize.json")).unwrap())
+                .unwrap();
+        assert_eq!(merged["sweeps"].as_array().unwrap().len(), 2);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -61,6 +61,22 @@ pub fn markdown(
     md
 }
 
+/// The α axis of [`plot`] (logarithmic): the range of `alphas`, widened to a factor of 4
+/// around a single value (a log axis over an empty range has no ticks to find); an error for
+/// a value that is not finite and > 0.
+fn alpha_axis(alphas: &[f64]) -> Result<(f64, f64)> {
+    if let Some(a) = alphas.iter().find(|a| !(a.is_finite() && **a > 0.0)) {
+        anyhow::bail!("plot: α = {a} cannot be drawn on a logarithmic axis");
+    }
+    let amin = alphas.iter().cloned().fold(f64::INFINITY, f64::min);
+    let amax = alphas.iter().cloned().fold(0.0, f64::max);
+    match (amin.is_finite(), amax > amin * (1.0 + 1e-9)) {
+        (false, _) => anyhow::bail!("plot: no α to draw"),
+        (true, false) => Ok((amin / 2.0, amin * 2.0)),
+        (true, true) => Ok((amin, amax)),
+    }
+}
+
 /// Error against α (log–log), one panel per technique, one line per storage configuration.
 pub fn plot(all: &[Sweep]) -> Result<String> {
     let mut out = String::new();
@@ -88,8 +104,7 @@ pub fn plot(all: &[Sweep]) -> Result<String> {
                     hi = hi.max(e);
                 }
             }
-            let amin = sw[0].alphas.iter().cloned().fold(f64::INFINITY, f64::min);
-            let amax = sw[0].alphas.iter().cloned().fold(0.0, f64::max);
+            let (amin, amax) = alpha_axis(&sw[0].alphas)?;
             let mut chart = ChartBuilder::on(area)
                 .caption(format!("{tech}: error vs bias α"), ("sans-serif", 18))
                 .margin(10)
@@ -150,5 +165,34 @@ fn pct_tick(p: f64) -> String {
         format!("{p:.1}")
     } else {
         format!("{p:.2}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// One α (`quantize --alphas 1e-3`) gets an axis around it; α ≤ 0 is an error, not a
+    /// logarithmic axis that never ends its tick search.
+    #[test]
+    fn alpha_axes_of_one_value_and_bad_values() {
+        assert_eq!(alpha_axis(&[1e-3]).unwrap(), (5e-4, 2e-3));
+        assert_eq!(alpha_axis(&[1e-4, 1e-2, 1e-3]).unwrap(), (1e-4, 1e-2));
+        for bad in [&[0.0][..], &[1e-3, f64::NAN], &[]] {
+            assert!(alpha_axis(bad).is_err(), "{bad:?}");
+        }
+        let one = Sweep {
+            technique: "vsm".into(),
+            config: "16-bit".into(),
+            alphas: vec![1e-3],
+            errors: vec![0.02],
+            deviation: vec![0.0],
+            non_finite: vec![0],
+            best_alpha: 1e-3,
+            best_error: 0.02,
+            fragments: 10,
+        };
+        let svg = plot(&[one]).unwrap();
+        assert!(svg.contains("<svg") && svg.contains("vsm: error vs bias"));
     }
 }
