@@ -36,3 +36,23 @@ pub fn embedded_scenes() -> Result<Vec<Scene>> {
         })
         .collect()
 }
+
+/// A fingerprint of the embedded scene and mesh files (FNV-1a, 64 bits, in hex): equal
+/// fingerprints, equal dataset.
+pub fn embedded_fingerprint() -> String {
+    let mut h: u64 = 0xcbf29ce484222325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes.iter().chain(&[0xff]) {
+            h = (h ^ b as u64).wrapping_mul(0x100000001b3);
+        }
+    };
+    for (name, text) in EMBEDDED_SCENE_NAMES.iter().zip(SCENES) {
+        eat(name.as_bytes());
+        eat(text.as_bytes());
+    }
+    for (path, bytes) in MESHES {
+        eat(path.as_bytes());
+        eat(bytes);
+    }
+    format!("{h:016x}")
+}

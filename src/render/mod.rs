@@ -15,7 +15,7 @@ mod embedded;
 pub mod mesh;
 pub mod scene;
 
-pub use embedded::{embedded_scenes, EMBEDDED_SCENE_NAMES};
+pub use embedded::{embedded_fingerprint, embedded_scenes, EMBEDDED_SCENE_NAMES};
 pub use scene::{Light, Scene};
 
 use crate::stack::{DepthStack, StackMeta};
@@ -292,6 +292,15 @@ pub fn default_dataset(resolution: usize) -> Result<Vec<DepthStack>> {
         .iter()
         .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
         .map(|(s, i)| render_view(s, i, resolution))
+        .collect())
+}
+
+/// The views of the default dataset as (scene, light) names, in the order [`default_dataset`]
+/// renders them; nothing is rendered.
+pub fn default_dataset_views() -> Result<Vec<(String, String)>> {
+    Ok(embedded_scenes()?
+        .iter()
+        .flat_map(|s| s.lights.iter().map(|l| (s.name.clone(), l.name.clone())))
         .collect())
 }
 
