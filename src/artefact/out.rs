@@ -263,6 +263,23 @@ impl OutDir {
         }
     }
 
+    /// Remove output `name` if it exists: a file, a link (the link itself, never its target) or
+    /// a folder with everything in it (links inside are removed, not followed). A link on the
+    /// way to `name` is refused.
+    pub fn remove_all(&self, name: &str) -> Result<()> {
+        let rel = check_name(name)?;
+        self.check_parents(&rel)?;
+        let path = self.root.join(&rel);
+        let removed = match fs::symlink_metadata(&path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+            Err(e) => Err(e),
+            // std's remove_dir_all removes links inside the folder without following them.
+            Ok(m) if m.is_dir() => fs::remove_dir_all(&path),
+            Ok(_) => fs::remove_file(&path),
+        };
+        removed.with_context(|| format!("removing {}", path.display()))
+    }
+
     /// The first file (or link) under the folder in name order, skipping the lock and `skip`;
     /// None when the folder is missing or holds no file. For commands that write many files into
     /// one folder and refuse a folder holding outputs already.
@@ -706,6 +723,33 @@ mod tests {
             "written outside: {:?}",
             listing(&outside)
         );
+        fs::remove_dir_all(&d).unwrap();
+        fs::remove_dir_all(&outside).unwrap();
+    }
+
+    #[test]
+    fn remove_all_removes_links_never_their_targets() {
+        let d = tmp("remove");
+        let outside = tmp("remove-outside");
+        fs::create_dir_all(d.join("sub/deep")).unwrap();
+        fs::create_dir_all(outside.join("kept")).unwrap();
+        fs::write(outside.join("kept/file"), "x").unwrap();
+        fs::write(d.join("sub/deep/f"), "x").unwrap();
+        std::os::unix::fs::symlink(&outside, d.join("sub/deep/link")).unwrap();
+        std::os::unix::fs::symlink(&outside, d.join("top-link")).unwrap();
+        fs::write(d.join("other"), "x").unwrap();
+        let out = OutDir::new(&d, false).unwrap();
+        out.remove_all("sub").unwrap();
+        out.remove_all("top-link").unwrap();
+        out.remove_all("missing").unwrap();
+        assert_eq!(listing(&d), vec!["other"]);
+        assert_eq!(fs::read_to_string(outside.join("kept/file")).unwrap(), "x");
+        // A link on the way is refused, not followed.
+        std::os::unix::fs::symlink(&outside, d.join("via")).unwrap();
+        let e = format!("{:#}", out.remove_all("via/kept").unwrap_err());
+        assert!(e.contains("symbolic link"), "{e}");
+        assert!(outside.join("kept/file").exists());
+        assert!(out.remove_all("../x").is_err());
         fs::remove_dir_all(&d).unwrap();
         fs::remove_dir_all(&outside).unwrap();
     }

@@ -36,9 +36,11 @@ pub struct Args {
     /// Skip the candidate sweep (the slowest step).
     #[arg(long)]
     pub skip_search: bool,
-    /// Replace the run's outputs: delete its previous artefacts and compute every step again.
-    /// Without it a folder holding outputs is refused, except the run's own unfinished run,
-    /// which resumes (steps whose artefacts exist are read back).
+    /// Replace the run's outputs: delete its previous artefacts (the entries a run writes in the
+    /// report folder; stacks/ and search-m<m>/ in the data folder; other files stay, links are
+    /// not followed, docs/files.md) and compute every step again. Without it a folder holding
+    /// outputs is refused, except the run's own unfinished run, which resumes (steps whose
+    /// artefacts exist are read back).
     #[arg(long, alias = "fresh")]
     pub force: bool,
     /// Print {"report", "seconds", "recommendations"} as JSON on stdout at the end.

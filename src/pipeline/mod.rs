@@ -2,7 +2,8 @@
 //! artefacts (a step whose files exist is read back instead of recomputed; `fresh` starts over).
 //! A run marks its report folder as its own ([`IN_PROGRESS`]) until it finishes: a run that
 //! finds its own mark resumes; a folder holding anything else (a finished run, other files) is
-//! refused unless `fresh` (`--force`).
+//! refused unless `fresh` (`--force`), which first removes the run's own artefacts
+//! ([`remove_artefacts`]).
 //!
 //! ```text
 //! 1 stacks      render (or read back) the depth stacks          results/<run>/stacks/
@@ -35,6 +36,7 @@ pub mod theta;
 
 pub use config::{Config, Plan, Preset};
 
+use crate::artefact::OutDir;
 use crate::report::recommend::Recommendation;
 use anyhow::{bail, Context, Result};
 use progress::{pct, Steps};
@@ -84,20 +86,74 @@ fn mark(cfg: &Config, plan: &Plan) -> serde_json::Value {
     })
 }
 
+/// The entries of a report folder that a run writes (the top level of `<reports>/<run>`).
+pub const REPORT_ENTRIES: [&str; 17] = [
+    IN_PROGRESS,
+    "grid_refinement.json",
+    "grid_refinement.svg",
+    "evaluate",
+    "pictures",
+    "eye",
+    "search",
+    "theta",
+    "quantize",
+    "stability",
+    "speed_accuracy.svg",
+    "error_histograms.svg",
+    "recommend.json",
+    "tune",
+    "index.html",
+    "report.md",
+    "run.json",
+];
+
+/// Whether `name` is an entry of a data folder that a run writes (the top level of
+/// `<results>/<run>`): `stacks` and the sweeps' `search-m<m>`.
+pub fn is_data_entry(name: &str) -> bool {
+    name == "stacks"
+        || name
+            .strip_prefix("search-m")
+            .is_some_and(|m| !m.is_empty() && m.bytes().all(|b| b.is_ascii_digit()))
+}
+
+/// What `fresh` (`--force`) removes before a run, each through its folder's writer (a link is
+/// removed, never followed): the [`REPORT_ENTRIES`] of the report folder `out` and the
+/// [`is_data_entry`] entries of the data folder `data`. Other files and the folders
+/// themselves (with their locks) stay.
+pub fn remove_artefacts(out: &OutDir, data: &OutDir) -> Result<()> {
+    for name in REPORT_ENTRIES {
+        out.remove_all(name)?;
+    }
+    let entries = match std::fs::read_dir(data.root()) {
+        Ok(rd) => rd
+            .collect::<std::io::Result<Vec<_>>>()
+            .with_context(|| format!("reading {}", data.root().display()))?,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => Vec::new(),
+        Err(e) => return Err(e).with_context(|| format!("reading {}", data.root().display())),
+    };
+    for e in entries {
+        if let Some(name) = e.file_name().to_str().filter(|n| is_data_entry(n)) {
+            data.remove_all(name)?;
+        }
+    }
+    Ok(())
+}
+
 /// Run (or resume) the whole study.
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
     let p = Paths::of(cfg);
     // One run per folder pair: a second `reproduce` of the same run waits for no one, it is
     // refused (both folders are locked until this run ends).
-    let out = crate::artefact::OutDir::new(&p.out, true)?;
-    let locks = [out, crate::artefact::OutDir::new(&p.data, true)?];
+    let out = OutDir::new(&p.out, true)?;
+    let locks = [out, OutDir::new(&p.data, true)?];
     for l in &locks {
         l.lock()?;
     }
     // Before any work: the report folder is empty, or holds this run's own unfinished run, or
-    // `fresh` replaces what is there. (The data folder only grows: stacks are read back, the
-    // sweeps resume their own rows and refuse rows of another configuration.)
+    // `fresh` removes the run's artefacts ([`remove_artefacts`]). (Otherwise the data folder
+    // only grows: a complete set of stacks is read back, the sweeps resume their own rows and
+    // refuse rows of another configuration.)
     let out = &locks[0];
     let own = crate::artefact::read_json::<serde_json::Value>(&p.out.join(IN_PROGRESS))
         .is_ok_and(|m| m == mark(cfg, &plan));
@@ -110,25 +166,10 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         }
     }
     if cfg.fresh {
-        // Empty the folders but keep them (and their locks).
-        for d in [&p.out, &p.data] {
-            for e in std::fs::read_dir(d).with_context(|| format!("reading {}", d.display()))? {
-                let e = e?;
-                if e.file_name() == crate::artefact::LOCK_FILE {
-                    continue;
-                }
-                let path = e.path();
-                let r = if e.file_type()?.is_dir() {
-                    std::fs::remove_dir_all(&path)
-                } else {
-                    std::fs::remove_file(&path)
-                };
-                r.with_context(|| format!("removing {}", path.display()))?;
-            }
-        }
+        remove_artefacts(out, &locks[1])?;
     }
-    for d in [&p.out, &p.data] {
-        std::fs::create_dir_all(d).with_context(|| format!("creating {}", d.display()))?;
+    for l in &locks {
+        l.create_dir(".")?;
     }
     out.write_json(IN_PROGRESS, &mark(cfg, &plan))?;
     let mut step = Steps::new(9);
@@ -218,7 +259,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         eye: &eye,
         seconds: step.elapsed(),
     })?;
-    doc.write(&p.out)?;
+    doc.write(out, ".")?;
 
     let seconds = step.elapsed();
     // The run's provenance and wall time (README's quick-start figures read it).
@@ -250,4 +291,60 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         recommendations: recs,
         seconds,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::fs;
+    use std::os::unix::fs::symlink;
+
+    fn listing(d: &std::path::Path) -> Vec<String> {
+        let mut v: Vec<String> = fs::read_dir(d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    }
+
+    #[test]
+    fn force_removes_only_the_runs_artefacts_and_follows_no_link() {
+        let root = std::env::temp_dir().join(format!("momentlab-fresh-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let (report, data, outside) = (root.join("report"), root.join("data"), root.join("out"));
+        for d in [
+            report.join("theta"),
+            data.join("stacks"),
+            data.join("search-m3"),
+            outside.join("sub"),
+        ] {
+            fs::create_dir_all(d).unwrap();
+        }
+        fs::write(outside.join("sub/precious"), "x").unwrap();
+        fs::write(report.join("index.html"), "").unwrap();
+        fs::write(report.join("theta/theta2.json"), "").unwrap();
+        fs::write(report.join("user.txt"), "").unwrap();
+        symlink(&outside, report.join("tune")).unwrap();
+        fs::write(data.join("stacks/a_b.exr"), "").unwrap();
+        symlink(&outside, data.join("stacks/inner")).unwrap();
+        fs::write(data.join("search-m3/results.jsonl"), "").unwrap();
+        symlink(&outside, data.join("search-m4")).unwrap();
+        symlink(&outside, data.join("mine")).unwrap();
+        fs::write(data.join("notes.txt"), "").unwrap();
+        fs::write(data.join("search-mx"), "").unwrap();
+        remove_artefacts(
+            &OutDir::new(&report, true).unwrap(),
+            &OutDir::new(&data, true).unwrap(),
+        )
+        .unwrap();
+        assert_eq!(listing(&report), vec!["user.txt"]);
+        assert_eq!(listing(&data), vec!["mine", "notes.txt", "search-mx"]);
+        assert_eq!(listing(&outside), vec!["sub"]);
+        assert_eq!(
+            fs::read_to_string(outside.join("sub/precious")).unwrap(),
+            "x"
+        );
+        fs::remove_dir_all(&root).unwrap();
+    }
 }

@@ -1,9 +1,9 @@
 //! A small report model written as both a self-contained folder with `index.html` and
 //! `report.md` (figures are files next to them, referenced by relative paths).
 
-use anyhow::{Context, Result};
+use crate::artefact::OutDir;
+use anyhow::Result;
 use std::fmt::Write as _;
-use std::path::Path;
 
 /// One block of content.
 #[derive(Clone, Debug)]
@@ -176,11 +176,18 @@ impl Document {
         m
     }
 
-    /// Write `index.html` and `report.md` into `dir` (which holds the figures).
-    pub fn write(&self, dir: &Path) -> Result<()> {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-        crate::artefact::write_text(&dir.join("index.html"), &self.to_html())?;
-        crate::artefact::write_text(&dir.join("report.md"), &self.to_markdown())
+    /// Write `index.html` and `report.md` into folder `dir` of `out` (`.` for `out` itself; the
+    /// folder holds the figures). The folder is created inside `out`; a symbolic link on the
+    /// way is refused, never followed.
+    pub fn write(&self, out: &OutDir, dir: &str) -> Result<()> {
+        out.create_dir(dir)?;
+        let name = |file: &str| match dir {
+            "" | "." => file.to_string(),
+            _ => format!("{dir}/{file}"),
+        };
+        out.write_text(&name("index.html"), &self.to_html())?;
+        out.write_text(&name("report.md"), &self.to_markdown())?;
+        Ok(())
     }
 }
 
@@ -254,6 +261,27 @@ pub fn html_references(html: &str) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn written_inside_its_folder_never_through_a_link() {
+        let root = std::env::temp_dir().join(format!("momentlab-document-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let (out, outside) = (root.join("out"), root.join("outside"));
+        std::fs::create_dir_all(&out).unwrap();
+        std::fs::create_dir_all(&outside).unwrap();
+        let od = OutDir::new(&out, true).unwrap();
+        let d = Document::new("r");
+        d.write(&od, ".").unwrap();
+        d.write(&od, "sub").unwrap();
+        for f in ["index.html", "report.md", "sub/index.html", "sub/report.md"] {
+            assert!(out.join(f).is_file(), "{f}");
+        }
+        std::os::unix::fs::symlink(&outside, out.join("linked")).unwrap();
+        let e = format!("{:#}", d.write(&od, "linked").unwrap_err());
+        assert!(e.contains("symbolic link"), "{e}");
+        assert_eq!(std::fs::read_dir(&outside).unwrap().count(), 0);
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     #[test]
     fn html_and_markdown_escape_and_reference_figures() {
