@@ -54,6 +54,9 @@ pub struct Args {
     pub json: bool,
 }
 
+/// The folder of the export inside --out.
+const EXPORT_DIR: &str = "export";
+
 /// The options of `args`; a one-line error for a bad list or an empty space.
 pub fn options(args: &Args) -> Result<Options> {
     let tnames: Vec<&str> = TechniqueKind::ALL.iter().map(|t| t.name()).collect();
@@ -87,13 +90,36 @@ pub fn run(args: Args) -> Result<()> {
         }
         None => None,
     };
+    // Before rendering and tuning: every file of the export can be written (inside --out, no
+    // linked folder on the way, nothing replaced without --force). The export has a folder per
+    // scene: the embedded dataset's scenes are known without rendering, given stacks are read
+    // first.
+    let reserve_export = |scenes: &[String]| -> Result<()> {
+        match &out {
+            Some(o) => o
+                .reserve(tune::export::file_names(EXPORT_DIR, scenes))
+                .context("--out"),
+            None => Ok(()),
+        }
+    };
+    if args.stacks.is_none() {
+        let mut scenes: Vec<String> = Vec::new();
+        for (scene, _) in crate::render::default_dataset_views()? {
+            if !scenes.contains(&scene) {
+                scenes.push(scene);
+            }
+        }
+        reserve_export(&scenes)?;
+    }
     let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "tune")?;
+    if args.stacks.is_some() {
+        reserve_export(&tune::sample::scene_names(&stacks))?;
+    }
     let bar = Bar::new("tune", 0);
     let t = tune::tune(&stacks, &opts, &bar)?;
     if let Some(o) = &out {
         o.write_json("tune.json", &t)?;
-        let ex = OutDir::new(o.root().join("export"), args.force)?;
-        tune::export::write(&ex, &t)?;
+        tune::export::write(o, EXPORT_DIR, &t)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&t)?);

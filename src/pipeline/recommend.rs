@@ -2,7 +2,7 @@
 //! recommendations among the measured closed forms (`recommend.json`) and the tuned setting
 //! per scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]).
 
-use crate::artefact::{write_json, write_text};
+use crate::artefact::{write_json, write_text, OutDir};
 use crate::progress::Bar;
 use crate::report::chart;
 use crate::report::pareto::Entry;
@@ -58,19 +58,27 @@ pub fn run(
 
 /// The tuning of the run: read back from `out/tune/tune.json` when it exists (same tolerance
 /// and sample sizes), otherwise searched on `stacks` and written there with the export of
-/// every chosen setting (`out/tune/export/<scene>/`, [`tune::export`]).
+/// every chosen setting (`out/tune/export/<scene>/`, [`tune::export`]) through one writer on
+/// `out` (a linked `tune` or `export` folder is refused before the search). `tune.json` is
+/// written last: it marks a finished tuning.
 pub fn tuning(
     stacks: &[DepthStack],
     plan: &super::Plan,
     tolerance: f64,
     out: &Path,
 ) -> Result<Tuning> {
-    let file = out.join("tune").join("tune.json");
+    let file = out.join(TUNE_FILE);
     if let Ok(t) = crate::artefact::read_json::<Tuning>(&file) {
         if t.tolerance == tolerance && t.fragments_per_scene == plan.tune_fragments {
             return Ok(t);
         }
     }
+    let od = OutDir::new(out, true)?;
+    od.reserve(
+        tune::export::file_names(EXPORT_DIR, &tune::sample::scene_names(stacks))
+            .into_iter()
+            .chain([TUNE_FILE.to_string()]),
+    )?;
     let opts = Options {
         tolerance,
         fragments_per_scene: plan.tune_fragments,
@@ -79,8 +87,44 @@ pub fn tuning(
     };
     let bar = Bar::new("tune", 0);
     let t = tune::tune(stacks, &opts, &bar)?;
-    let ex = crate::artefact::OutDir::new(out.join("tune").join("export"), true)?;
-    tune::export::write(&ex, &t)?;
-    write_json(&file, &t)?;
+    tune::export::write(&od, EXPORT_DIR, &t)?;
+    od.write_json(TUNE_FILE, &t)?;
     Ok(t)
+}
+
+/// The tuning file of a run, relative to its report folder.
+pub const TUNE_FILE: &str = "tune/tune.json";
+
+/// The export folder of a run's tuning, relative to its report folder.
+pub const EXPORT_DIR: &str = "tune/export";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::pipeline::{Plan, Preset};
+    use std::fs;
+
+    #[test]
+    fn tuning_refuses_a_linked_export_folder_before_the_search() {
+        let root = std::env::temp_dir().join(format!("momentlab-tune-link-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let (out, outside) = (root.join("run"), root.join("outside"));
+        fs::create_dir_all(out.join("tune")).unwrap();
+        fs::create_dir_all(&outside).unwrap();
+        std::os::unix::fs::symlink(&outside, out.join("tune/export")).unwrap();
+        let stacks = crate::render::default_dataset(16).unwrap();
+        let plan = Plan::of(Preset::Tiny, Some(16));
+        let e = format!("{:#}", tuning(&stacks, &plan, 0.002, &out).unwrap_err());
+        assert!(e.contains("symbolic link") && e.contains("export"), "{e}");
+        assert_eq!(
+            fs::read_dir(&outside).unwrap().count(),
+            0,
+            "written outside"
+        );
+        assert!(
+            !out.join("tune/tune.json").exists(),
+            "tuned before the check"
+        );
+        fs::remove_dir_all(&root).unwrap();
+    }
 }

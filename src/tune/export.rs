@@ -839,11 +839,34 @@ pub struct Exported<'a> {
     pub shaders: Vec<String>,
 }
 
-/// Write the export of every target's chosen setting into `out`/`<scene>/` (scene "all" for
-/// all scenes): `setting.json`, and `shadow.glsl` + `shadow.hlsl` where a reconstruction exists.
-pub fn write(out: &crate::artefact::OutDir, t: &super::Tuning) -> Result<()> {
+/// The folder of target `scene`'s export inside `dir`: `<dir>/<scene>` (the scene name made
+/// safe as one component).
+fn target_dir(dir: &str, scene: &str) -> String {
+    format!("{dir}/{}", crate::artefact::safe_name(scene))
+}
+
+/// Every file [`write`] may write into folder `dir` of its writer for the targets of `scenes`
+/// and `all` (all scenes): `<dir>/<scene>/setting.json`, `shadow.glsl` and `shadow.hlsl`. Known
+/// before the tuning, so the caller can [`reserve`](crate::artefact::OutDir::reserve) them first.
+pub fn file_names<S: AsRef<str>>(dir: &str, scenes: &[S]) -> Vec<String> {
+    scenes
+        .iter()
+        .map(|s| s.as_ref())
+        .chain(std::iter::once("all"))
+        .flat_map(|scene| {
+            let d = target_dir(dir, scene);
+            ["setting.json", "shadow.glsl", "shadow.hlsl"].map(|f| format!("{d}/{f}"))
+        })
+        .collect()
+}
+
+/// Write the export of every target's chosen setting into folder `dir` of `out`, one folder
+/// per target (`<dir>/<scene>/`, scene "all" for all scenes): `setting.json`, and
+/// `shadow.glsl` + `shadow.hlsl` where a reconstruction exists. The names are among
+/// [`file_names`].
+pub fn write(out: &crate::artefact::OutDir, dir: &str, t: &super::Tuning) -> Result<()> {
     for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
-        let dir = crate::artefact::safe_name(&target.scene);
+        let dir = target_dir(dir, &target.scene);
         let s = &target.chosen.setting;
         let mut shaders = Vec::new();
         if let Some(m) = module(s, header(s))? {

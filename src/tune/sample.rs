@@ -48,6 +48,18 @@ impl Sample {
     }
 }
 
+/// The scene names of `stacks`, each once, in the order of their first stack: the scenes of a
+/// [`Sample`] and of a tuning's targets.
+pub fn scene_names(stacks: &[DepthStack]) -> Vec<String> {
+    let mut names: Vec<String> = Vec::new();
+    for s in stacks {
+        if !names.contains(&s.meta.scene) {
+            names.push(s.meta.scene.clone());
+        }
+    }
+    names
+}
+
 /// About `per_scene` fragments of every scene (fewer when a scene has fewer), drawn with
 /// `seed` from all layers of all its views; `done(views)` is called after each view.
 pub fn draw(
@@ -67,11 +79,7 @@ pub fn draw(
         weights: Gaussian::paper().taps().iter().map(|t| t.2).collect(),
         ..Default::default()
     };
-    for s in stacks {
-        if !out.scenes.contains(&s.meta.scene) {
-            out.scenes.push(s.meta.scene.clone());
-        }
-    }
+    out.scenes = scene_names(stacks);
     let taps = Gaussian::paper().taps();
     let bias = Bias {
         technique_epsilon: 0.0,

@@ -203,3 +203,96 @@ fn bad_input_is_one_line_before_any_work() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `tune --out T` with cheap settings (rendering at 16², a few fragments, one family).
+fn tune_into(out: &std::path::Path, extra: &[&str]) -> (i32, String, String) {
+    let out = out.display().to_string();
+    let mut a = vec![
+        "tune",
+        "--resolution",
+        "16",
+        "--fragments",
+        "64",
+        "--screen",
+        "64",
+        "--technique",
+        "vsm",
+        "--storages",
+        "f32",
+        "--out",
+        &out,
+    ];
+    a.extend(extra);
+    crate::common::run(&a, None)
+}
+
+#[test]
+fn a_linked_export_folder_is_refused_and_nothing_is_written_outside() {
+    let dir = crate::common::tmp("tune-export-link");
+    let (out, outside) = (dir.join("T"), dir.join("outside"));
+    std::fs::create_dir_all(&out).unwrap();
+    std::fs::create_dir_all(&outside).unwrap();
+    std::os::unix::fs::symlink(&outside, out.join("export")).unwrap();
+    for extra in [&[][..], &["--force"][..]] {
+        let (code, _, err) = tune_into(&out, extra);
+        assert_ne!(code, 0, "{extra:?}: {err}");
+        assert_eq!(err.trim().lines().count(), 1, "{extra:?}: {err}");
+        assert!(
+            err.contains("symbolic link") && err.contains("export"),
+            "{err}"
+        );
+        let written: Vec<_> = std::fs::read_dir(&outside).unwrap().collect();
+        assert!(
+            written.is_empty(),
+            "{extra:?}: written outside: {written:?}"
+        );
+        assert!(
+            !out.join("tune.json").exists(),
+            "{extra:?}: tune.json written"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn an_existing_export_file_stops_tune_before_any_output_or_work() {
+    let dir = crate::common::tmp("tune-export-exists");
+    let out = dir.join("T");
+    std::fs::create_dir_all(out.join("export/all")).unwrap();
+    std::fs::write(out.join("export/all/setting.json"), "mine").unwrap();
+    let (code, _, err) = tune_into(&out, &[]);
+    assert_ne!(code, 0, "{err}");
+    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    assert!(
+        err.contains("export/all/setting.json") && err.contains("--force"),
+        "{err}"
+    );
+    assert!(!err.contains("rendering"), "did work first: {err}");
+    assert!(!out.join("tune.json").exists(), "tune.json written first");
+    let mut files = Vec::new();
+    let mut todo = vec![out.clone()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                todo.push(p);
+            } else {
+                files.push(p);
+            }
+        }
+    }
+    assert_eq!(files, vec![out.join("export/all/setting.json")]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("export/all/setting.json")).unwrap(),
+        "mine"
+    );
+    // With --force the tuning runs and replaces it.
+    let (code, _, err) = tune_into(&out, &["--force"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.join("tune.json").exists());
+    assert_ne!(
+        std::fs::read_to_string(out.join("export/all/setting.json")).unwrap(),
+        "mine"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
