@@ -50,7 +50,8 @@ pub struct Args {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Replace existing output files (otherwise a name clash is an error, found before the
-    /// search); also for --summary's comparison.md, summary.json and fig5.svg.
+    /// search); also for --summary's comparison.md, summary.json and fig5.svg and for the
+    /// snippets --snippets re-emits.
     #[arg(long)]
     pub force: bool,
     /// Also print the JSON on stdout.
@@ -62,7 +63,7 @@ pub struct Args {
     #[arg(long, value_enum, default_value_t = Order::Paper)]
     pub channel_order: Order,
     /// Instead of searching: re-emit theta*.hlsl / theta*.glsl for every theta*.json in DIR (the
-    /// JSON files are only read).
+    /// JSON files are only read); existing snippets are replaced only with --force.
     #[arg(long, conflicts_with_all = ["m", "basis", "summary"])]
     pub snippets: Option<PathBuf>,
 }
@@ -162,7 +163,7 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     if let Some(dir) = &args.snippets {
-        return theta::snippets(dir, args.channel_order.into());
+        return theta::snippets(dir, args.channel_order.into(), args.force);
     }
     let search = theta::Search {
         options: options(&args)?,

@@ -63,7 +63,9 @@ fn write_snippets(
 }
 
 /// Re-emit the snippets of every theta*.json in `dir` beside their JSON (which is only read).
-pub fn snippets(dir: &Path, order: ChannelOrder) -> Result<()> {
+/// Every JSON is read and every snippet name checked before the first snippet is written: an
+/// existing snippet is replaced only with `force`.
+pub fn snippets(dir: &Path, order: ChannelOrder, force: bool) -> Result<()> {
     let mut paths: Vec<PathBuf> = std::fs::read_dir(dir)
         .with_context(|| format!("--snippets: reading {}", dir.display()))?
         .filter_map(|e| e.ok().map(|e| e.path()))
@@ -78,15 +80,20 @@ pub fn snippets(dir: &Path, order: ChannelOrder) -> Result<()> {
     if paths.is_empty() {
         bail!("--snippets: no theta*.json in {}", dir.display());
     }
-    // Re-emitting replaces the snippets beside their JSON by design.
-    let od = OutDir::new(dir, true).context("--snippets")?;
+    let od = OutDir::new(dir, force).context("--snippets")?;
+    let mut todo = Vec::new();
     for p in &paths {
         let Some((th, _)) = read_theta(p)? else {
             continue;
         };
         let curve = curve::from_names(&th.basis).with_context(|| p.display().to_string())?;
         let tag = snippet_tag(curve.as_ref());
-        let used = write_snippets(&od, &th, curve.as_ref(), &tag, order)?;
+        od.reserve([format!("theta{tag}.glsl"), format!("theta{tag}.hlsl")])
+            .context("--snippets")?;
+        todo.push((p, th, curve, tag));
+    }
+    for (p, th, curve, tag) in &todo {
+        let used = write_snippets(&od, th, curve.as_ref(), tag, order)?;
         eprintln!(
             "{}: wrote theta{tag}.glsl, theta{tag}.hlsl ({used} channel order)",
             p.display()

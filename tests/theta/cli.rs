@@ -94,6 +94,65 @@ fn theta2_json_and_snippets() {
 }
 
 #[test]
+fn snippets_replace_existing_snippets_only_with_force() {
+    let dir = tmp_path("theta-snippets-force");
+    let out = momentlab()
+        .args(["theta", "--m", "2", "--restarts", "1", "--out"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // An edited theta2.glsl and a missing theta2.hlsl: refused before any snippet is written.
+    std::fs::write(dir.join("theta2.glsl"), "mine").unwrap();
+    std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
+    let out = momentlab()
+        .args(["theta", "--snippets"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success(),
+        "replaced theta2.glsl without --force"
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.trim_end().lines().count() == 1
+            && err.contains("theta2.glsl")
+            && err.contains("exists already")
+            && err.contains("--force"),
+        "{err}"
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("theta2.glsl")).unwrap(),
+        "mine"
+    );
+    assert!(
+        !dir.join("theta2.hlsl").exists(),
+        "written before the check"
+    );
+    // With --force both are written.
+    let out = momentlab()
+        .args(["theta", "--force", "--snippets"])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read_to_string(dir.join("theta2.glsl"))
+        .unwrap()
+        .contains("encodeMoments2Vec"));
+    assert!(dir.join("theta2.hlsl").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn default_output_is_a_run_directory_under_results() {
     let cwd = tmp("theta-cwd");
     let out = momentlab()
