@@ -149,8 +149,8 @@ pub fn run(args: Args) -> Result<()> {
             let st: Vec<DepthStack> = sc
                 .iter()
                 .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
-                .map(|(s, i)| render::render_view(s, i, args.resolution))
-                .collect();
+                .map(|(s, i)| render::try_render_view(s, i, args.resolution))
+                .collect::<Result<_>>()?;
             require_fragments(&st, Some(p))?;
             st
         }

@@ -77,11 +77,27 @@ pub fn run(args: Args) -> Result<()> {
     let mut lines = Vec::new();
     let mut rows = Vec::new();
     let (mut total_frags, mut max_layers) = (0usize, 0usize);
+    // Stacks written so far: a view that cannot be a stack (too many layers) fails the run
+    // before its files are written, and the files of the views before it are removed, so the
+    // run leaves no partial dataset behind.
+    let mut written: Vec<String> = Vec::new();
     for s in &scenes {
         for (i, light) in s.lights.iter().enumerate() {
             bar.set_label(&format!("render rows ({}/{})", s.name, light.name));
             let t0 = Instant::now();
-            let st = render::render_view_with(s, i, args.resolution, &|k| bar.inc(k));
+            let st = match render::render_view_with(s, i, args.resolution, &|k| bar.inc(k)) {
+                Ok(st) => st,
+                Err(e) => {
+                    for n in &written {
+                        out.remove(n)?;
+                    }
+                    return Err(e.context("render"));
+                }
+            };
+            written.extend(stack::file_names(&st.file_stem()));
+            if args.preview {
+                written.push(format!("{}.preview.png", st.file_stem()));
+            }
             let dt = t0.elapsed().as_secs_f64();
             let path = stack::write_to(&out, &st.file_stem(), &st)?;
             if args.preview {

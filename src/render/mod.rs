@@ -151,18 +151,27 @@ pub fn light_bvh(tris: &[Tri], frame: &LightFrame) -> Bvh {
 }
 
 /// Renders view `light_index` of `scene` at `resolution`² (see module docs). Panics if
-/// `light_index` is out of range or `resolution` is 0 (callers validate user input).
+/// `light_index` is out of range or `resolution` is 0, or if the view has more layers than a
+/// stack may hold (for scenes built in code and tests; user scenes go through
+/// [`try_render_view`]).
 pub fn render_view(scene: &Scene, light_index: usize, resolution: usize) -> DepthStack {
+    try_render_view(scene, light_index, resolution).unwrap_or_else(|e| panic!("{e:#}"))
+}
+
+/// [`render_view`], with an error when the view would be a stack its reader refuses (more than
+/// [`MAX_LAYERS`](crate::stack::MAX_LAYERS) layers, or more than
+/// [`MAX_STACK_BYTES`](crate::stack::MAX_STACK_BYTES)), found before the layers are allocated.
+pub fn try_render_view(scene: &Scene, light_index: usize, resolution: usize) -> Result<DepthStack> {
     render_view_with(scene, light_index, resolution, &|_| {})
 }
 
-/// [`render_view`] calling `row_done(1)` after each finished row (for progress bars).
+/// [`try_render_view`] calling `row_done(1)` after each finished row (for progress bars).
 pub fn render_view_with(
     scene: &Scene,
     light_index: usize,
     resolution: usize,
     row_done: &(dyn Fn(u64) + Sync),
-) -> DepthStack {
+) -> Result<DepthStack> {
     assert!(resolution > 0, "resolution must be positive");
     let light = &scene.lights[light_index];
     let frame = LightFrame::fit(&scene.triangles, light.dir, resolution);
@@ -194,6 +203,32 @@ pub fn render_view_with(
         .max()
         .unwrap_or(0)
         .max(1) as usize;
+    if layers > crate::stack::MAX_LAYERS {
+        bail!(
+            "scene '{}' view '{}' at {n}×{n}: {layers} surfaces along one texel's ray, more than \
+             the {} layers a stack may hold",
+            scene.name,
+            light.name,
+            crate::stack::MAX_LAYERS
+        );
+    }
+    let meta = StackMeta {
+        scene: scene.name.clone(),
+        view: light.name.clone(),
+        light_dir: light.dir,
+        near: frame.near,
+        far: frame.far,
+        width: n,
+        height: n,
+        layers,
+        u_axis: frame.u_axis,
+        v_axis: frame.v_axis,
+        uv_origin: frame.uv_origin,
+        texel_size: frame.texel,
+    };
+    // the reader's limits, before the layers are allocated
+    crate::stack::check_size(&meta)
+        .with_context(|| format!("scene '{}' view '{}'", scene.name, light.name))?;
     let mut depth = vec![vec![f32::INFINITY; n * n]; layers];
     let mut dzdu = vec![vec![0.0f32; n * n]; layers];
     let mut dzdv = vec![vec![0.0f32; n * n]; layers];
@@ -210,25 +245,12 @@ pub fn render_view_with(
             }
         }
     }
-    DepthStack {
-        meta: StackMeta {
-            scene: scene.name.clone(),
-            view: light.name.clone(),
-            light_dir: light.dir,
-            near: frame.near,
-            far: frame.far,
-            width: n,
-            height: n,
-            layers,
-            u_axis: frame.u_axis,
-            v_axis: frame.v_axis,
-            uv_origin: frame.uv_origin,
-            texel_size: frame.texel,
-        },
+    Ok(DepthStack {
+        meta,
         depth,
         dzdu,
         dzdv,
-    }
+    })
 }
 
 /// The scenes of `path`: a folder gives all its `*.json` scene files (sorted by file name;
@@ -288,11 +310,11 @@ pub fn default_dataset(resolution: usize) -> Result<Vec<DepthStack>> {
         bail!("resolution must be positive");
     }
     let scenes = embedded_scenes()?;
-    Ok(scenes
+    scenes
         .iter()
         .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
-        .map(|(s, i)| render_view(s, i, resolution))
-        .collect())
+        .map(|(s, i)| try_render_view(s, i, resolution))
+        .collect()
 }
 
 /// The views of the default dataset as (scene, light) names, in the order [`default_dataset`]
