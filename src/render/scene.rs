@@ -2,8 +2,8 @@
 //! Loaded from JSON (procedural primitives and OBJ meshes with transforms; format in
 //! docs/stacks.md) or built in code.
 
-use super::mesh::load_mesh;
 pub use super::mesh::load_obj_bytes;
+use super::mesh::{load_mesh_from, MeshFiles};
 use crate::stack::check_plain_name;
 use anyhow::{bail, Context, Result};
 use rand::{Rng, SeedableRng};
@@ -75,21 +75,20 @@ impl Scene {
 
     /// Loads a scene from a JSON file; mesh paths are relative to the file's directory.
     pub fn load(path: &Path) -> Result<Scene> {
-        use crate::artefact::input::{read_bytes, read_text, Limit};
+        use crate::artefact::input::{read_text, Limit};
         let text = read_text(path, Limit::SCENE)?;
-        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        Scene::from_json(&text, &|rel: &str| {
-            let p = dir.join(rel);
-            read_bytes(&p, Limit::MESH).context("reading mesh")
-        })
-        .with_context(|| format!("scene {}", path.display()))
+        let files = DirFiles(path.parent().unwrap_or(Path::new(".")).to_path_buf());
+        let desc: SceneDesc = serde_json::from_str(&text)
+            .context("malformed scene JSON")
+            .with_context(|| format!("scene {}", path.display()))?;
+        Scene::from_desc(desc, &files).with_context(|| format!("scene {}", path.display()))
     }
 
     /// Parses a scene from JSON text; `mesh` returns the bytes of a mesh file given its path
     /// as written in the JSON.
     pub fn from_json(text: &str, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Scene> {
         let desc: SceneDesc = serde_json::from_str(text).context("malformed scene JSON")?;
-        Scene::from_desc(desc, mesh)
+        Scene::from_desc(desc, &mesh)
     }
 
     /// A scene made of one mesh file (OBJ, glTF, PLY, STL) rendered directly. Its lights and
@@ -145,21 +144,45 @@ impl Scene {
                 transform: Transform::default(),
             }],
         };
-        let dir = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-        Scene::from_desc(desc, &|rel: &str| {
-            let p = dir.join(rel);
-            crate::artefact::read_bytes(&p, crate::artefact::Limit::MESH).context("reading mesh")
-        })
-        .with_context(|| format!("{}", path.display()))
+        let files = DirFiles(path.parent().unwrap_or(Path::new(".")).to_path_buf());
+        Scene::from_desc(desc, &files).with_context(|| format!("{}", path.display()))
     }
 
-    fn from_desc(desc: SceneDesc, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Scene> {
+    fn from_desc(desc: SceneDesc, mesh: &dyn MeshFiles) -> Result<Scene> {
+        // Every procedural object's triangle count, and their sum, before anything is built.
+        let mut planned: u128 = 0;
+        for (i, obj) in desc.objects.iter().enumerate() {
+            if let Some((fields, n)) = obj.shape.triangle_count() {
+                let kind = obj.shape.kind();
+                if n > MAX_TRIANGLES as u128 {
+                    bail!(
+                        "object {i} ({kind}): {fields} makes {n} triangles, more than the \
+                         {MAX_TRIANGLES} a scene may hold"
+                    );
+                }
+                planned += n;
+                if planned > MAX_TRIANGLES as u128 {
+                    bail!(
+                        "object {i} ({kind}): {fields} brings the scene to {planned} triangles, \
+                         more than the {MAX_TRIANGLES} a scene may hold"
+                    );
+                }
+            }
+        }
         let mut tris = Vec::new();
         for (i, obj) in desc.objects.iter().enumerate() {
             let mut local = obj
                 .shape
                 .triangles(mesh)
                 .with_context(|| format!("object {i}"))?;
+            if tris.len() + local.len() > MAX_TRIANGLES {
+                bail!(
+                    "object {i} ({}): brings the scene to {} triangles, more than the \
+                     {MAX_TRIANGLES} a scene may hold",
+                    obj.shape.kind(),
+                    tris.len() + local.len()
+                );
+            }
             let m = obj.transform.matrix();
             check_affine(&m).with_context(|| format!("object {i}: transform"))?;
             for t in &mut local {
@@ -207,6 +230,42 @@ impl Scene {
     }
 }
 
+/// Mesh files in a folder (paths relative to it), read through the bounded reader
+/// ([`Limit::MESH`](crate::artefact::Limit::MESH)). A glTF buffer must be a file in or below the
+/// `.gltf`'s folder once links are followed.
+struct DirFiles(std::path::PathBuf);
+
+impl MeshFiles for DirFiles {
+    fn read(&self, rel: &str) -> Result<Vec<u8>> {
+        crate::artefact::read_bytes(&self.0.join(rel), crate::artefact::Limit::MESH)
+            .context("reading mesh")
+    }
+
+    fn read_beside(&self, mesh: &str, name: &str) -> Result<Vec<u8>> {
+        let mesh = self.0.join(mesh);
+        let folder = match mesh.parent() {
+            Some(f) if !f.as_os_str().is_empty() => f,
+            _ => Path::new("."),
+        };
+        let p = folder.join(name);
+        let Ok(t) = p.canonicalize() else {
+            // missing (or a dangling link): the bounded reader's "no such file"
+            return crate::artefact::read_bytes(&p, crate::artefact::Limit::MESH);
+        };
+        let f = folder
+            .canonicalize()
+            .with_context(|| format!("{}: cannot resolve", folder.display()))?;
+        if !t.starts_with(&f) {
+            bail!(
+                "{} leads to {}, outside the folder of the .gltf",
+                p.display(),
+                t.display()
+            );
+        }
+        crate::artefact::read_bytes(&t, crate::artefact::Limit::MESH)
+    }
+}
+
 /// The light sidecar of a mesh file rendered directly: `<stem>.lights.json`.
 pub fn mesh_sidecar_path(path: &Path) -> std::path::PathBuf {
     let stem = path.file_stem().unwrap_or_default().to_string_lossy();
@@ -230,6 +289,10 @@ pub struct MeshSidecar {
 /// Smallest light elevation above the horizon, in degrees: a light must shine down onto the
 /// receivers (y is up), so a direction of travel with y ≥ −sin 1° is rejected.
 pub const MIN_ELEVATION_DEG: f64 = 1.0;
+
+/// Largest |azimuth| in degrees of a light or camera: one turn either way (a NaN, infinite or
+/// larger azimuth is an error naming the azimuth, not a direction computed from it).
+pub const MAX_AZIMUTH_DEG: f64 = 360.0;
 
 /// A light as written in a scene file: `dir` (direction of travel) or `azimuth_deg` +
 /// `elevation_deg` (where it comes from), and optionally the `camera` of its eye view. On the
@@ -291,7 +354,16 @@ fn downward(
     let d = match given {
         (Some(d), None, None) => d,
         (None, Some(az), Some(el)) => {
-            if !((MIN_ELEVATION_DEG..=90.0).contains(&el) && az.is_finite()) {
+            if !(-MAX_AZIMUTH_DEG..=MAX_AZIMUTH_DEG).contains(&az) {
+                // 1e308 as "1e308", not 309 digits
+                let az = if az.abs() >= 1e9 {
+                    format!("{az:e}")
+                } else {
+                    format!("{az}")
+                };
+                bail!("{what}: azimuth_deg {az} outside [-{MAX_AZIMUTH_DEG}, {MAX_AZIMUTH_DEG}]");
+            }
+            if !(MIN_ELEVATION_DEG..=90.0).contains(&el) {
                 bail!(
                     "{what}: elevation_deg {el} outside [{MIN_ELEVATION_DEG}, 90] (it must look \
                      down onto the receivers)"
@@ -347,6 +419,8 @@ impl std::str::FromStr for LightDesc {
         }
     }
 }
+
+pub use super::mesh::MAX_TRIANGLES;
 
 /// Largest |coordinate| of a scene vertex (world units): depths and their differences stay
 /// well inside f64 and the f32 depth maps keep their resolution.
@@ -642,8 +716,83 @@ fn pos(what: &str, v: f64) -> Result<()> {
     Ok(())
 }
 
+/// Triangles of a sphere of `n` segments: ⌈n/2⌉ (at least 2) rings of n quads, the two pole
+/// rings as fans.
+fn sphere_triangles(n: u128) -> u128 {
+    let rings = n.div_ceil(2).max(2);
+    n.saturating_mul(2 * rings - 2)
+}
+
 impl Shape {
-    fn triangles(&self, mesh: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Vec<Tri>> {
+    /// The `type` name of the shape, for errors.
+    fn kind(&self) -> &'static str {
+        match self {
+            Shape::Plane { .. } => "plane",
+            Shape::Box { .. } => "box",
+            Shape::Cylinder { .. } => "cylinder",
+            Shape::Torus { .. } => "torus",
+            Shape::Sphere { .. } => "sphere",
+            Shape::Stairs { .. } => "stairs",
+            Shape::Fence { .. } => "fence",
+            Shape::Grating { .. } => "grating",
+            Shape::Cards { .. } => "cards",
+            Shape::City { .. } => "city",
+            Shape::Arcade { .. } => "arcade",
+            Shape::Mesh { .. } => "mesh",
+        }
+    }
+
+    /// The count fields of a procedural shape (as "field N, …", for errors) and the number of
+    /// triangles [`Shape::triangles`] makes from them (saturating, so absurd counts stay
+    /// absurd instead of wrapping); `None` for a mesh (bounded by the mesh loaders).
+    fn triangle_count(&self) -> Option<(String, u128)> {
+        let w = |n: usize| n as u128;
+        Some(match *self {
+            Shape::Plane { .. } => ("a plane".into(), 2),
+            Shape::Box { .. } => ("a box".into(), 12),
+            Shape::Cylinder { segments, .. } => (
+                format!("segments {segments}"),
+                w(segments).saturating_mul(4),
+            ),
+            Shape::Torus { segments, .. } => (
+                format!("segments {segments}"),
+                w(segments)
+                    .saturating_mul(w(segments / 2).max(3))
+                    .saturating_mul(2),
+            ),
+            Shape::Sphere { segments, .. } => (
+                format!("segments {segments}"),
+                sphere_triangles(w(segments)),
+            ),
+            Shape::Stairs { steps, .. } => (
+                format!("steps {steps}"),
+                w(steps).saturating_mul(8) + if steps > 0 { 4 } else { 0 },
+            ),
+            Shape::Fence { bars, rails, .. } => (
+                format!("bars {bars}, rails {rails}"),
+                w(bars).saturating_add(w(rails)).saturating_mul(12),
+            ),
+            Shape::Grating { bars, .. } => (
+                format!("bars [{}, {}]", bars[0], bars[1]),
+                w(bars[0]).saturating_add(w(bars[1])).saturating_mul(12),
+            ),
+            Shape::Cards { count, .. } => (format!("count {count}"), w(count).saturating_mul(2)),
+            Shape::City { grid, bridges, .. } => (
+                format!("grid [{}, {}], bridges {bridges}", grid[0], grid[1]),
+                w(grid[0])
+                    .saturating_mul(w(grid[1]))
+                    .saturating_add(w(bridges))
+                    .saturating_mul(12),
+            ),
+            Shape::Arcade { columns, .. } => (
+                format!("columns {columns}"),
+                w(columns).saturating_mul(2 * 4 * 16).saturating_add(12),
+            ),
+            Shape::Mesh { .. } => return None,
+        })
+    }
+
+    fn triangles(&self, mesh: &dyn MeshFiles) -> Result<Vec<Tri>> {
         let mut out = Vec::new();
         match *self {
             Shape::Plane { size } => {
@@ -896,9 +1045,9 @@ impl Shape {
                 up_axis,
                 rotate,
             } => {
-                let bytes = mesh(path)?;
+                let bytes = mesh.read(path)?;
                 let mut tris =
-                    load_mesh(path, &bytes, mesh).with_context(|| format!("mesh '{path}'"))?;
+                    load_mesh_from(path, &bytes, mesh).with_context(|| format!("mesh '{path}'"))?;
                 orient_mesh(&mut tris, up_axis, rotate, fit)?;
                 out = tris;
             }

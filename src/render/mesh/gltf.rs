@@ -160,32 +160,45 @@ fn read_indices(acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str) -> Result
     })
 }
 
-/// The data of every buffer: the GLB's binary chunk or a base64 data URI or an external file.
+/// The data of every buffer: the GLB's binary chunk or a base64 data URI or an external file;
+/// at most [`Limit::MESH`](crate::artefact::Limit::MESH) in all (one file named by many buffers
+/// counts each time).
 fn load_buffers(g: &gltf::Gltf, resolve: &dyn Fn(&str) -> Result<Vec<u8>>) -> Result<Vec<Vec<u8>>> {
+    let limit = crate::artefact::Limit::MESH;
+    let mut total = 0u64;
     g.document
         .buffers()
         .map(|b| {
             let i = b.index();
             let data = match b.source() {
-                gltf::buffer::Source::Bin => g
-                    .blob
-                    .clone()
-                    .ok_or_else(|| anyhow!("glTF buffer {i} refers to a missing GLB binary chunk"))?,
+                gltf::buffer::Source::Bin => g.blob.clone().ok_or_else(|| {
+                    anyhow!("glTF buffer {i} refers to a missing GLB binary chunk")
+                })?,
                 gltf::buffer::Source::Uri(uri) => {
                     if let Some(rest) = uri.strip_prefix("data:") {
-                        let (_, b64) = rest.split_once(";base64,").ok_or_else(|| {
-                            anyhow!("glTF buffer {i}: data URI is not base64")
-                        })?;
+                        let (_, b64) = rest
+                            .split_once(";base64,")
+                            .ok_or_else(|| anyhow!("glTF buffer {i}: data URI is not base64"))?;
                         base64::engine::general_purpose::STANDARD
                             .decode(b64)
                             .map_err(|e| anyhow!("glTF buffer {i}: bad base64 data ({e})"))?
                     } else if uri.contains("://") {
-                        bail!("glTF buffer {i}: remote URI '{uri}' is not read; download it next to the .gltf");
+                        bail!(
+                            "glTF buffer {i}: remote URI '{}' is not read; download it next to \
+                             the .gltf",
+                            uri.escape_debug()
+                        );
                     } else {
-                        resolve(uri).with_context(|| format!("glTF buffer {i} ('{uri}')"))?
+                        resolve(uri).with_context(|| {
+                            format!("glTF buffer {i} ('{}')", uri.escape_debug())
+                        })?
                     }
                 }
             };
+            total += data.len() as u64;
+            if total > limit.bytes {
+                bail!("glTF buffer {i}: the buffers hold more than {limit} in all");
+            }
             if data.len() < b.length() {
                 bail!(
                     "glTF buffer {i}: {} bytes, but the file declares byteLength {}",
@@ -243,6 +256,8 @@ fn visit(
             if !idx.len().is_multiple_of(3) {
                 bail!("{what}: {} indices is not a multiple of 3", idx.len());
             }
+            // a mesh instanced by many nodes adds its triangles once per node
+            super::check_triangles(&|| what.clone(), out.len(), idx.len() / 3)?;
             for f in idx.chunks_exact(3) {
                 let v = |i: usize| {
                     verts.get(i).copied().ok_or_else(|| {

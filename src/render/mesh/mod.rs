@@ -16,6 +16,23 @@ pub use self::gltf::load_gltf_bytes;
 pub use self::ply::load_ply_bytes;
 pub use self::stl::load_stl_bytes;
 
+/// Largest triangle count of a scene, and so of one mesh file (each triangle takes 72 bytes,
+/// so a scene holds at most 3.6 GB of triangles before its BVH). Checked before the triangles
+/// are built: from the counts of procedural objects, from the face and index counts of mesh
+/// files as they are read.
+pub const MAX_TRIANGLES: usize = 50_000_000;
+
+/// Error unless `have` triangles and `more` to come stay within [`MAX_TRIANGLES`].
+pub(crate) fn check_triangles(what: &dyn Fn() -> String, have: usize, more: usize) -> Result<()> {
+    if more > MAX_TRIANGLES.saturating_sub(have) {
+        bail!(
+            "{}: more than {MAX_TRIANGLES} triangles (the limit of a scene)",
+            what()
+        );
+    }
+    Ok(())
+}
+
 /// The mesh formats read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
@@ -101,6 +118,46 @@ pub fn sniff(bytes: &[u8]) -> Option<MeshFormat> {
     }
 }
 
+/// Where a mesh and the files it refers to (external glTF buffers) are read from.
+pub trait MeshFiles {
+    /// The bytes of the file at `rel` (relative to the scene's base).
+    fn read(&self, rel: &str) -> Result<Vec<u8>>;
+    /// The bytes of file `name` beside the mesh `mesh` (a path as given to [`MeshFiles::read`]);
+    /// `name` is a relative path already checked by [`check_beside`]. A reader of real folders
+    /// also checks that the file it opens, links followed, lies in the mesh's folder.
+    fn read_beside(&self, mesh: &str, name: &str) -> Result<Vec<u8>> {
+        let base = Path::new(mesh).parent().unwrap_or(Path::new(""));
+        self.read(&base.join(name).to_string_lossy())
+    }
+}
+
+impl<F: Fn(&str) -> Result<Vec<u8>>> MeshFiles for F {
+    fn read(&self, rel: &str) -> Result<Vec<u8>> {
+        self(rel)
+    }
+}
+
+/// `name` (a glTF buffer URI that is not a data URI) as a path in or below the mesh's folder:
+/// relative, no `..`, no backslash, no URI scheme, no control characters.
+pub fn check_beside(name: &str) -> Result<()> {
+    use std::path::Component;
+    let p = Path::new(name);
+    let plain = !name.is_empty()
+        && !name.contains('\\')
+        && !name.chars().any(char::is_control)
+        && !name.split('/').next().unwrap_or("").contains(':')
+        && p.components()
+            .all(|c| matches!(c, Component::Normal(_) | Component::CurDir));
+    if !plain {
+        bail!(
+            "uri '{}' is not a file in the folder of the .gltf (only data URIs and relative \
+             paths without '..' are read)",
+            name.escape_debug()
+        );
+    }
+    Ok(())
+}
+
 /// Triangles of the mesh file `path` (format by extension, checked by magic). `bytes` is the
 /// file's content; `resolve` reads a file given its path relative to the same base as `path`
 /// (external glTF buffers are resolved next to the `.gltf`).
@@ -109,6 +166,11 @@ pub fn load_mesh(
     bytes: &[u8],
     resolve: &dyn Fn(&str) -> Result<Vec<u8>>,
 ) -> Result<Vec<Tri>> {
+    load_mesh_from(path, bytes, &resolve)
+}
+
+/// [`load_mesh`] reading external glTF buffers through `files` ([`MeshFiles::read_beside`]).
+pub fn load_mesh_from(path: &str, bytes: &[u8], files: &dyn MeshFiles) -> Result<Vec<Tri>> {
     let fmt = MeshFormat::from_path(path)?;
     let seen = sniff(bytes);
     let mismatch = match (fmt, seen) {
@@ -136,13 +198,10 @@ pub fn load_mesh(
             }
             load_obj_bytes(bytes)?
         }
-        MeshFormat::Gltf | MeshFormat::Glb => {
-            let base = Path::new(path).parent().unwrap_or(Path::new(""));
-            load_gltf_bytes(bytes, &|uri: &str| {
-                let p = base.join(uri);
-                resolve(&p.to_string_lossy())
-            })?
-        }
+        MeshFormat::Gltf | MeshFormat::Glb => load_gltf_bytes(bytes, &|uri: &str| {
+            check_beside(uri)?;
+            files.read_beside(path, uri)
+        })?,
         MeshFormat::Ply => load_ply_bytes(bytes)?,
         MeshFormat::Stl => load_stl_bytes(bytes)?,
     };
@@ -174,7 +233,11 @@ pub fn load_obj_bytes(bytes: &[u8]) -> Result<Vec<Tri>> {
     let (models, _) =
         tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
             .map_err(|e| anyhow!("OBJ parse error: {e}"))?;
-    let mut tris = Vec::new();
+    let faces = models
+        .iter()
+        .fold(0usize, |a, m| a.saturating_add(m.mesh.indices.len() / 3));
+    check_triangles(&|| "OBJ".to_string(), 0, faces)?;
+    let mut tris = Vec::with_capacity(faces);
     for m in &models {
         let p = &m.mesh.positions;
         let idx = &m.mesh.indices;
@@ -217,6 +280,7 @@ pub(crate) fn fan(
             )
         })
     };
+    check_triangles(what, out.len(), idx.len() - 2)?;
     let a = v(idx[0])?;
     for k in 1..idx.len() - 1 {
         out.push([a, v(idx[k])?, v(idx[k + 1])?]);

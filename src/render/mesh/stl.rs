@@ -19,6 +19,7 @@ pub(super) fn is_binary_stl(b: &[u8]) -> bool {
 pub fn load_stl_bytes(b: &[u8]) -> Result<Vec<Tri>> {
     if is_binary_stl(b) {
         let n = (b.len() - 84) / 50;
+        super::check_triangles(&|| "binary STL".to_string(), 0, n)?;
         let mut out = Vec::with_capacity(n);
         for rec in b[84..].chunks_exact(50) {
             let f = |k: usize| f32::from_le_bytes([rec[k], rec[k + 1], rec[k + 2], rec[k + 3]]);
