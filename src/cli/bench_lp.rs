@@ -77,6 +77,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
+    check_flags(&args)?;
     if args.corpus != CorpusKind::Kernels {
         return run_corpus(&args);
     }
@@ -254,6 +255,48 @@ fn print_top_groups(r: &CorpusRow, top: usize) {
 
 /// `--corpus stacks|moments|adversarial`: one row per group (stacks: per grid size; moments:
 /// per kind and grid size) or one for the corpus (adversarial).
+/// Flags the chosen corpus would ignore are errors, not silently dropped (before any work).
+fn check_flags(args: &Args) -> Result<()> {
+    use CorpusKind::*;
+    let c = args.corpus;
+    let name = format!("{c:?}").to_lowercase();
+    let not_for =
+        |flag: &str| anyhow::anyhow!("bench lp: {flag} does not apply to --corpus {name}");
+    if args.large && c != Adversarial {
+        return Err(not_for("--large"));
+    }
+    if (args.stacks.is_some() || args.resolution != 512) && c != Stacks {
+        return Err(not_for(if args.stacks.is_some() {
+            "--stacks"
+        } else {
+            "--resolution"
+        }));
+    }
+    if args.basis.is_some() && !matches!(c, Stacks | Moments) {
+        return Err(not_for("--basis"));
+    }
+    if args.basis.is_some() && args.m != 4 {
+        bail!("bench lp: --basis and --m both choose the functions; give one of them");
+    }
+    if args.top_groups != 8 && c != Adversarial {
+        return Err(not_for("--top-groups"));
+    }
+    if c == Adversarial {
+        let given = [
+            ("--n", args.n != [256, 1024, 4096]),
+            ("--inputs", args.inputs != 2000),
+            ("--m", args.m != 4),
+        ];
+        if let Some((flag, _)) = given.iter().find(|g| g.1) {
+            bail!(
+                "bench lp: {flag} does not apply to --corpus adversarial (its tables have fixed \
+                 sizes, functions and problems; --large adds the n = 4096 and 8192 tables)"
+            );
+        }
+    }
+    Ok(())
+}
+
 fn run_corpus(args: &Args) -> Result<()> {
     let groups = groups(args)?;
     let total: u64 = groups

@@ -46,7 +46,7 @@ pub struct Opts {
     pub max_fragments: usize,
     /// Synthetic dataset with this many texels per view (tests and demos, no stacks needed;
     /// 1..=1000000).
-    #[arg(long, conflicts_with = "stacks", value_parser = usize_in(1, 1_000_000))]
+    #[arg(long, conflicts_with_all = ["stacks", "max_fragments", "resolution"], value_parser = usize_in(1, 1_000_000))]
     pub synthetic: Option<usize>,
     /// Seed of the stratified fragment sample (and of the synthetic data).
     #[arg(long, default_value_t = 1)]
@@ -149,7 +149,7 @@ pub struct Opts {
     #[arg(long)]
     pub no_closed_forms: bool,
     /// Print the ranking (best candidate, references and their ranks) as JSON on stdout.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "plan")]
     pub json: bool,
 }
 
@@ -217,6 +217,11 @@ fn check_flags(args: &Opts) -> Result<()> {
         if !v.join("results.jsonl").exists() {
             bail!("--validate {}: no results.jsonl there", v.display());
         }
+    }
+    crate::lp::check_solver(&args.solver).context("--solver")?;
+    for c in &args.compare {
+        crate::search::merge::verify_results(c, false)
+            .with_context(|| format!("--compare {}", c.display()))?;
     }
     Ok(())
 }

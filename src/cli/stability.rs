@@ -24,14 +24,14 @@ pub struct Args {
     /// Uniform grid points of the oracle (Algorithm 1) on [0,1] (2..=65536).
     #[arg(long, default_value_t = 256, value_parser = usize_in(2, 65_536))]
     pub grid: usize,
-    /// Techniques (repeatable; comma lists, `lp:` specs keep their commas); names not
-    /// available in this build are skipped.
+    /// Techniques (repeatable; comma lists, `lp:` specs keep their commas); an unknown name is
+    /// an error before the study runs.
     #[arg(long, alias = "techniques", default_value = DEFAULT_TECHNIQUES)]
     pub technique: Vec<String>,
     /// Replace files that already exist in --out (otherwise refused before the study runs).
     #[arg(long)]
     pub force: bool,
-    /// Print the summary (inputs, techniques, skipped, seconds, output folder) as JSON.
+    /// Print the summary (inputs, techniques, seconds, output folder) as JSON.
     #[arg(long)]
     pub json: bool,
 }
@@ -48,14 +48,11 @@ pub fn run(args: Args) -> Result<()> {
     let pb = Bar::new("stability inputs", 0);
     let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;
     pb.finish();
-    for s in &o.skipped {
-        eprintln!("skipping technique {s}");
-    }
     if args.json {
         println!(
             "{}",
             serde_json::json!({
-                "inputs": o.inputs, "techniques": o.techniques, "skipped": o.skipped,
+                "inputs": o.inputs, "techniques": o.techniques,
                 "seconds": o.seconds, "out": opts.out,
             })
         );

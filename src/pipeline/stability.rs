@@ -24,9 +24,6 @@ pub fn run(plan: &Plan, out: &Path) -> Result<()> {
     let b = bar(0, "stability");
     let o = study(&opts, &|n| b.set_total(n as u64), &|n| b.inc(n as u64))?;
     b.finish();
-    for s in &o.skipped {
-        eprintln!("skipping technique {s}");
-    }
     println!(
         "stability: {} inputs × {} techniques in {:.1} s → {}",
         o.inputs,

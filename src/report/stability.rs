@@ -24,7 +24,7 @@ pub struct Options {
     pub seed: u64,
     /// Uniform grid points of the oracle (Algorithm 1) on [0,1], ≥ 2.
     pub grid: usize,
-    /// Technique names; names not available in this build are skipped (and listed).
+    /// Technique names (an unknown name is an error before any work).
     pub techniques: Vec<String>,
     /// Replace existing files in `out` (otherwise refused before the study runs).
     pub force: bool,
@@ -44,8 +44,6 @@ pub const FILES: [&str; 5] = [
 pub struct Outcome {
     pub inputs: usize,
     pub techniques: usize,
-    /// Techniques skipped, with the reason.
-    pub skipped: Vec<String>,
     pub seconds: f64,
 }
 
@@ -62,10 +60,7 @@ pub fn study(
     if opts.grid < 2 {
         bail!("--grid must be at least 2");
     }
-    let od = crate::artefact::OutDir::new(&opts.out, opts.force).context("--out")?;
-    od.reserve(FILES).context("--out")?;
     let mut techs: Vec<Entry> = Vec::new();
-    let mut skipped = Vec::new();
     let p16 = Params {
         quant_bits: 16,
         ..Params::default()
@@ -76,25 +71,23 @@ pub fn study(
         .map(|s| s.trim())
         .filter(|s| !s.is_empty())
     {
-        match by_name(name) {
-            Ok(t32) => {
-                // 16-bit moments get the technique's 16-bit defaults (e.g. a stronger bias).
-                let t16 = build(name, &p16).or_else(|_| by_name(name))?;
-                techs.push(Entry {
-                    name: name.to_string(),
-                    t32,
-                    t16,
-                })
-            }
-            Err(e) => skipped.push(format!("{name} ({e:#})")),
-        }
+        let t32 = by_name(name).with_context(|| format!("--technique {name}"))?;
+        // 16-bit moments get the technique's 16-bit defaults (e.g. a stronger bias).
+        let t16 = build(name, &p16).or_else(|_| by_name(name))?;
+        techs.push(Entry {
+            name: name.to_string(),
+            t32,
+            t16,
+        });
     }
     if techs.is_empty() {
         bail!(
-            "no technique available among '{}'",
+            "--technique: no technique named in '{}'",
             opts.techniques.join(",")
         );
     }
+    let od = crate::artefact::OutDir::new(&opts.out, opts.force).context("--out")?;
+    od.reserve(FILES).context("--out")?;
     let cfg = Config {
         samples: opts.samples,
         seed: opts.seed,
@@ -107,7 +100,7 @@ pub fn study(
     let report = stability::run(&cfg, &techs, &samples, progress)?;
     let secs = t0.elapsed().as_secs_f64();
     od.write_json("stability.json", &report)?;
-    let md = markdown(&report, &skipped, secs, opts);
+    let md = markdown(&report, secs, opts);
     od.write_text("stability.md", &md)?;
     for mode in [Mode::F64, Mode::F32, Mode::U16] {
         let name = format!("heatmap_{}.svg", mode.name());
@@ -118,7 +111,6 @@ pub fn study(
     Ok(Outcome {
         inputs: samples.len(),
         techniques: techs.len(),
-        skipped,
         seconds: secs,
     })
 }
@@ -134,7 +126,7 @@ fn sci(x: f64) -> String {
     }
 }
 
-fn markdown(r: &Report, skipped: &[String], secs: f64, args: &Options) -> String {
+fn markdown(r: &Report, secs: f64, args: &Options) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "# Stability of the shadow techniques\n");
     let _ = writeln!(
@@ -154,9 +146,6 @@ fn markdown(r: &Report, skipped: &[String], secs: f64, args: &Options) -> String
         r.config.grid_points,
         r.config.over_tolerance
     );
-    if !skipped.is_empty() {
-        let _ = writeln!(s, "Not available in this build: {}.\n", skipped.join(", "));
-    }
     let _ = writeln!(s, "## Per technique and input precision\n");
     let _ = writeln!(
         s,

@@ -31,8 +31,8 @@ pub fn verify_results(d: &Path, allow_partial: bool) -> Result<Verified> {
     let complete = std::fs::symlink_metadata(&marker).is_ok();
     if !complete && !allow_partial {
         bail!(
-            "{} (shard {i}/{n}) is not complete (no {COMPLETE_FILE}); rerun it or pass \
-             --allow-partial",
+            "{} (shard {i}/{n}) is not complete (no {COMPLETE_FILE}); rerun the search to \
+             finish it (`momentlab merge --allow-partial` merges unfinished shards)",
             d.display()
         );
     }

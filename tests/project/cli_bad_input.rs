@@ -156,6 +156,55 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             "not in 2..=65536",
         ),
         (args(&["stability", "--inputs", "0"]), None, 2, "--inputs"),
+        // Flags the command would have ignored, and checks that used to wait for the dataset.
+        (
+            args(&["bench", "lp", "--corpus", "adversarial", "--n", "64"]),
+            None,
+            1,
+            "--n does not apply to --corpus adversarial",
+        ),
+        (
+            args(&["bench", "lp", "--corpus", "moments", "--large"]),
+            None,
+            1,
+            "--large does not apply to --corpus moments",
+        ),
+        (
+            args(&["bench", "lp", "--basis", "z,z^2", "--m", "3"]),
+            None,
+            1,
+            "--basis and --m both choose the functions",
+        ),
+        (
+            args(&["search", "--synthetic", "100", "--max-fragments", "10"]),
+            None,
+            2,
+            "--max-fragments",
+        ),
+        (args(&["search", "--plan", "--json"]), None, 2, "--json"),
+        (
+            args(&["search", "--solver", "foo"]),
+            None,
+            1,
+            "--solver: unknown LP solver 'foo'",
+        ),
+        (
+            args(&[
+                "search",
+                "--report-only",
+                "--compare",
+                "/nonexistent-momentlab",
+            ]),
+            None,
+            1,
+            "--compare /nonexistent-momentlab",
+        ),
+        (
+            args(&["stability", "--inputs", "5", "--technique", "vsm,hamburgr4"]),
+            None,
+            1,
+            "--technique hamburgr4",
+        ),
         // A bias beyond the depth range made every output non-finite (scored as 0 % error).
         (
             args(&[
