@@ -792,8 +792,9 @@ mod tests {
         fs::remove_dir_all(&d).unwrap();
     }
 
-    /// Calls that open, create, replace or fill a file directly, bypassing [`OutDir`].
-    const DIRECT_WRITES: [&str; 10] = [
+    /// Calls that open, create, replace, fill, cut or remove a file or folder directly,
+    /// bypassing [`OutDir`], and that read a file bypassing the bounded reader.
+    const DIRECT_WRITES: [&str; 17] = [
         "File::create",
         "fs::write",
         "OpenOptions",
@@ -804,6 +805,13 @@ mod tests {
         "BitMapBackend",
         "write_to_file",
         "save_buffer",
+        "create_dir_all",
+        "remove_file",
+        "remove_dir",
+        ".set_len(",
+        "fs::read(",
+        "read_to_string(",
+        "File::open",
     ];
 
     /// (line number, call) of every direct write in `code` before its `#[cfg(test)]` module
@@ -852,7 +860,7 @@ mod tests {
         assert!(files > 50, "scanned only {files} files");
         assert!(
             found.is_empty(),
-            "files written past artefact::OutDir:\n{}",
+            "files written past artefact::OutDir or read past artefact::input:\n{}",
             found.join("\n")
         );
     }

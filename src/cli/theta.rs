@@ -155,6 +155,9 @@ fn options(args: &Args) -> Result<optimize::Options> {
 
 pub fn run(args: Args) -> Result<()> {
     if let Some(dir) = &args.summary {
+        if !dir.is_dir() {
+            bail!("--summary {}: no such folder", dir.display());
+        }
         let out = args.out.as_deref().unwrap_or(dir);
         // Before any verification: the three outputs can be written (refused unless --force).
         let od = OutDir::new(out, args.force).context("--summary")?;

@@ -143,6 +143,13 @@ pub fn remove_artefacts(out: &OutDir, data: &OutDir) -> Result<()> {
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
     let p = Paths::of(cfg);
+    // The run's folders are real folders inside --out and --results: a link there is refused,
+    // never followed out of them.
+    for root in [&cfg.reports, &cfg.results] {
+        OutDir::new(root, true)?
+            .create_dir(&cfg.run)
+            .with_context(|| format!("run folder '{}'", cfg.run))?;
+    }
     // One run per folder pair: a second `reproduce` of the same run waits for no one, it is
     // refused (both folders are locked until this run ends).
     let out = OutDir::new(&p.out, true)?;

@@ -590,7 +590,7 @@ fn full_sweeps_section(d: &mut Document, out: &Path) {
     let mut lines = Vec::new();
     for m in 2..=4 {
         let file = full.join(format!("search_m{m}.md"));
-        let Ok(text) = std::fs::read_to_string(&file) else {
+        let Ok(text) = crate::artefact::read_text(&file, crate::artefact::Limit::ARTEFACT) else {
             continue;
         };
         if let Some(w) = text.lines().find(|l| l.starts_with("The winner of ")) {

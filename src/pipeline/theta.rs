@@ -105,7 +105,9 @@ pub fn snippets(dir: &Path, order: ChannelOrder, force: bool) -> Result<()> {
 /// CPU seconds (user + system) of this process so far, from /proc/self/stat (Linux; clock
 /// ticks of 1/100 s); None elsewhere.
 fn process_cpu_seconds() -> Option<f64> {
-    let s = std::fs::read_to_string("/proc/self/stat").ok()?;
+    let s =
+        crate::artefact::read_text(Path::new("/proc/self/stat"), crate::artefact::Limit::CONFIG)
+            .ok()?;
     let rest = &s[s.rfind(')')? + 2..];
     let f: Vec<&str> = rest.split_whitespace().collect();
     // fields after the command: state is index 0, utime 11, stime 12

@@ -27,7 +27,13 @@ impl Provenance {
         Provenance {
             version: env!("CARGO_PKG_VERSION").to_string(),
             commit: COMMIT.to_string(),
-            cpu: cpu_model(&std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default()),
+            cpu: cpu_model(
+                &crate::artefact::read_text(
+                    std::path::Path::new("/proc/cpuinfo"),
+                    crate::artefact::Limit::CONFIG,
+                )
+                .unwrap_or_default(),
+            ),
             threads: rayon::current_num_threads(),
             date: utc_date(secs),
             command: command_line(),

@@ -38,12 +38,12 @@ pub fn fmt_ns(x: f64) -> String {
 }
 
 fn read_json(path: &Path) -> Result<Value> {
-    let s = std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+    let s = read(path)?;
     serde_json::from_str(&s).with_context(|| format!("parsing {}", path.display()))
 }
 
 fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))
+    crate::artefact::read_text(path, crate::artefact::Limit::ARTEFACT)
 }
 
 fn f(v: &Value, key: &str, file: &Path) -> Result<f64> {

@@ -8,7 +8,6 @@ use super::sweep::SweepSummary;
 use crate::artefact::{read_bytes, Limit, OutDir};
 use anyhow::{bail, Context, Result};
 use std::collections::BTreeSet;
-use std::fs;
 use std::path::{Path, PathBuf};
 
 /// A results directory checked to be whole: its configuration, its rows, and whether it is
@@ -170,7 +169,7 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
 fn check_not_failed(d: &Path) -> Result<()> {
     let failed = d.join(FAILED_FILE);
     if failed.exists() {
-        let text = fs::read_to_string(&failed).unwrap_or_default();
+        let text = crate::artefact::read_text(&failed, Limit::CONFIG).unwrap_or_default();
         let why = text
             .lines()
             .find(|l| !l.trim().is_empty())

@@ -205,6 +205,12 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             1,
             "--technique hamburgr4",
         ),
+        (
+            args(&["theta", "--summary", "/nonexistent-momentlab-summary"]),
+            None,
+            1,
+            "--summary /nonexistent-momentlab-summary: no such folder",
+        ),
         // A bias beyond the depth range made every output non-finite (scored as 0 % error).
         (
             args(&[

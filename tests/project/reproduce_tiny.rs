@@ -198,3 +198,38 @@ fn bad_arguments_are_one_line_errors() {
         assert_eq!(e.trim().lines().count(), 1, "{args:?}: {e}");
     }
 }
+
+/// A link where the run's folder goes (`<out>/<run>` or `<results>/<run>`) is refused before
+/// anything is written, never followed out of --out or --results.
+#[test]
+fn a_linked_run_folder_is_refused() {
+    let root = std::env::temp_dir().join(format!("momentlab-runlink-{}", std::process::id()));
+    std::fs::remove_dir_all(&root).ok();
+    for linked in ["out", "results"] {
+        let (out, results, outside) =
+            (root.join("out"), root.join("results"), root.join("outside"));
+        for d in [&out, &results, &outside] {
+            std::fs::create_dir_all(d).unwrap();
+        }
+        std::os::unix::fs::symlink(&outside, root.join(linked).join("default")).unwrap();
+        let o = Command::new(bin())
+            .args(["reproduce", "--tiny", "--skip-search", "--out"])
+            .arg(&out)
+            .arg("--results")
+            .arg(&results)
+            .output()
+            .unwrap();
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{linked}: {e}");
+        assert!(
+            e.contains("symbolic link") && e.trim().lines().count() == 1,
+            "{e}"
+        );
+        assert_eq!(
+            std::fs::read_dir(&outside).unwrap().count(),
+            0,
+            "{linked}: wrote outside"
+        );
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}
