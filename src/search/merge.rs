@@ -194,6 +194,7 @@ fn check_not_failed(d: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::fs;
 
     #[test]
     fn merge_refuses_failed_and_never_started_shards() {
