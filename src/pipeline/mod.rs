@@ -139,6 +139,34 @@ pub fn remove_artefacts(out: &OutDir, data: &OutDir) -> Result<()> {
     Ok(())
 }
 
+/// The steps write into the entries of the run's folders ([`REPORT_ENTRIES`],
+/// [`is_data_entry`]): a symbolic link among them (planted in a resumed run) is an error, so
+/// that no step follows it out of the folder.
+fn refuse_linked_entries(out: &OutDir, data: &OutDir) -> Result<()> {
+    let data_entries: Vec<String> = match std::fs::read_dir(data.root()) {
+        Ok(rd) => rd
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| is_data_entry(n))
+            .chain(["stacks".to_string()])
+            .collect(),
+        Err(_) => vec!["stacks".to_string()],
+    };
+    let report = REPORT_ENTRIES.iter().map(|n| (out.root(), n.to_string()));
+    let data_paths = data_entries.into_iter().map(|n| (data.root(), n));
+    for (root, name) in report.chain(data_paths) {
+        let p = root.join(&name);
+        if std::fs::symlink_metadata(&p).is_ok_and(|m| m.file_type().is_symlink()) {
+            bail!(
+                "{}: is a symbolic link; refusing to follow it out of {} (remove it, or pass \
+                 --force to replace the run's outputs)",
+                p.display(),
+                root.display()
+            );
+        }
+    }
+    Ok(())
+}
+
 /// Run (or resume) the whole study.
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
@@ -178,6 +206,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     for l in &locks {
         l.create_dir(".")?;
     }
+    refuse_linked_entries(out, &locks[1])?;
     out.write_json(IN_PROGRESS, &mark(cfg, &plan))?;
     let mut step = Steps::new(9);
 
@@ -352,6 +381,39 @@ mod tests {
             fs::read_to_string(outside.join("sub/precious")).unwrap(),
             "x"
         );
+        fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// A link among the entries a run writes (`evaluate` in the report, `search-m2` in the
+    /// data folder) stops the run before any step; other links are not the run's business.
+    #[test]
+    fn linked_entries_of_a_run_are_refused() {
+        let root = std::env::temp_dir().join(format!("momentlab-linked-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let (report, data, outside) = (root.join("report"), root.join("data"), root.join("out"));
+        for d in [&report, &data, &outside] {
+            fs::create_dir_all(d).unwrap();
+        }
+        let dirs = || {
+            (
+                OutDir::new(&report, true).unwrap(),
+                OutDir::new(&data, true).unwrap(),
+            )
+        };
+        symlink(&outside, data.join("mine")).unwrap();
+        let (r, d) = dirs();
+        assert!(refuse_linked_entries(&r, &d).is_ok());
+        for (dir, name) in [
+            (&report, "evaluate"),
+            (&data, "search-m2"),
+            (&data, "stacks"),
+        ] {
+            symlink(&outside, dir.join(name)).unwrap();
+            let (r, d) = dirs();
+            let e = refuse_linked_entries(&r, &d).unwrap_err().to_string();
+            assert!(e.contains(name) && e.contains("symbolic link"), "{e}");
+            fs::remove_file(dir.join(name)).unwrap();
+        }
         fs::remove_dir_all(&root).unwrap();
     }
 }
