@@ -68,6 +68,18 @@ pub fn evaluate_batch(text: &str, src: &str) -> Result<Value> {
         .ok_or_else(|| anyhow!("{src}: missing \"problems\""))?;
     let problems: Vec<Problem> =
         serde_json::from_value(problems).map_err(|e| anyhow!("{src}: \"problems\": {e}"))?;
+    if let Some(known) = crate::technique::registry::parameters_of(&technique) {
+        if let Some(k) = obj.keys().find(|k| !known.contains(&k.as_str())) {
+            bail!(
+                "{src}: \"{k}\" does not apply to {technique} (its parameters: {})",
+                if known.is_empty() {
+                    "none".to_string()
+                } else {
+                    known.join(", ")
+                }
+            );
+        }
+    }
     let mut params: Params = serde_json::from_value(Value::Object(Map::from_iter(obj)))
         .map_err(|e| anyhow!("{src}: technique parameters: {e}"))?;
     if technique == "hamburger" && params.moment_count.is_none() {

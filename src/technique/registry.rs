@@ -354,6 +354,48 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
     Ok(t)
 }
 
+/// The [`Params`] fields (JSON keys) the technique `name` reads; None for a name [`build`]
+/// does not know (LP candidates `lp:…` read none).
+pub fn parameters_of(name: &str) -> Option<&'static [&'static str]> {
+    const VSM: [&str; 5] = ["alpha", "b_star", "bias", "precision", "min_variance"];
+    const ESM: [&str; 5] = ["alpha", "b_star", "bias", "precision", "esm_c"];
+    const EVSM: [&str; 7] = [
+        "alpha",
+        "b_star",
+        "bias",
+        "precision",
+        "evsm_c_pos",
+        "evsm_c_neg",
+        "min_variance",
+    ];
+    const CSM: [&str; 5] = ["alpha", "b_star", "bias", "precision", "csm_terms"];
+    const MSM: [&str; 5] = ["alpha", "b_star", "bias", "precision", "quant_bits"];
+    const HAMBURGER: [&str; 6] = [
+        "alpha",
+        "b_star",
+        "bias",
+        "precision",
+        "quant_bits",
+        "moment_count",
+    ];
+    if name.trim().starts_with("lp:") {
+        return Some(&[]);
+    }
+    let canonical = canonical_name(name);
+    if general_hamburger_moments(&canonical).is_some() {
+        return Some(&HAMBURGER);
+    }
+    Some(match canonical.as_str() {
+        "vsm" => &VSM,
+        "esm" => &ESM,
+        "evsm" => &EVSM,
+        "csm" => &CSM,
+        "hamburger" => &HAMBURGER,
+        "hamburger4" | "hausdorff4" | "hamburger6" | "tmsm" => &MSM,
+        _ => return None,
+    })
+}
+
 /// The technique named by `spec` with default parameters; a one-line error for unknown names.
 pub fn by_name(spec: &str) -> Result<Box<dyn Technique>> {
     if let Some(list) = spec.strip_prefix("lp:") {
@@ -390,5 +432,28 @@ mod tests {
         assert!(by_name("hamburger7").is_err());
         assert!(by_name("9msm").is_err());
         assert!(is_closed_form_name("8msm") && !is_closed_form_name("z^2"));
+    }
+
+    /// Every closed form's parameter list names only fields of `Params`, holds the ones its
+    /// builder reads, and LP candidates read none.
+    #[test]
+    fn parameters_of_each_technique() {
+        let fields = serde_json::to_value(Params::default()).unwrap();
+        for name in CLOSED_FORM_NAMES
+            .iter()
+            .chain(&["hamburger", "hamburger8", "4msm"])
+        {
+            let keys = parameters_of(name).unwrap_or_else(|| panic!("{name}"));
+            for k in keys {
+                assert!(fields.get(k).is_some(), "{name}: {k} is not a field");
+            }
+        }
+        assert_eq!(parameters_of("esm").unwrap().contains(&"esm_c"), true);
+        assert!(!parameters_of("vsm").unwrap().contains(&"esm_c"));
+        assert!(parameters_of("hamburger10")
+            .unwrap()
+            .contains(&"moment_count"));
+        assert!(parameters_of("lp:z,z^2").unwrap().is_empty());
+        assert!(parameters_of("nonsense").is_none());
     }
 }

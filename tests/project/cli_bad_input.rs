@@ -206,6 +206,15 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             "--technique hamburgr4",
         ),
         (
+            args(&["shadow"]),
+            Some(
+                r#"{"technique": "vsm", "esm_c": 5, "problems": [{"moments": [0.5, 0.3], "zf": 0.5}]}"#
+                    .to_string(),
+            ),
+            1,
+            "\"esm_c\" does not apply to vsm",
+        ),
+        (
             args(&["theta", "--summary", "/nonexistent-momentlab-summary"]),
             None,
             1,
