@@ -448,7 +448,7 @@ mod tests {
                 assert!(fields.get(k).is_some(), "{name}: {k} is not a field");
             }
         }
-        assert_eq!(parameters_of("esm").unwrap().contains(&"esm_c"), true);
+        assert!(parameters_of("esm").unwrap().contains(&"esm_c"));
         assert!(!parameters_of("vsm").unwrap().contains(&"esm_c"));
         assert!(parameters_of("hamburger10")
             .unwrap()
