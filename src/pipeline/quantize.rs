@@ -5,7 +5,9 @@
 use super::Plan;
 use crate::artefact::OutDir;
 use crate::metrics::{Bias, Subsample};
+use crate::quantize::curve::MonomialCurve;
 use crate::quantize::study::{self, sweep, Sweep, Tech};
+use crate::quantize::theta::{verify, Theta};
 use crate::report::quantize::{markdown, plot};
 use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
@@ -68,7 +70,7 @@ pub fn study(s: &Study, od: &OutDir) -> Result<Written> {
     let thetas: Vec<_> = s
         .techniques
         .iter()
-        .map(|t| study::load_theta(&s.theta_dir, t.m()))
+        .map(|t| load_theta(&s.theta_dir, t.m()))
         .collect::<Result<_>>()?;
     let stacks = load_stacks(s)?;
     if stacks.is_empty() {
@@ -214,6 +216,41 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
     };
     print!("{}", study(&s, &od)?.markdown);
     Ok(())
+}
+
+/// θ_m from `dir/theta{m}.json` (written by `momentlab theta`), checked against the exact
+/// verifier: θ(b([0,1])) ⊆ [0,1]^m up to 1e-6.
+fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
+    let p = dir.join(format!("theta{m}.json"));
+    if !p.is_file() {
+        bail!(
+            "--theta-dir: {} not found (create it with `momentlab theta --m {m} --out {}`)",
+            p.display(),
+            dir.display()
+        );
+    }
+    let text = crate::artefact::read_text(&p, crate::artefact::Limit::ARTEFACT)?;
+    #[derive(serde::Deserialize)]
+    struct J {
+        basis: Vec<String>,
+        matrix: Vec<Vec<f64>>,
+        offset: Vec<f64>,
+    }
+    let j: J = serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
+    let th = Theta::new(j.basis, j.matrix, j.offset).with_context(|| p.display().to_string())?;
+    if th.m() != m {
+        bail!("{}: expected m = {m}, got {}", p.display(), th.m());
+    }
+    let curve = MonomialCurve::power(m)?;
+    let v = verify(&th, &curve)?;
+    if v.max_violation > 1e-6 {
+        bail!(
+            "{}: θ(b([0,1])) leaves [0,1]^{m} by {:.2e} (exact verifier)",
+            p.display(),
+            v.max_violation
+        );
+    }
+    Ok(th)
 }
 
 #[cfg(test)]

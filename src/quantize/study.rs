@@ -4,8 +4,7 @@
 //! (b' = (1−α)·b + α·b*, b* = (½, …, ½)) and measure the mean |G − PCF| over all fragments.
 //! Quantization happens per texel BEFORE filtering, as in a real shadow map.
 
-use super::curve::MonomialCurve;
-use super::theta::{published, verify, Theta};
+use super::theta::{published, Theta};
 use crate::kernel::{filter_separable, front_map, Gaussian};
 use crate::metrics::{fragments_subsampled, Bias, Subsample};
 use crate::stack::DepthStack;
@@ -15,10 +14,9 @@ use crate::technique::hamburger6::Hamburger6;
 use crate::technique::linalg::Precision;
 use crate::technique::vsm::Vsm;
 use crate::technique::ClosedForm;
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use rayon::prelude::*;
 use serde::Serialize;
-use std::path::Path;
 
 /// Per-texel storage format of the moment channels.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -307,41 +305,6 @@ pub fn sweep(
 pub const DEFAULT_ALPHAS: [f64; 13] = [
     1e-8, 3e-8, 1e-7, 3e-7, 1e-6, 3e-6, 1e-5, 3e-5, 1e-4, 3e-4, 1e-3, 3e-3, 1e-2,
 ];
-
-/// θ_m from `dir/theta{m}.json` (written by `momentlab theta`), checked against the exact
-/// verifier: θ(b([0,1])) ⊆ [0,1]^m up to 1e-6.
-pub fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
-    let p = dir.join(format!("theta{m}.json"));
-    if !p.is_file() {
-        bail!(
-            "--theta-dir: {} not found (create it with `momentlab theta --m {m} --out {}`)",
-            p.display(),
-            dir.display()
-        );
-    }
-    let text = crate::artefact::read_text(&p, crate::artefact::Limit::ARTEFACT)?;
-    #[derive(serde::Deserialize)]
-    struct J {
-        basis: Vec<String>,
-        matrix: Vec<Vec<f64>>,
-        offset: Vec<f64>,
-    }
-    let j: J = serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))?;
-    let th = Theta::new(j.basis, j.matrix, j.offset).with_context(|| p.display().to_string())?;
-    if th.m() != m {
-        bail!("{}: expected m = {m}, got {}", p.display(), th.m());
-    }
-    let curve = MonomialCurve::power(m)?;
-    let v = verify(&th, &curve)?;
-    if v.max_violation > 1e-6 {
-        bail!(
-            "{}: θ(b([0,1])) leaves [0,1]^{m} by {:.2e} (exact verifier)",
-            p.display(),
-            v.max_violation
-        );
-    }
-    Ok(th)
-}
 
 /// The storage configurations of the study for `tech`: canonical 8/16-bit, 32-bit float, and
 /// 8/16-bit with our θ and with the published θ (where one exists).
