@@ -561,15 +561,21 @@ impl DirLock {
                         }
                     );
                 }
-                // No locking on this file system: go on unlocked rather than not at all.
+                // No locking on this file system: go on unlocked rather than not at all, and
+                // say so.
                 Err(std::fs::TryLockError::Error(e))
                     if e.kind() == std::io::ErrorKind::Unsupported =>
                 {
+                    eprintln!(
+                        "warning: {}: this file system cannot lock files; a second run writing \
+                         this folder at the same time would not be refused",
+                        dir.display()
+                    );
                     return Ok(DirLock {
                         path,
                         file: Some(f),
                         key,
-                    })
+                    });
                 }
                 Err(std::fs::TryLockError::Error(e)) => {
                     return Err(e).with_context(|| format!("locking {}", dir.display()))
