@@ -622,7 +622,7 @@ fn host() -> String {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
     fn tmp(tag: &str) -> PathBuf {
@@ -631,7 +631,8 @@ mod tests {
         d
     }
 
-    fn listing(d: &Path) -> Vec<String> {
+    /// The names in folder `d`, sorted (test helper of the modules that write folders).
+    pub(crate) fn listing(d: &Path) -> Vec<String> {
         let mut v: Vec<String> = fs::read_dir(d)
             .unwrap()
             .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())

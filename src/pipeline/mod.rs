@@ -335,14 +335,7 @@ mod tests {
     use std::fs;
     use std::os::unix::fs::symlink;
 
-    fn listing(d: &std::path::Path) -> Vec<String> {
-        let mut v: Vec<String> = fs::read_dir(d)
-            .unwrap()
-            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-            .collect();
-        v.sort();
-        v
-    }
+    use crate::artefact::out::tests::listing;
 
     #[test]
     fn force_removes_only_the_runs_artefacts_and_follows_no_link() {

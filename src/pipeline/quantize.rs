@@ -263,17 +263,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("momentlab-qmerge-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
-        let sweep = |config: &str| Sweep {
-            technique: "vsm".into(),
-            config: config.into(),
-            alphas: vec![1e-3],
-            errors: vec![0.1],
-            deviation: vec![0.0],
-            non_finite: vec![0],
-            best_alpha: 1e-3,
-            best_error: 0.1,
-            fragments: 10,
-        };
+        let sweep = |config: &str| study::sample_sweep("vsm", config);
         let file = |name: &str, config: &str| {
             let p = dir.join(name);
             let v = serde_json::json!({"stacks": "s", "views": 1, "stride": 1, "seconds": 1.0,

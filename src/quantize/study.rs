@@ -368,6 +368,22 @@ pub fn usability(all: &[Sweep]) -> Vec<serde_json::Value> {
     out
 }
 
+/// A one-α sweep of `technique` with storage `config` (test fixture).
+#[cfg(test)]
+pub(crate) fn sample_sweep(technique: &str, config: &str) -> Sweep {
+    Sweep {
+        technique: technique.into(),
+        config: config.into(),
+        alphas: vec![1e-3],
+        errors: vec![0.02],
+        deviation: vec![0.0],
+        non_finite: vec![0],
+        best_alpha: 1e-3,
+        best_error: 0.02,
+        fragments: 10,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -181,17 +181,7 @@ mod tests {
         for bad in [&[0.0][..], &[1e-3, f64::NAN], &[]] {
             assert!(alpha_axis(bad).is_err(), "{bad:?}");
         }
-        let one = Sweep {
-            technique: "vsm".into(),
-            config: "16-bit".into(),
-            alphas: vec![1e-3],
-            errors: vec![0.02],
-            deviation: vec![0.0],
-            non_finite: vec![0],
-            best_alpha: 1e-3,
-            best_error: 0.02,
-            fragments: 10,
-        };
+        let one = crate::quantize::study::sample_sweep("vsm", "16-bit");
         let svg = plot(&[one]).unwrap();
         assert!(svg.contains("<svg") && svg.contains("vsm: error vs bias"));
     }
