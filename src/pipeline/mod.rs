@@ -167,6 +167,19 @@ fn refuse_linked_entries(out: &OutDir, data: &OutDir) -> Result<()> {
     Ok(())
 }
 
+/// The first setting of `new` that `old` holds otherwise, as "key = old (this run: new)".
+fn first_difference(old: &serde_json::Value, new: &serde_json::Value) -> String {
+    let null = serde_json::Value::Null;
+    new.as_object()
+        .and_then(|o| o.iter().find(|(k, v)| old.get(k.as_str()) != Some(*v)))
+        .map_or("unknown".to_string(), |(k, v)| {
+            format!(
+                "{k} = {} (this run: {v})",
+                old.get(k.as_str()).unwrap_or(&null)
+            )
+        })
+}
+
 /// Run (or resume) the whole study.
 pub fn run(cfg: &Config) -> Result<Outcome> {
     let plan = cfg.plan()?;
@@ -190,8 +203,16 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     // only grows: a complete set of stacks is read back, the sweeps resume their own rows and
     // refuse rows of another configuration.)
     let out = &locks[0];
-    let own = crate::artefact::read_json::<serde_json::Value>(&p.out.join(IN_PROGRESS))
-        .is_ok_and(|m| m == mark(cfg, &plan));
+    let marker = crate::artefact::read_json::<serde_json::Value>(&p.out.join(IN_PROGRESS)).ok();
+    let own = marker.as_ref() == Some(&mark(cfg, &plan));
+    if let (false, false, Some(m)) = (cfg.fresh, own, &marker) {
+        bail!(
+            "{} holds an unfinished run with other settings: {}; rerun it with its settings \
+             to resume, or pass --force to replace its outputs",
+            p.out.display(),
+            first_difference(m, &mark(cfg, &plan))
+        );
+    }
     if !cfg.fresh && !own {
         if let Some(f) = out.first_file(&[])? {
             bail!(
@@ -375,6 +396,17 @@ mod tests {
             "x"
         );
         fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn the_first_differing_setting_is_named() {
+        let old = serde_json::json!({"resolution": 128, "skip_search": false, "tiny": true});
+        let new = serde_json::json!({"resolution": 128, "skip_search": true, "tiny": true});
+        assert_eq!(
+            first_difference(&old, &new),
+            "skip_search = false (this run: true)"
+        );
+        assert_eq!(first_difference(&old, &old), "unknown");
     }
 
     /// A link among the entries a run writes (`evaluate` in the report, `search-m2` in the

@@ -30,7 +30,8 @@ pub struct Options {
     pub force: bool,
 }
 
-/// The files the study writes into its folder.
+/// The files the study writes into its folder; `stability.json` is written last, so it marks
+/// a finished study.
 pub const FILES: [&str; 5] = [
     "stability.json",
     "stability.md",
@@ -99,7 +100,6 @@ pub fn study(
     let t0 = std::time::Instant::now();
     let report = stability::run(&cfg, &techs, &samples, progress)?;
     let secs = t0.elapsed().as_secs_f64();
-    od.write_json("stability.json", &report)?;
     let md = markdown(&report, secs, opts);
     od.write_text("stability.md", &md)?;
     for mode in [Mode::F64, Mode::F32, Mode::U16] {
@@ -108,6 +108,8 @@ pub fn study(
         heat_maps(&mut svg, &od.path(&name)?, &report, mode)?;
         od.write_text(&name, &svg)?;
     }
+    // Last: its presence marks a finished study (the pipeline's step keeps the folder then).
+    od.write_json("stability.json", &report)?;
     Ok(Outcome {
         inputs: samples.len(),
         techniques: techs.len(),
@@ -291,4 +293,38 @@ fn heat_maps(svg: &mut String, path: &Path, r: &Report, mode: Mode) -> Result<()
     }
     root.present().map_err(|x| e(&x))?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A study that stops before its last file leaves no `stability.json`, so a resumed
+    /// pipeline runs it again instead of keeping a folder without its report.
+    #[test]
+    fn the_summary_is_written_last() {
+        let dir = std::env::temp_dir().join(format!("momentlab-stab-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let opts = Options {
+            out: dir.clone(),
+            samples: 3,
+            seed: 1,
+            grid: 16,
+            techniques: vec!["vsm".into()],
+            force: true,
+        };
+        // Once the files are reserved, a folder where the last heat map goes: that write fails.
+        let block = |_| std::fs::create_dir_all(dir.join("heatmap_u16.svg/x")).unwrap();
+        let Err(e) = study(&opts, &block, &|_| {}) else {
+            panic!("a heat map over a folder was written")
+        };
+        assert!(format!("{e:#}").contains("heatmap_u16.svg"), "{e:#}");
+        assert!(dir.join("stability.md").exists() && !dir.join("stability.json").exists());
+        std::fs::remove_dir_all(dir.join("heatmap_u16.svg")).unwrap();
+        study(&opts, &|_| {}, &|_| {}).unwrap();
+        for f in FILES {
+            assert!(dir.join(f).is_file(), "{f}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
