@@ -118,8 +118,9 @@ pub fn run(args: Args) -> Result<()> {
     let bar = Bar::new("tune", 0);
     let t = tune::tune(&stacks, &opts, &bar)?;
     if let Some(o) = &out {
-        o.write_json("tune.json", &t)?;
         tune::export::write(o, EXPORT_DIR, &t)?;
+        // Last: a folder with tune.json holds the whole tuning.
+        o.write_json("tune.json", &t)?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&t)?);
