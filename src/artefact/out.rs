@@ -403,12 +403,11 @@ fn put_atomically(
         let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
         // At most 64 bytes of the name: the temporary name stays within NAME_MAX (255 bytes)
         // for every output name the writer accepts.
-        let mut cut = file.len().min(64);
-        while !file.is_char_boundary(cut) {
-            cut -= 1;
-        }
-        let short = &file[..cut];
-        let tmp = dir.join(format!(".{short}.{}.{n}.tmp", std::process::id()));
+        let tmp = dir.join(format!(
+            "{}{}.{n}.tmp",
+            tmp_prefix(file),
+            std::process::id()
+        ));
         match fs::OpenOptions::new()
             .write(true)
             .read(true)
@@ -456,7 +455,10 @@ fn put_atomically(
         Ok(())
     })();
     match result {
-        Ok(()) => Ok(target),
+        Ok(()) => {
+            remove_stale_tmps(dir, file);
+            Ok(target)
+        }
         Err(e) => {
             let _ = fs::remove_file(&tmp);
             if e.to_string().contains("exists already") {
@@ -615,6 +617,57 @@ impl Drop for DirLock {
     }
 }
 
+/// The start of the temporary names of output `file`: `.<file>.<host>.` with at most 64 bytes
+/// of the name and 32 of the host, so that a temporary name `<prefix><pid>.<n>.tmp` stays
+/// within NAME_MAX (255 bytes) for every name the writer accepts.
+fn tmp_prefix(file: &str) -> String {
+    let cut = |s: &str, max: usize| {
+        let mut c = s.len().min(max);
+        while !s.is_char_boundary(c) {
+            c -= 1;
+        }
+        s[..c].to_string()
+    };
+    format!(".{}.{}.", cut(file, 64), cut(&safe_name(&host()), 32))
+}
+
+/// Remove the temporary files of output `file` in `dir` that a process of this host left when
+/// it was killed mid-write (its pid no longer runs); called once `file` is written.
+fn remove_stale_tmps(dir: &Path, file: &str) {
+    let prefix = tmp_prefix(file);
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name();
+        let Some(rest) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(prefix.as_str()))
+            .and_then(|r| r.strip_suffix(".tmp"))
+        else {
+            continue;
+        };
+        let Some((pid, n)) = rest.split_once('.') else {
+            continue;
+        };
+        let Ok(pid) = pid.parse::<i32>() else {
+            continue;
+        };
+        if n.is_empty()
+            || !n.bytes().all(|b| b.is_ascii_digit())
+            || pid as u32 == std::process::id()
+        {
+            continue;
+        }
+        // SAFETY: signal 0 only asks whether the process exists.
+        let gone = unsafe { libc::kill(pid, 0) } == -1
+            && std::io::Error::last_os_error().raw_os_error() == Some(libc::ESRCH);
+        if gone {
+            let _ = fs::remove_file(e.path());
+        }
+    }
+}
+
 fn host() -> String {
     fs::read_to_string("/proc/sys/kernel/hostname")
         .map(|s| s.trim().to_string())
@@ -629,6 +682,33 @@ pub(crate) mod tests {
         let d = std::env::temp_dir().join(format!("momentlab-out-{tag}-{}", std::process::id()));
         let _ = fs::remove_dir_all(&d);
         d
+    }
+
+    /// A temporary file of a killed writer of this host is removed when its output is
+    /// written; those of running processes (this one, pid 1) stay.
+    #[test]
+    fn temporary_files_of_killed_writers_are_removed() {
+        let d = tmp("stale");
+        fs::create_dir_all(&d).unwrap();
+        let mut child = std::process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let name = |pid: u32| format!("{}{pid}.0.tmp", tmp_prefix("x.json"));
+        for pid in [dead, 1, std::process::id()] {
+            fs::write(d.join(name(pid)), "").unwrap();
+        }
+        fs::write(d.join(".y.json.other.7.0.tmp"), "").unwrap();
+        let out = OutDir::new(&d, false).unwrap();
+        out.write_text("x.json", "{}").unwrap();
+        let mut want = vec![
+            name(1),
+            name(std::process::id()),
+            ".y.json.other.7.0.tmp".into(),
+            "x.json".into(),
+        ];
+        want.sort();
+        assert_eq!(listing(&d), want);
+        fs::remove_dir_all(&d).unwrap();
     }
 
     /// The names in folder `d`, sorted (test helper of the modules that write folders).
