@@ -49,21 +49,57 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         "core-hours",
         format!("wall, {threads} threads")
     );
+    // The chosen row is starred: racing's expected cost when a proxy race ran.
+    let expected = plan.proxy.as_ref().filter(|_| !opts.exhaustive);
     let mut rows: Vec<(String, &[Schedule])> = vec![(
         format!("racing (keep {}, at most)", opts.keep),
         plan.racing.as_slice(),
     )];
     rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
+    let expected_seconds = expected.map(|p| c.seconds_for(&p.by_family, p.other, threads));
+    if let (Some(p), Some(secs)) = (expected, expected_seconds) {
+        println!(
+            "plan: {:<28} {:>12} {:>11} {:>18}",
+            format!("* racing (keep {}, expected)", opts.keep),
+            big(p.lp_solves),
+            format!("{:.3}", secs * threads as f64 / 3600.0),
+            duration(setup + plan.references_seconds + secs)
+        );
+    }
     for (name, per) in &rows {
         let total: u64 = per.iter().map(|s| s.lp_solves).sum();
         let hours = c.core_hours(total);
-        let chosen = (name == "exhaustive") == opts.exhaustive;
+        let chosen = (name == "exhaustive") == opts.exhaustive && expected.is_none();
         println!(
             "plan: {:<28} {:>12} {:>11} {:>18}",
             format!("{}{name}", if chosen { "* " } else { "  " }),
             big(total),
             format!("{hours:.3}"),
-            duration(setup + hours * 3600.0 / threads as f64)
+            duration(setup + plan.references_seconds + hours * 3600.0 / threads as f64)
+        );
+    }
+    if let (Some(p), Some(secs)) = (expected, expected_seconds) {
+        let stages: Vec<String> = p
+            .stages
+            .iter()
+            .map(|(c, f)| format!("{} × {}", count(*c), count(*f)))
+            .collect();
+        println!(
+            "plan: expected from a proxy race on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            p.share,
+            count(p.fragments),
+            p.seconds,
+            p.share,
+            stages.join(", "),
+            p.tied,
+            p.share,
+            big(p.lp_solves),
+            p.by_family
+                .iter()
+                .map(|(f, n)| format!("{f} {}", big(*n)))
+                .collect::<Vec<_>>()
+                .join(", "),
+            duration(secs)
         );
     }
     if let Some(s) = plan.racing.first().filter(|_| shards == 1) {
@@ -99,7 +135,15 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             setup
         );
     }
-    let time = TIME_MARGIN * (setup + hours * 3600.0 / threads as f64);
+    if plan.references_seconds > 0.0 {
+        println!(
+            "plan: wall times include the dataset ({}) and the references after the race ({}: the winner and {} LP references on every kept fragment, and the closed forms)",
+            duration(setup),
+            duration(plan.references_seconds),
+            crate::search::reference::LP_REFERENCES
+        );
+    }
+    let time = TIME_MARGIN * (setup + plan.references_seconds + hours * 3600.0 / threads as f64);
     println!(
         "plan: Slurm: --array=0-{} --cpus-per-task={threads} --time={} ({TIME_MARGIN}× the estimate at this machine's speed per core)",
         shards - 1,

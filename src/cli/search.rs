@@ -136,9 +136,15 @@ pub struct Opts {
     #[arg(long)]
     pub report_only: bool,
     /// Dry run: candidates, fragments, LP solves and core-hours (from a short calibration on
-    /// this machine) for racing and --exhaustive, per task with --shard; nothing is written.
+    /// this machine) for racing and --exhaustive, per task with --shard, and racing's expected
+    /// cost from a proxy race on 1/S of the fragments (--plan-proxy); nothing is written
+    /// outside a scratch folder in the system's temporary folder, removed after.
     #[arg(long, conflicts_with = "report_only")]
     pub plan: bool,
+    /// With --plan: the proxy race runs on 1/S of the fragments (0: no proxy race, only the
+    /// upper bound of the racing schedule).
+    #[arg(long, default_value_t = crate::search::plan::PROXY_SHARE, requires = "plan", value_parser = usize_in(0, 1024))]
+    pub plan_proxy: usize,
     /// Other results directories (e.g. the m = 2 and m = 3 sweeps) for the side-by-side plot.
     #[arg(long, value_delimiter = ',')]
     pub compare: Vec<PathBuf>,
@@ -343,8 +349,14 @@ pub fn run(args: Args) -> Result<()> {
     );
     if args.plan {
         let setup = t_data.elapsed().as_secs_f64();
-        let plan =
-            crate::search::run::plan_dataset(&data, &table, &opts, super::plan::CALIBRATION)?;
+        let plan = crate::search::run::plan_dataset(
+            &data,
+            &table,
+            stacks.as_deref(),
+            &opts,
+            super::plan::CALIBRATION,
+            (args.plan_proxy > 0).then_some(args.plan_proxy),
+        )?;
         super::plan::print(&plan, &opts, setup);
         return Ok(());
     }

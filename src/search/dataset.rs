@@ -304,6 +304,27 @@ impl Dataset {
         keyed.into_iter().map(|(_, k)| k).collect()
     }
 
+    /// The stored fragments `ids` (indices into [`Self::fragments`]) as a dataset of their own,
+    /// with the same distributions, trivial fragments and population, so that its error
+    /// estimates are on the same scale: a prefix of [`Self::stratified_order`] is a smaller
+    /// stratified sample of the same population. Panics on an index out of range.
+    pub fn subset(&self, ids: &[u32]) -> Dataset {
+        let mut ids = ids.to_vec();
+        ids.sort_unstable();
+        ids.dedup();
+        Dataset {
+            grid: self.grid.clone(),
+            entries: self.entries.clone(),
+            dists: self.dists.clone(),
+            // In the stored order, which is sorted by (dist, zf, layer) already.
+            fragments: ids.iter().map(|&i| self.fragments[i as usize]).collect(),
+            trivial_count: self.trivial_count,
+            trivial_error: self.trivial_error,
+            nontrivial_population: self.nontrivial_population,
+            views: self.views.clone(),
+        }
+    }
+
     /// Fingerprint of the fragments (refuse resuming on different data).
     pub fn fingerprint(&self) -> u64 {
         let mut h = super::Fnv::new();
@@ -503,6 +524,36 @@ impl Dataset {
 mod tests {
     use super::*;
     use crate::search::FunctionTable;
+
+    /// A subset keeps the population, trivial fragments and distributions: all fragments give
+    /// the same dataset (fingerprint), a prefix of the stratified order fewer fragments on the
+    /// same error scale.
+    #[test]
+    fn a_subset_is_a_smaller_sample_of_the_same_population() {
+        let grid = Grid::uniform(16).unwrap();
+        let data = Dataset::synthetic(3, &grid, 2, 50, 3).unwrap();
+        let n = data.fragments().len();
+        let all: Vec<u32> = (0..n as u32).rev().collect();
+        assert_eq!(data.subset(&all).fingerprint(), data.fingerprint());
+        let order = data.stratified_order(7);
+        let sub = data.subset(&order[..n / 4]);
+        assert_eq!(sub.fragments().len(), n / 4);
+        assert_eq!(sub.nontrivial_population(), data.nontrivial_population());
+        assert_eq!(sub.total_count(), data.total_count());
+        assert_eq!(
+            sub.error_estimate(10, 1.0, 0.2),
+            data.error_estimate(10, 1.0, 0.2)
+        );
+        let mut want: Vec<Fragment> = order[..n / 4]
+            .iter()
+            .map(|&k| data.fragments()[k as usize])
+            .collect();
+        want.sort_by_key(|f| (f.dist, f.zf, f.layer, f.view, f.texel));
+        let mut got = sub.fragments().to_vec();
+        got.sort_by_key(|f| (f.dist, f.zf, f.layer, f.view, f.texel));
+        assert_eq!(got, want);
+        assert!(sub.fingerprint() != data.fingerprint());
+    }
 
     #[test]
     fn snapping_merging_and_trivial_fragments() {

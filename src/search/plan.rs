@@ -12,10 +12,14 @@
 //! confidence. Exhaustive: |C|·F, exact.
 
 use super::config::SweepConfig;
+use super::results::read_rows;
 use super::select;
+use super::sweep::{run_sweep, Hooks, Outcome};
 use super::Scorer;
+use crate::artefact::OutDir;
 use anyhow::{bail, Result};
 use std::collections::BTreeSet;
+use std::path::Path;
 use std::time::Instant;
 
 /// The work of one run (one shard).
@@ -88,6 +92,10 @@ pub struct Calibration {
     pub failures: u64,
     /// Per family: (family, candidates sampled, candidates in the run).
     pub strata: Vec<(&'static str, usize, usize)>,
+    /// Per family sampled: (family, CPU µs per LP).
+    pub family_us: Vec<(&'static str, f64)>,
+    /// CPU seconds in the sample's LPs (their sum over the threads).
+    pub cpu_seconds: f64,
 }
 
 impl Calibration {
@@ -98,6 +106,40 @@ impl Calibration {
     /// Core-hours for `lp_solves` solves at the calibrated rate.
     pub fn core_hours(&self, lp_solves: u64) -> f64 {
         lp_solves as f64 / self.rate() / 3600.0
+    }
+    /// Wall seconds on `threads` threads for LP solves counted per family (`other`: solves of
+    /// no known family, at the sample's mean): Σ_f LP_f · µs_f of the sample's CPU time per LP,
+    /// divided by the threads and by the sample's parallel efficiency (CPU seconds in its LPs /
+    /// (wall · threads)), so that a stage rich in costly families costs more. 0 when nothing
+    /// was timed.
+    pub fn seconds_for(
+        &self,
+        by_family: &[(&'static str, u64)],
+        other: u64,
+        threads: usize,
+    ) -> f64 {
+        if self.lp_solves == 0 {
+            return 0.0;
+        }
+        if self.cpu_seconds <= 0.0 {
+            let all = by_family.iter().map(|f| f.1).sum::<u64>() + other;
+            return self.core_hours(all) * 3600.0 / threads.max(1) as f64;
+        }
+        let mean_us = self.cpu_seconds * 1e6 / self.lp_solves as f64;
+        let us = |f: &str| {
+            self.family_us
+                .iter()
+                .find(|x| x.0 == f)
+                .map_or(mean_us, |x| x.1)
+        };
+        let cpu_us: f64 = by_family
+            .iter()
+            .map(|&(f, n)| n as f64 * us(f))
+            .sum::<f64>()
+            + other as f64 * mean_us;
+        let efficiency =
+            (self.cpu_seconds / (self.seconds.max(1e-9) * self.threads.max(1) as f64)).min(1.0);
+        cpu_us * 1e-6 / (threads.max(1) as f64 * efficiency)
     }
 }
 
@@ -114,11 +156,23 @@ pub struct Plan {
     pub racing: Vec<Schedule>,
     pub exhaustive: Vec<Schedule>,
     pub calibration: Calibration,
+    /// Racing's expected cost from a proxy race of shard `cfg.shard` (None: not asked for, or
+    /// exhaustive).
+    pub proxy: Option<Proxy>,
+    /// Wall seconds of the references after the race (0 when not estimated; set by
+    /// [`super::run::plan_dataset`]).
+    pub references_seconds: f64,
 }
 
 /// Plan the sweep `cfg` on `scorer`'s data and catalog: flags and schedules of every shard,
-/// and a calibration of `calibration[0]` candidates × `calibration[1]` fragments.
-pub fn plan(cfg: &SweepConfig, scorer: &Scorer, calibration: [usize; 2]) -> Result<Plan> {
+/// a calibration of `calibration[0]` candidates × `calibration[1]` fragments and, for racing
+/// with `proxy` = Some((s, scratch)), a proxy race on 1/s of the fragments ([`proxy_race`]).
+pub fn plan(
+    cfg: &SweepConfig,
+    scorer: &Scorer,
+    calibration: [usize; 2],
+    proxy: Option<(usize, &Path)>,
+) -> Result<Plan> {
     let all = select::selected(cfg)?;
     if all.is_empty() {
         bail!("plan: no candidates selected");
@@ -154,6 +208,114 @@ pub fn plan(cfg: &SweepConfig, scorer: &Scorer, calibration: [usize; 2]) -> Resu
         racing: per(cfg.keep, false),
         exhaustive: per(cfg.keep, true),
         calibration: calibrate(scorer, &active, &order, calibration)?,
+        proxy: match proxy {
+            Some((share, scratch)) if !cfg.exhaustive => {
+                Some(proxy_race(cfg, scorer, share, scratch)?)
+            }
+            _ => None,
+        },
+        references_seconds: 0.0,
+    })
+}
+
+/// Default share of the fragments the proxy race runs on: 1/8 (at 1/16 its noisier tests
+/// eliminated fewer candidates than the run: docs/search.md).
+pub const PROXY_SHARE: usize = 8;
+
+/// What a racing run will cost, from a proxy race ([`proxy_race`]): the race itself on 1/s of
+/// the fragments, its costs scaled by s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Proxy {
+    /// s: the proxy raced on a stratified 1/s of the kept fragments.
+    pub share: usize,
+    /// Fragments it raced on.
+    pub fragments: u64,
+    /// Per stage: (candidates, fragments × s).
+    pub stages: Vec<(u64, u64)>,
+    /// Candidates tied at its end.
+    pub tied: u64,
+    /// Its LP solves × s: the expected LP solves of the run.
+    pub lp_solves: u64,
+    /// Of those, the candidates' per family ([`super::timing::family_of`]), and the rest
+    /// (stage references and the pilot).
+    pub by_family: Vec<(&'static str, u64)>,
+    pub other: u64,
+    /// Its wall time on this machine (all threads).
+    pub seconds: f64,
+}
+
+/// The race `cfg` (one shard: `cfg.shard`) run on a stratified 1/`share` of the kept
+/// fragments — the first F/s of the race's own fragment order — with every block 1/s as
+/// large (first sample, early look) and every half-width × 1/√s, so that each test compares the
+/// block mean with the threshold the full block would have: a candidate whose gap to the
+/// reference exceeds the full-size half-width leaves in the proxy as in the run, in
+/// expectation. Eliminations, the cap and the stopping rule are the run's own code
+/// ([`super::run_sweep`], in the scratch folder `scratch`, which it removes). Racing's cost
+/// depends on when candidates leave by confidence, which the fixed schedule ([`schedule`])
+/// cannot know; the proxy's LP solves × s and wall time × s estimate it.
+pub fn proxy_race(
+    cfg: &SweepConfig,
+    scorer: &Scorer,
+    share: usize,
+    scratch: &Path,
+) -> Result<Proxy> {
+    if share == 0 {
+        bail!("plan: proxy share 0: must be at least 1");
+    }
+    let data = scorer.data();
+    let order = data.stratified_order(cfg.seed);
+    let keep = order.len().div_ceil(share);
+    let sub = data.subset(&order[..keep]);
+    let sub_scorer = Scorer::new(&sub, scorer.table(), scorer.solver(), scorer.chunk())?;
+    let proxy_cfg = SweepConfig {
+        exhaustive: false,
+        dataset_fingerprint: format!("{:016x}", sub.fingerprint()),
+        first_sample: cfg.first_sample.div_ceil(share).max(2),
+        early_look: cfg.early_look.div_ceil(share),
+        ..cfg.clone()
+    };
+    let hooks = Hooks {
+        stop_after_batches: None,
+        progress: None,
+        half_width: Some(1.0 / (share as f64).sqrt()),
+    };
+    let parent = OutDir::new(scratch, true)?;
+    static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    let name = format!("momentlab-plan-{}-{run}", std::process::id());
+    parent.remove_all(&name)?;
+    let dir = parent.create_dir(&name)?;
+    let t0 = Instant::now();
+    let outcome = run_sweep(&proxy_cfg, &sub_scorer, &dir, &hooks);
+    let seconds = t0.elapsed().as_secs_f64();
+    let rows = outcome.and_then(|o| Ok((o, read_rows(&dir)?)));
+    parent.remove_all(&name)?;
+    let summary = match rows? {
+        (Outcome::Complete(s), rows) => (s, rows),
+        (Outcome::Stopped, _) => bail!("plan: the proxy race stopped"),
+    };
+    let (summary, rows) = summary;
+    let s = share as u64;
+    let mut by_family: Vec<(&'static str, u64)> = Vec::new();
+    for r in &rows {
+        let f = super::timing::family_of(&r.functions);
+        match by_family.iter_mut().find(|x| x.0 == f) {
+            Some(x) => x.1 += r.fragments * s,
+            None => by_family.push((f, r.fragments * s)),
+        }
+    }
+    by_family.sort();
+    let lp_solves = summary.lp_solves * s;
+    let candidates: u64 = by_family.iter().map(|x| x.1).sum();
+    Ok(Proxy {
+        share,
+        fragments: keep as u64,
+        stages: summary.stages.iter().map(|&(c, f)| (c, f * s)).collect(),
+        tied: summary.full,
+        lp_solves,
+        by_family,
+        other: lp_solves.saturating_sub(candidates),
+        seconds,
     })
 }
 
@@ -237,6 +399,8 @@ pub fn calibrate(
             .zip(&strata)
             .map(|((l, s), all)| (*l, s.len(), all.len()))
             .collect(),
+        family_us: Vec::new(),
+        cpu_seconds: 0.0,
     };
     let cands: Vec<Vec<usize>> = sample
         .iter()
@@ -250,6 +414,17 @@ pub fn calibrate(
     let errs = scorer.errors_many(&cands, &block, &|_| {})?;
     out.seconds = t0.elapsed().as_secs_f64();
     out.failures = errs.iter().map(|e| e.failures).sum();
+    out.cpu_seconds = errs.iter().map(|e| e.seconds).sum();
+    let mut at = 0;
+    for (label, members) in labels.iter().zip(&sample) {
+        let part = &errs[at..at + members.len()];
+        at += members.len();
+        if !part.is_empty() {
+            let secs: f64 = part.iter().map(|e| e.seconds).sum();
+            out.family_us
+                .push((*label, secs * 1e6 / (part.len() * block.len()) as f64));
+        }
+    }
     out.candidates = cands.len();
     out.lp_solves = (cands.len() * block.len()) as u64;
     Ok(out)
@@ -258,6 +433,37 @@ pub fn calibrate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Family-weighted wall time: Σ_f LP_f · µs_f (unknown families and `other` at the
+    /// sample's mean µs) / (threads · efficiency).
+    #[test]
+    fn seconds_for_weights_each_family_by_its_cost() {
+        let c = Calibration {
+            candidates: 4,
+            fragments: 100,
+            lp_solves: 400,
+            seconds: 0.001,
+            threads: 2,
+            failures: 0,
+            strata: Vec::new(),
+            family_us: vec![("a", 2.0), ("b", 8.0)],
+            cpu_seconds: 0.0016,
+        };
+        // Mean 0.0016 s / 400 = 4 µs; efficiency 0.0016 / (0.001 · 2) = 0.8.
+        // 1000 · 2 + 500 · 8 + 250 · 4 = 7000 µs on 2 threads at 0.8: 4375 µs.
+        let t = c.seconds_for(&[("a", 1000), ("b", 500)], 250, 2);
+        assert!((t - 4.375e-3).abs() < 1e-15, "{t}");
+        // An unknown family costs the mean; one thread takes twice as long.
+        let t = c.seconds_for(&[("z", 1000)], 0, 1);
+        assert!((t - 4000e-6 / 0.8).abs() < 1e-15, "{t}");
+        // Without a timed sample: the plain rate (no solves: nothing known, 0 s).
+        let empty = Calibration {
+            lp_solves: 0,
+            cpu_seconds: 0.0,
+            ..c
+        };
+        assert_eq!(empty.seconds_for(&[("a", 10)], 0, 2), 0.0);
+    }
 
     /// Proportional allocation: 64 of the m = 4 catalog's family sizes (20 445, 11 440, 13 685,
     /// 20 475) gives 20, 11, 13, 20 by the floors and the largest remainders; small strata get

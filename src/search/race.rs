@@ -207,6 +207,9 @@ pub struct Rule {
     /// Cap: at most max(⌈keep·|C|⌉, top) of the |C| candidates tested stay.
     pub keep: f64,
     pub top: usize,
+    /// Factor on every half-width: 1 in a run; 1/√s in the plan's proxy race, which decides on
+    /// 1/s of each block with the threshold the full block would have ([`super::plan`]).
+    pub width: f64,
 }
 
 /// The budget cap of a stage of `candidates`: at most max(⌈keep·candidates⌉, top) stay (the
@@ -218,9 +221,9 @@ pub fn cap(keep: f64, candidates: u64, top: u64) -> u64 {
 /// Lower confidence bound of μ_c − μ_R (in per-fragment error units) under `rule`.
 pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
     if rule.paired {
-        c.d.mean() - half_width(&c.d, rule.delta, rule.bound, 2.0)
+        c.d.mean() - rule.width * half_width(&c.d, rule.delta, rule.bound, 2.0)
     } else {
-        let h = |m: &Moments| half_width(m, rule.delta / 2.0, rule.bound, 1.0);
+        let h = |m: &Moments| rule.width * half_width(m, rule.delta / 2.0, rule.bound, 1.0);
         (c.e.mean() - h(&c.e)) - (r.e.mean() + h(&r.e))
     }
 }
@@ -312,6 +315,58 @@ pub fn pooled(parts: &[(u64, f64, f64)]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A test on n/s fragments with every half-width × 1/√s has the threshold of the test on
+    /// n fragments with the same mean and spread: the same samples repeated s times give the
+    /// same lower bound up to the sample variance's n − 1.
+    #[test]
+    fn a_scaled_half_width_is_the_full_blocks_threshold() {
+        let d: Vec<f64> = (0..64)
+            .map(|k| 0.02 + 0.05 * ((k * 37 % 11) as f64 - 5.0) / 5.0)
+            .collect();
+        let e: Vec<f64> = d.iter().map(|x| x + 0.5).collect();
+        let stats = |d: &[f64], e: &[f64]| StageStats {
+            index: 1,
+            e: Moments::of(e),
+            d: Moments::of(d),
+        };
+        let reference = StageStats {
+            index: 0,
+            e: Moments::of(&e),
+            d: Moments::of(&vec![0.0; e.len()]),
+        };
+        for s in [4usize, 8, 16] {
+            let full_d: Vec<f64> = d.iter().cycle().take(d.len() * s).copied().collect();
+            let full_e: Vec<f64> = e.iter().cycle().take(e.len() * s).copied().collect();
+            let rule = Rule {
+                delta: 1e-4,
+                bound: Bound::Normal,
+                paired: true,
+                keep: 1.0,
+                top: 1,
+                width: 1.0,
+            };
+            let full = gap_lower_bound(&stats(&full_d, &full_e), &reference, &rule);
+            let proxy_rule = Rule {
+                width: 1.0 / (s as f64).sqrt(),
+                ..rule
+            };
+            let proxy = gap_lower_bound(&stats(&d, &e), &reference, &proxy_rule);
+            let h_full = Moments::of(&d).mean() - full;
+            let h_proxy = Moments::of(&d).mean() - proxy;
+            // s² with n − 1: the ratio of the half-widths is √((n/(n−1)) / (sn/(sn−1))).
+            let n = d.len() as f64;
+            let sn = n * s as f64;
+            let want = ((n / (n - 1.0)) / (sn / (sn - 1.0))).sqrt();
+            assert!(
+                (h_proxy / h_full - want).abs() < 1e-9,
+                "s = {s}: {h_proxy} vs {h_full}"
+            );
+            // Without the factor the proxy's threshold is √s times the run's.
+            let plain = Moments::of(&d).mean() - gap_lower_bound(&stats(&d, &e), &reference, &rule);
+            assert!((plain / h_full - (s as f64).sqrt()).abs() < 0.05 * (s as f64).sqrt());
+        }
+    }
 
     #[test]
     fn normal_quantile_matches_tables() {
@@ -408,6 +463,7 @@ mod tests {
             paired: true,
             keep: 1.0,
             top: 1,
+            width: 1.0,
         };
         assert_eq!(
             decide(&s, &means, 0, &rule),

@@ -73,7 +73,10 @@ pub fn trig_cols(m: usize) -> Vec<usize> {
 }
 
 /// The paper's LP reference bases: (label, columns of [`paper_bases`]).
-fn lp_reference_sets() -> [(&'static str, Vec<usize>); 4] {
+/// Number of LP references scored on every fragment after a race ([`lp_references`]).
+pub const LP_REFERENCES: usize = 4;
+
+fn lp_reference_sets() -> [(&'static str, Vec<usize>); LP_REFERENCES] {
     [
         ("VSM (LP)", vec![0, 1]),
         ("ESM c=80 (LP)", vec![8]),

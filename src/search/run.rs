@@ -212,6 +212,7 @@ pub fn sweep_dataset(
     let hooks = Hooks {
         stop_after_batches: None,
         progress,
+        half_width: None,
     };
     let outcome = run_sweep(&cfg, &scorer, results, &hooks)?;
     let sweep_seconds = t0.elapsed().as_secs_f64();
@@ -263,17 +264,58 @@ pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig>
 }
 
 /// The plan of the sweep `opts` on a prepared dataset and table, with a calibration of
-/// `calibration` = [candidates, fragments] LP solves ([`super::plan`]).
+/// `calibration` = [candidates, fragments] LP solves and, with `proxy` = Some(s), a proxy race
+/// on 1/s of the fragments in a scratch folder under the system's temporary folder
+/// ([`super::plan`]); `stacks` (when the dataset came from stacks) time the closed-form
+/// references that follow a race.
 pub fn plan_dataset(
     data: &Dataset,
     table: &FunctionTable,
+    stacks: Option<&[DepthStack]>,
     opts: &SweepOptions,
     calibration: [usize; 2],
+    proxy: Option<usize>,
 ) -> Result<super::plan::Plan> {
     crate::basis::candidates::check_m(table.len(), opts.m)?;
     let scorer = Scorer::new(data, table, &opts.solver, opts.chunk)?;
     let cfg = sweep_config(opts, &scorer)?;
-    super::plan::plan(&cfg, &scorer, calibration)
+    let scratch = std::env::temp_dir();
+    let mut plan = super::plan::plan(
+        &cfg,
+        &scorer,
+        calibration,
+        proxy.map(|s| (s, scratch.as_path())),
+    )?;
+    if opts.shard[1] == 1 {
+        plan.references_seconds = references_seconds(data, stacks, opts, &plan.calibration)?;
+    }
+    Ok(plan)
+}
+
+/// Wall seconds of the references [`references_for`] computes after a race on this machine:
+/// the winner and the LP references on every kept fragment at the calibrated rate, and the
+/// closed forms timed on the stack with the fewest fragments, scaled by the fragments of all.
+fn references_seconds(
+    data: &Dataset,
+    stacks: Option<&[DepthStack]>,
+    opts: &SweepOptions,
+    calibration: &super::plan::Calibration,
+) -> Result<f64> {
+    let lps = (1 + reference::LP_REFERENCES as u64) * data.fragments().len() as u64;
+    let mut secs = calibration.seconds_for(&[], lps, rayon::current_num_threads());
+    if let Some(stacks) = stacks.filter(|_| opts.closed_forms) {
+        let all: usize = stacks.iter().map(DepthStack::fragment_count).sum();
+        if let Some(small) = stacks
+            .iter()
+            .filter(|s| s.fragment_count() > 0)
+            .min_by_key(|s| s.fragment_count())
+        {
+            let t0 = Instant::now();
+            reference::closed_form_references(std::slice::from_ref(small), &opts.bias)?;
+            secs += t0.elapsed().as_secs_f64() * all as f64 / small.fragment_count() as f64;
+        }
+    }
+    Ok(secs)
 }
 
 /// The references (LP, paired with the winner; closed forms with `opts.closed_forms`) and the

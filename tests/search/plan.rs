@@ -6,7 +6,7 @@
 
 use crate::common::search::{table, WITH_DEGENERATE};
 use crate::common::tmp_path;
-use momentlab::search::plan::{plan, Plan};
+use momentlab::search::plan::{plan, proxy_race, Plan};
 use momentlab::search::{run_sweep, Dataset, Hooks, Outcome, Scorer, SweepConfig};
 use momentlab::Grid;
 
@@ -43,7 +43,7 @@ fn plan_equals_the_sweeps_own_schedule() {
                     cfg.exhaustive = exhaustive;
                     cfg.candidates = candidates.clone();
                     cfg.shard = [0, shards];
-                    let p: Plan = plan(&cfg, &s, [3, 20]).unwrap();
+                    let p: Plan = plan(&cfg, &s, [3, 20], None).unwrap();
                     assert!(p.calibration.lp_solves > 0 && p.calibration.seconds > 0.0);
                     let per = if exhaustive { &p.exhaustive } else { &p.racing };
                     assert_eq!(per.len(), shards);
@@ -95,10 +95,128 @@ fn without_confidence_eliminations_the_plan_is_exact() {
     cfg.pilot = 4;
     cfg.bound = momentlab::search::race::Bound::Bernstein;
     cfg.confidence = 1.0 - 1e-12;
-    let p = plan(&cfg, &s, [2, 10]).unwrap();
+    let p = plan(&cfg, &s, [2, 10], None).unwrap();
     let a = actual(&cfg, &s, "exact");
     assert_eq!(a.race.as_ref().unwrap().confidence_eliminated, 0);
     assert_eq!(a.lp_solves, p.racing[0].lp_solves);
     assert_eq!(a.stages, p.racing[0].stages);
     assert_eq!(a.full, p.racing[0].full);
+}
+
+/// A synthetic race with eliminations by confidence and by the cap, resolved before its
+/// fragment budget.
+fn racing_setup() -> (Grid, Dataset) {
+    let grid = Grid::uniform(24).unwrap();
+    let data = Dataset::synthetic(5, &grid, 4, 2000, 4).unwrap();
+    (grid, data)
+}
+
+fn racing_config(s: &Scorer) -> SweepConfig {
+    let mut cfg = SweepConfig::new(3, s, "synthetic");
+    cfg.top = 2;
+    cfg.first_sample = 256;
+    cfg.growth = 2;
+    cfg.early_look = 256;
+    cfg.pilot = 4;
+    cfg
+}
+
+/// On 1/1 of the fragments the proxy race is the race: same stages, tie set and LP solves,
+/// the LP solves split into the candidates' (per family) and the references'; the scratch
+/// folder is left empty.
+#[test]
+fn a_proxy_race_on_every_fragment_is_the_race() {
+    let (grid, data) = racing_setup();
+    let table = table(&grid, &WITH_DEGENERATE);
+    let s = Scorer::new(&data, &table, "fast", 64).unwrap();
+    let cfg = racing_config(&s);
+    let a = actual(&cfg, &s, "proxy-whole");
+    let race = a.race.as_ref().unwrap();
+    assert!(race.confidence_eliminated > 0 && race.resolved, "{a:?}");
+    let scratch = crate::common::tmp("proxy-scratch");
+    let p = proxy_race(&cfg, &s, 1, &scratch).unwrap();
+    assert_eq!(p.stages, a.stages);
+    assert_eq!(p.tied, a.full);
+    assert_eq!(p.lp_solves, a.lp_solves);
+    assert_eq!(p.fragments, data.fragments().len() as u64);
+    let candidates: u64 = p.by_family.iter().map(|f| f.1).sum();
+    assert_eq!(candidates + p.other, p.lp_solves);
+    assert!(p.other > 0 && candidates > p.other);
+    assert_eq!(std::fs::read_dir(&scratch).unwrap().count(), 0);
+    assert!(proxy_race(&cfg, &s, 0, &scratch).is_err());
+}
+
+/// On 1/4 of the fragments the proxy race runs the run's stages on blocks a quarter as large
+/// (its stage sizes × 4 are the run's, up to rounding), and `plan` reports it for racing only;
+/// its LP solves never exceed the fixed schedule's.
+#[test]
+fn a_proxy_race_on_a_quarter_scales_the_blocks() {
+    let (grid, data) = racing_setup();
+    let table = table(&grid, &WITH_DEGENERATE);
+    let s = Scorer::new(&data, &table, "fast", 64).unwrap();
+    let mut cfg = racing_config(&s);
+    let scratch = crate::common::tmp("proxy-quarter-scratch");
+    let planned = plan(&cfg, &s, [2, 10], Some((4, &scratch))).unwrap();
+    let p = planned.proxy.expect("racing with a proxy");
+    assert_eq!(p.share, 4);
+    assert_eq!(p.fragments, (data.fragments().len() as u64).div_ceil(4));
+    // Up to the rounding of the quarter blocks (each at most 3 fragments short × 4).
+    let bound = planned.racing[0].lp_solves;
+    assert!(
+        p.lp_solves <= bound + bound / 100,
+        "{} vs {bound}",
+        p.lp_solves
+    );
+    for (x, y) in p.stages.iter().zip(&planned.racing[0].stages) {
+        assert!(
+            x.0 <= y.0 && x.1.abs_diff(y.1) < 4 * 4,
+            "{:?} vs {:?}",
+            p.stages,
+            planned.racing
+        );
+    }
+    cfg.exhaustive = true;
+    assert!(plan(&cfg, &s, [2, 10], Some((4, &scratch)))
+        .unwrap()
+        .proxy
+        .is_none());
+}
+
+/// `search --plan` prints racing's expected cost from the proxy race as the chosen row, the
+/// upper bound beside it, and the proxy's stages; `--plan-proxy 0` leaves only the bound,
+/// chosen; `--plan-proxy` needs `--plan`. Nothing is left in the results folder.
+#[test]
+fn the_plan_prints_the_proxy_races_expected_cost() {
+    let results = crate::common::tmp_path("plan-cli");
+    let r = results.to_str().unwrap();
+    let base = [
+        "search",
+        "--synthetic",
+        "300",
+        "--m",
+        "2",
+        "--plan",
+        "--results",
+        r,
+    ];
+    let (code, out, err) = crate::common::run(&[&base[..], &["--plan-proxy", "2"]].concat(), None);
+    assert_eq!(code, 0, "{err}");
+    let row = |label: &str| {
+        out.lines()
+            .find(|l| l.contains(label))
+            .unwrap_or_else(|| panic!("no '{label}' in {out}"))
+            .to_string()
+    };
+    assert!(row("racing (keep 0.25, expected)").starts_with("plan: * racing"));
+    assert!(row("racing (keep 0.25, at most)").starts_with("plan:   racing"));
+    assert!(row("expected from a proxy race on 1/2 of the fragments").contains("LP solves"));
+    let (code, out, err) = crate::common::run(&[&base[..], &["--plan-proxy", "0"]].concat(), None);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("expected"), "{out}");
+    assert!(out.contains("plan: * racing (keep 0.25, at most)"), "{out}");
+    let (code, _, err) =
+        crate::common::run(&["search", "--synthetic", "300", "--plan-proxy", "2"], None);
+    assert_eq!(code, 2);
+    assert!(err.contains("--plan"), "{err}");
+    assert!(!results.exists());
 }
