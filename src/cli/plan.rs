@@ -29,7 +29,14 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
     let strata: Vec<String> = c
         .strata
         .iter()
-        .map(|(family, sampled, all)| format!("{family} {sampled} of {}", count(*all as u64)))
+        .map(|(family, sampled, all)| {
+            let us = c.family_us.iter().find(|f| f.0 == *family);
+            format!(
+                "{family} {sampled} of {}{}",
+                count(*all as u64),
+                us.map_or(String::new(), |f| format!(" at {:.1} µs", f.1))
+            )
+        })
         .collect();
     println!(
         "plan: calibration: {} candidates ({}) × {} fragments = {} LP solves in {:.2} s on {} threads ({} unsettled) → {} LP solves/s per core",
@@ -56,14 +63,16 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         plan.racing.as_slice(),
     )];
     rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
+    // One shard's proxy race; the rows are totals over the shards, like the others.
     let expected_seconds = expected.map(|p| c.seconds_for(&p.by_family, p.other, threads));
     if let (Some(p), Some(secs)) = (expected, expected_seconds) {
+        let all = secs * shards as f64;
         println!(
             "plan: {:<28} {:>12} {:>11} {:>18}",
             format!("* racing (keep {}, expected)", opts.keep),
-            big(p.lp_solves),
-            format!("{:.3}", secs * threads as f64 / 3600.0),
-            duration(setup + plan.references_seconds + secs)
+            big(p.lp_solves * shards as u64),
+            format!("{:.3}", all * threads as f64 / 3600.0),
+            duration(setup + plan.references_seconds + all)
         );
     }
     for (name, per) in &rows {
@@ -85,7 +94,12 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             .map(|(c, f)| format!("{} × {}", count(*c), count(*f)))
             .collect();
         println!(
-            "plan: expected from a proxy race on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            "plan: expected from a proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            if shards > 1 {
+                format!(" of shard {}/{shards} (the row above: × {shards})", opts.shard[0])
+            } else {
+                String::new()
+            },
             p.share,
             count(p.fragments),
             p.seconds,
@@ -93,7 +107,7 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             stages.join(", "),
             p.tied,
             p.share,
-            big(p.lp_solves),
+            count(p.lp_solves),
             p.by_family
                 .iter()
                 .map(|(f, n)| format!("{f} {}", big(*n)))

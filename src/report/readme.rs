@@ -349,8 +349,9 @@ fn race_times(reports: &Path) -> Result<String> {
 }
 
 /// docs/search.md's table of one race run in several fragment orders (`--race-seed`): stage
-/// sizes, LP solves against their mean, winner, tie set and how many of its candidates the first
-/// order's tie set holds, from
+/// sizes, LP solves against their mean, the LP solves `--plan` expected (its proxy race)
+/// against the run's, winner, tie set and how many of its candidates the first order's tie set
+/// holds, from
 /// reports/search/race_orders_m<M>.json (`scripts/race-orders.sh M SEED…`).
 fn race_orders(reports: &Path) -> Result<String> {
     let mut s = String::new();
@@ -363,7 +364,7 @@ fn race_orders(reports: &Path) -> Result<String> {
             s.push('\n');
         }
         s.push_str(
-            "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | --- | ---: | ---: |\n",
+            "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | `--plan` expected (vs the run) | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | ---: | --- | ---: | ---: |\n",
         );
         let v = read_json(&file)?;
         let orders = v
@@ -396,9 +397,13 @@ fn race_orders(reports: &Path) -> Result<String> {
                 .and_then(Value::as_array)
                 .map(|a| a.iter().filter_map(Value::as_str).collect())
                 .unwrap_or_default();
+            let expected = match o.get("plan_lp_solves").and_then(Value::as_f64) {
+                Some(p) => format!("{:.2} M ({:+.0} %)", p / 1e6, percent(p / lp)),
+                None => "–".to_string(),
+            };
             let _ = writeln!(
                 s,
-                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | ({}) | {:.0} | {} |",
+                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | {expected} | ({}) | {:.0} | {} |",
                 f(o, "race_seed", &file)?,
                 stages.join(", "),
                 lp / 1e6,

@@ -1,7 +1,8 @@
 //! What a sweep will cost before it runs (`momentlab search --plan`): the candidates it scores,
 //! the racing stages and LP solves exactly as [`super::run_sweep`] schedules them (for racing
-//! and for the exhaustive mode, per shard), and the core-hours from a short calibration of the
-//! LP solver on this machine and data (a sample stratified by candidate family, all threads).
+//! and for the exhaustive mode, per shard), the core-hours from a short calibration of the
+//! LP solver on this machine and data (a sample stratified by candidate family, all threads),
+//! and racing's expected cost from a proxy race ([`proxy_race`]).
 //!
 //! LP solves (as `SweepSummary::lp_solves`): the pilot block P picks the stage-0 reference
 //! (pilot·|P| solves); racing stage k with |C_k| candidates on a block of B_k fragments costs
@@ -9,7 +10,9 @@
 //! (the cap; eliminations by confidence only lower it, and racing stops early when one
 //! candidate is left); then the survivors on the fragments they have not seen, (|C| + 1)·|rest|.
 //! The racing schedule is therefore an upper bound, reached when no candidate is eliminated by
-//! confidence. Exhaustive: |C|·F, exact.
+//! confidence. Exhaustive: |C|·F, exact. How many leave by confidence, and when, depends on
+//! the gaps between the leaders and the field, which only racing itself finds: the proxy race
+//! runs it on a stratified 1/s of the fragments and scales its LP solves by s.
 
 use super::config::SweepConfig;
 use super::results::read_rows;
