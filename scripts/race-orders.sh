@@ -32,7 +32,10 @@ for s in seeds:
     rows = [json.loads(l) for l in open(f"{d}/results.jsonl")]
     names = next(r["functions"] for r in rows if r["index"] == w)
     tied = sorted(r["index"] for r in rows if r.get("tied"))
-    plan = open(f"{d}.plan").read()
+    try:
+        plan = open(f"{d}.plan").read()
+    except FileNotFoundError:
+        plan = ""
     expected = re.search(r"× [0-9]+ → ([0-9 ]+) LP solves", plan)
     bound = re.search(r"racing \(keep [^)]*, at most\) +([0-9.]+) M", plan)
     orders.append({"command": f"momentlab search --m {m} --race-seed {s} --results {d} --no-report",
