@@ -90,6 +90,119 @@ unsafe fn sub_rows_abs_avx512(d: &mut [f64], e: &mut [f64], ys: &[f64], mat: &[f
     sub_rows_abs_generic(d, e, ys, mat)
 }
 
+/// A Dantzig pricing pass with its screening, in one pass over the grid:
+/// d_i = c_i − Σ_k y_k f_k(z_i), with c_i = `cost[i]` and the rows f_k at mat[k·n..(k+1)·n]
+/// (n = d.len()), per point the operations of filling d with c and then [`sub_rows_abs`] in
+/// the same order (the same bits of d). With thresholds t and one
+/// rounding bound g for all points it returns min d_i over the points with d_i + t_i < −g
+/// (+∞ for none) and lists in `flagged`, as (first index, min d_i of the block), every block
+/// of [`BLOCK`] points holding some d_i + t_i ≤ g. NaN values never qualify and are skipped
+/// in the block minima.
+#[allow(clippy::too_many_arguments)] // one fused pass: the reduced costs and their screening
+pub fn price_screen(
+    d: &mut [f64],
+    cost: &[f64],
+    ys: &[f64],
+    mat: &[f64],
+    t: &[f64],
+    g: f64,
+    flagged: &mut Vec<(usize, f64)>,
+    avx512: bool,
+) -> f64 {
+    let n = d.len();
+    assert!(cost.len() == n && t.len() == n && mat.len() >= ys.len() * n);
+    flagged.clear();
+    #[cfg(target_arch = "x86_64")]
+    if avx512 {
+        // SAFETY: `avx512` is only true where the CPU has AVX-512F (`has_avx512`).
+        return unsafe { price_screen_avx512(d, cost, ys, mat, t, g, flagged) };
+    }
+    let _ = avx512;
+    price_screen_generic(d, cost, ys, mat, t, g, flagged)
+}
+
+#[inline(always)]
+fn price_screen_generic(
+    d: &mut [f64],
+    cost: &[f64],
+    ys: &[f64],
+    mat: &[f64],
+    t: &[f64],
+    g: f64,
+    flagged: &mut Vec<(usize, f64)>,
+) -> f64 {
+    let n = d.len();
+    let mut lanes = [f64::INFINITY; BLOCK];
+    let full = n - n % BLOCK;
+    for lo in (0..full).step_by(BLOCK) {
+        let mut db: [f64; BLOCK] = cost[lo..lo + BLOCK].try_into().unwrap();
+        for (k, &y) in ys.iter().enumerate() {
+            let f: &[f64; BLOCK] = mat[k * n + lo..k * n + lo + BLOCK].try_into().unwrap();
+            for j in 0..BLOCK {
+                db[j] -= y * f[j];
+            }
+        }
+        d[lo..lo + BLOCK].copy_from_slice(&db);
+        let tb: &[f64; BLOCK] = t[lo..lo + BLOCK].try_into().unwrap();
+        let mut hit = false;
+        let mut low = [f64::INFINITY; BLOCK];
+        for j in 0..BLOCK {
+            // Plain comparisons (false for NaN) and selects: vector code, no branches.
+            let (v, s) = (db[j], db[j] + tb[j]);
+            hit |= s <= g;
+            let below = if s < -g { v } else { f64::INFINITY };
+            lanes[j] = if below < lanes[j] { below } else { lanes[j] };
+            low[j] = if v < low[j] { v } else { low[j] };
+        }
+        if hit {
+            // The block minimum by halving (vector code rather than a chain of 16 minima).
+            for w in [8, 4, 2, 1] {
+                for j in 0..w {
+                    low[j] = if low[j + w] < low[j] {
+                        low[j + w]
+                    } else {
+                        low[j]
+                    };
+                }
+            }
+            flagged.push((lo, low[0]));
+        }
+    }
+    let mut out = lanes.iter().fold(f64::INFINITY, |a, &b| a.min(b));
+    let (mut hit, mut low) = (false, f64::INFINITY);
+    for i in full..n {
+        let mut v = cost[i];
+        for (k, &y) in ys.iter().enumerate() {
+            v -= y * mat[k * n + i];
+        }
+        d[i] = v;
+        let s = v + t[i];
+        hit |= s <= g;
+        if s < -g {
+            out = out.min(v);
+        }
+        low = low.min(v);
+    }
+    if hit {
+        flagged.push((full, low));
+    }
+    out
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn price_screen_avx512(
+    d: &mut [f64],
+    cost: &[f64],
+    ys: &[f64],
+    mat: &[f64],
+    t: &[f64],
+    g: f64,
+    flagged: &mut Vec<(usize, f64)>,
+) -> f64 {
+    price_screen_generic(d, cost, ys, mat, t, g, flagged)
+}
+
 /// The reduced costs of a dual vector over the grid in one pass:
 /// d_i = p_i − y₀ − Σ_k y_k f_k(z_i) and e_i = p_i + |y₀| + Σ_k |y_k f_k(z_i)| with
 /// p_i = [i < kf], the row f_k at `mat[offs[k]..offs[k] + n]` (n = d.len()). Returns in `flagged`
@@ -635,6 +748,68 @@ mod tests {
                     assert_eq!(out[t], residual2(p, hi.chain(lo_terms)), "i = {i}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn price_screen_forms_d_as_sub_rows_abs_bit_for_bit() {
+        for n in [1usize, 15, 16, 37, 64] {
+            let mat: Vec<f64> = (0..3 * n).map(|i| (i as f64 * 0.37).sin() * 1e3).collect();
+            let ys = [-0.3, 1.7e5, 2.5e-7];
+            let cost: Vec<f64> = (0..n).map(|i| (i % 3) as f64 * 0.25).collect();
+            let mut d1 = cost.clone();
+            let mut e1 = cost.clone();
+            sub_rows_abs(&mut d1, &mut e1, &ys, &mat, false);
+            let t = vec![0.0; n];
+            for avx in [false, has_avx512()] {
+                let mut d2 = vec![f64::NAN; n];
+                let mut flagged = Vec::new();
+                price_screen(&mut d2, &cost, &ys, &mat, &t, 0.0, &mut flagged, avx);
+                assert_eq!(d1, d2, "n = {n}");
+            }
+        }
+    }
+
+    /// No rows, so d is the costs: 37 points (two full blocks and a tail of 5), t = 1, g = 0.5:
+    /// d_i + 1 < −0.5 holds for d = −2 (point 3) and −4 (point 33, in the tail), so the minimum
+    /// is −4; block 0 is flagged by point 3, block 1 (d = 5, NaN at 20) is not, the tail by
+    /// its −0.5 (−0.5 + 1 ≤ 0.5) with minimum −4. Without point 33 the minimum is −2. With
+    /// costs 0 beyond the first block, g = 1.5 flags every block (0 + 1 ≤ 1.5) and no point
+    /// is below −2.5 (+∞).
+    #[test]
+    fn price_screen_exact_values() {
+        let mut c = vec![5.0; 37];
+        c[3] = -2.0;
+        c[20] = f64::NAN;
+        c[33] = -4.0;
+        c[35] = -0.5;
+        let t = vec![1.0; 37];
+        let mut d = vec![0.0; 37];
+        for avx in [false, has_avx512()] {
+            let mut flagged = Vec::new();
+            assert_eq!(
+                price_screen(&mut d, &c, &[], &[], &t, 0.5, &mut flagged, avx),
+                -4.0
+            );
+            assert_eq!(flagged, vec![(0, -2.0), (32, -4.0)]);
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+            assert_eq!(bits(&d), bits(&c));
+            let mut c2 = c.clone();
+            c2[33] = 5.0;
+            assert_eq!(
+                price_screen(&mut d, &c2, &[], &[], &t, 0.5, &mut flagged, avx),
+                -2.0
+            );
+            assert_eq!(flagged, vec![(0, -2.0), (32, -0.5)]);
+            c2[16..].fill(0.0);
+            let got = price_screen(&mut d, &c2, &[], &[], &t, 1.5, &mut flagged, avx);
+            assert_eq!(got, f64::INFINITY);
+            assert_eq!(flagged, vec![(0, -2.0), (16, 0.0), (32, 0.0)]);
+            assert_eq!(
+                price_screen(&mut [], &[], &[], &[], &[], 0.5, &mut flagged, avx),
+                f64::INFINITY
+            );
+            assert!(flagged.is_empty());
         }
     }
 
