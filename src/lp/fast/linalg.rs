@@ -110,6 +110,8 @@ pub(super) struct BasisInverse {
     factored: Vec<usize>,
     /// `inv` is that factorisation (no pivot since, and it held no artificial column).
     fresh: bool,
+    /// ‖B‖_F ‖B⁻¹‖_F of the last factorisation.
+    pub(super) cond: f64,
 }
 
 impl BasisInverse {
@@ -120,6 +122,7 @@ impl BasisInverse {
             lu: Default::default(),
             factored: vec![usize::MAX; r],
             fresh: false,
+            cond: f64::INFINITY,
         }
     }
 
@@ -140,8 +143,10 @@ impl BasisInverse {
             }
         }
         let bnorm = norm(&self.bmat);
-        let ok = invert(&mut self.lu, &self.bmat, &mut self.inv, r)
-            && bnorm * norm(&self.inv) < max_cond;
+        let ok = invert(&mut self.lu, &self.bmat, &mut self.inv, r) && {
+            self.cond = bnorm * norm(&self.inv);
+            self.cond < max_cond
+        };
         self.factored.copy_from_slice(basis);
         self.fresh = ok && !basis.contains(&artificial);
         ok
