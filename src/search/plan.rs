@@ -255,7 +255,8 @@ pub struct Proxy {
 /// expectation. Eliminations, the cap and the stopping rule are the run's own code
 /// ([`super::run_sweep`], in the scratch folder `scratch`, which it removes). Racing's cost
 /// depends on when candidates leave by confidence, which the fixed schedule ([`schedule`])
-/// cannot know; the proxy's LP solves × s and wall time × s estimate it.
+/// cannot know; the proxy's LP solves × s, per candidate family, estimate it (costed by
+/// [`Calibration::seconds_for`]).
 pub fn proxy_race(
     cfg: &SweepConfig,
     scorer: &Scorer,
@@ -289,15 +290,14 @@ pub fn proxy_race(
     parent.remove_all(&name)?;
     let dir = parent.create_dir(&name)?;
     let t0 = Instant::now();
-    let outcome = run_sweep(&proxy_cfg, &sub_scorer, &dir, &hooks);
+    let outcome =
+        run_sweep(&proxy_cfg, &sub_scorer, &dir, &hooks).and_then(|o| Ok((o, read_rows(&dir)?)));
     let seconds = t0.elapsed().as_secs_f64();
-    let rows = outcome.and_then(|o| Ok((o, read_rows(&dir)?)));
     parent.remove_all(&name)?;
-    let summary = match rows? {
+    let (summary, rows) = match outcome? {
         (Outcome::Complete(s), rows) => (s, rows),
         (Outcome::Stopped, _) => bail!("plan: the proxy race stopped"),
     };
-    let (summary, rows) = summary;
     let s = share as u64;
     let mut by_family: Vec<(&'static str, u64)> = Vec::new();
     for r in &rows {
