@@ -48,6 +48,26 @@ struct Run {
     last_left: usize,
 }
 
+impl Run {
+    /// The state at the start of a run with `kf` grid points below z_f.
+    fn new(kf: usize, bland_always: bool) -> Run {
+        Run {
+            kf,
+            bland_always,
+            phase1: false,
+            art_pos: 0,
+            art_norm: 0.0,
+            c_norm: 0.0,
+            since_refactor: 0,
+            degenerate: 0,
+            verified: false,
+            rescues: 0,
+            perturbed: false,
+            last_left: usize::MAX,
+        }
+    }
+}
+
 /// How an iteration of [`FastSolver::run`] ends early.
 enum Jump {
     /// Go on with the next iteration.
@@ -149,20 +169,7 @@ impl FastSolver {
         } else if !self.refactor() {
             return Outcome::Failed;
         }
-        let mut st = Run {
-            kf,
-            bland_always,
-            phase1: false,
-            art_pos: 0,
-            art_norm: 0.0,
-            c_norm: 0.0,
-            since_refactor: 0,
-            degenerate: 0,
-            verified: false,
-            rescues: 0,
-            perturbed: false,
-            last_left: usize::MAX,
-        };
+        let mut st = Run::new(kf, bland_always);
         if !self.start_phase1(&mut st) {
             return Outcome::Failed;
         }
@@ -635,20 +642,7 @@ mod tests {
         for (x, want) in s.x.iter().zip([-1.0, 4.0, -6.0, 4.0]) {
             assert!((x - want).abs() < 1e-12, "{:?}", s.x);
         }
-        let mut st = Run {
-            kf: 0,
-            bland_always: false,
-            phase1: false,
-            art_pos: 0,
-            art_norm: 0.0,
-            c_norm: 0.0,
-            since_refactor: 0,
-            degenerate: 0,
-            verified: false,
-            rescues: 0,
-            perturbed: false,
-            last_left: usize::MAX,
-        };
+        let mut st = Run::new(0, false);
         assert!(s.start_phase1(&mut st));
         assert!(st.phase1 && st.art_pos == 2);
         assert_eq!(s.basis, [0, 2, ART, 6]);
