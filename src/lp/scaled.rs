@@ -43,6 +43,13 @@ pub enum Found {
     Failed(&'static str),
 }
 
+/// A start basis as loaded by [`ScaledSimplex::try_start`].
+enum Start {
+    Singular,
+    Feasible,
+    Infeasible,
+}
+
 /// Workspace of the scaled simplex (reused between problems of one table).
 #[derive(Clone, Debug, Default)]
 pub struct ScaledSimplex {
@@ -68,7 +75,9 @@ pub struct ScaledSimplex {
     /// The row kernels may use AVX-512.
     avx512: bool,
     rhs: Vec<f64>,
-    /// Basis: grid indices, or n + k for the artificial of row k.
+    /// The composite artificial column n + r of a warm phase 1 ([`Self::composite_phase1`]).
+    comp: Vec<f64>,
+    /// Basis: grid indices, n + k for the artificial of row k, n + r for the composite one.
     basis: Vec<usize>,
     is_basic: Vec<bool>,
     sign: Vec<f64>,
@@ -91,10 +100,16 @@ pub struct ScaledSimplex {
 
 impl ScaledSimplex {
     /// Solve for the moments last given to `cert` ([`Certifier::set_moments`]) with `kf` grid
-    /// points below z_f, starting from `start` when it is a primal feasible basis.
+    /// points below z_f. A nonsingular `start` is phase 2's start when it is primal feasible,
+    /// else phase 1's ([`Self::composite_phase1`]); otherwise phase 1 starts from one
+    /// artificial per row.
     pub fn solve(&mut self, cert: &Certifier, kf: usize, start: Option<&[usize]>) -> Found {
         self.setup(cert);
-        let warm = start.is_some_and(|s| self.try_start(s));
+        let warm = match start.map(|s| self.try_start(s)) {
+            Some(Start::Feasible) => true,
+            Some(Start::Infeasible) => self.composite_phase1(),
+            _ => false,
+        };
         if !warm {
             self.artificial_start();
             if let Err(e) = self.iterate(kf, true) {
@@ -183,7 +198,7 @@ impl ScaledSimplex {
         self.rhs.extend(rows.iter().map(|&j| s[j] * cert.bbar(j)));
         self.basis.resize(r, 0);
         self.is_basic.clear();
-        self.is_basic.resize(n + r, false);
+        self.is_basic.resize(n + r + 1, false);
         self.sign.clear();
         self.sign
             .extend(self.rhs.iter().map(|&v| if v < 0.0 { -1.0 } else { 1.0 }));
@@ -200,10 +215,13 @@ impl ScaledSimplex {
         self.arow[k * self.n + i]
     }
 
-    /// Column q (grid index or artificial) into self.col.
+    /// Column q (grid index, artificial n + k of row k, or the composite artificial n + r)
+    /// into self.col.
     fn load(&mut self, q: usize) {
         let r = self.r;
-        if q >= self.n {
+        if q == self.n + r {
+            self.col.copy_from_slice(&self.comp);
+        } else if q >= self.n {
             self.col.iter_mut().for_each(|v| *v = 0.0);
             self.col[q - self.n] = self.sign[q - self.n];
         } else {
@@ -248,15 +266,60 @@ impl ScaledSimplex {
         }
     }
 
-    /// Start from a given basis if it is nonsingular and primal feasible.
-    fn try_start(&mut self, start: &[usize]) -> bool {
+    /// Load a given basis of grid columns and its basic solution x = B⁻¹ b̂.
+    fn try_start(&mut self, start: &[usize]) -> Start {
         if start.len() != self.r || start.iter().any(|&i| i >= self.n) {
-            return false;
+            return Start::Singular;
         }
         self.is_basic.iter_mut().for_each(|b| *b = false);
         self.basis.copy_from_slice(start);
         self.set_basis(start);
-        self.factor() && self.x.iter().all(|&v| v >= -HARRIS)
+        if !self.factor() {
+            Start::Singular
+        } else if self.x.iter().all(|&v| v >= -HARRIS) {
+            Start::Feasible
+        } else {
+            Start::Infeasible
+        }
+    }
+
+    /// Phase 1 from a nonsingular start basis B with some x_t = (B⁻¹ b̂)_t < 0 (loaded by
+    /// [`Self::try_start`]), with one artificial column instead of one per row: the negative
+    /// part a = Σ_{x_t<0} x_t B_t of the basic solution. Then b̂ = Σ_{x_t>0} x_t B_t + 1·a, so
+    /// the basis with a in place of the most negative x_l is nonsingular (B⁻¹a = x⁻, whose
+    /// entry l is x_l ≠ 0, and |x⁻_t / x_l| ≤ 1) and primal feasible: weights x_t ≥ 0 where
+    /// x_t > 0, zero on the other negative columns, 1 on a. Phase 1 minimises the weight of a.
+    /// True when it reaches a primal feasible basis without artificials at a positive level;
+    /// false (numerical trouble, or a remaining weight on a) leaves the cold start to decide,
+    /// so that `Infeasible` always comes from the all-artificial phase 1 and its Farkas ray.
+    fn composite_phase1(&mut self) -> bool {
+        let (n, r) = (self.n, self.r);
+        let Some(l) = (0..r).min_by(|&s, &t| self.x[s].total_cmp(&self.x[t])) else {
+            return false;
+        };
+        self.comp.clear();
+        self.comp.resize(r, 0.0);
+        for t in 0..r {
+            let w = self.x[t];
+            if w < 0.0 {
+                for k in 0..r {
+                    self.comp[k] += w * self.a(k, self.basis[t]);
+                }
+            }
+        }
+        self.is_basic[self.basis[l]] = false;
+        self.basis[l] = n + r;
+        self.is_basic[n + r] = true;
+        if self.iterate(0, true).is_err() {
+            return false;
+        }
+        let size: f64 = self.comp.iter().map(|v| v.abs()).sum();
+        let left: f64 = (0..r)
+            .filter(|&t| self.basis[t] >= n)
+            .map(|t| self.x[t].max(0.0))
+            .sum::<f64>()
+            * size;
+        left <= TOL_ART && self.drive_out_artificials().is_ok()
     }
 
     fn artificial_start(&mut self) {
@@ -592,6 +655,28 @@ mod tests {
             assert!(s.pivots > 0);
             assert_eq!(c.optimal(&b, 3, &basis).unwrap().g, 0.5, "{basis:?}");
         }
+    }
+
+    /// The same LP from the infeasible basis {0, 1/4, 1/2} (weights 1/2, −1, 3/2): the warm
+    /// phase 1 with the composite artificial −1·δ(1/4) in place of the point 1/4 reaches the
+    /// optimum G = 1/2 of the cold start in fewer pivots.
+    #[test]
+    fn warm_phase1_from_an_infeasible_basis_reaches_the_cold_optimum() {
+        let mut c = certifier(5, |z, o| (o[0], o[1]) = (z, z * z), 2);
+        let b = [0.5, 0.3125];
+        c.set_moments(&b);
+        let mut pivots = Vec::new();
+        for start in [None, Some(&[0usize, 1, 2][..])] {
+            let mut s = ScaledSimplex::default();
+            let Found::Optimal(basis) = s.solve(&c, 3, start) else {
+                panic!("not optimal from {start:?}")
+            };
+            let opt = c.optimal(&b, 3, &basis).unwrap();
+            assert_eq!(opt.g, 0.5, "{basis:?}");
+            assert_eq!(opt.support, vec![(0.25, 0.5), (0.75, 0.5)]);
+            pivots.push(s.pivots);
+        }
+        assert_eq!(pivots, [5, 3], "cold and warm pivots");
     }
 
     /// (1/2, 1/5) has negative variance: phase 1 ends with a Farkas ray the certifier accepts.

@@ -583,8 +583,11 @@ impl FastSolver {
             Ok(sol) => return Ok(sol),
             Err(legacy) => legacy,
         };
+        // The scaled simplex starts from the uncertified optimum, else from the fast
+        // simplex's last basis when it holds grid columns only (a warm phase 1 if infeasible).
         let start = match &legacy {
             Legacy::Answer(b, _) => Some(b.clone()),
+            _ if self.basis.iter().all(|&i| i < self.n) => Some(self.basis.clone()),
             _ => None,
         };
         let sol = self.escalate(moments, kf, start.as_deref(), hint);
