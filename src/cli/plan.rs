@@ -94,7 +94,7 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             .map(|(c, f)| format!("{} × {}", count(*c), count(*f)))
             .collect();
         println!(
-            "plan: expected from a proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s; each test at the full block's threshold, eliminating the run's expected count, share {}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            "plan: expected from a proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
             if shards > 1 {
                 format!(" of shard {}/{shards} (the row above: × {shards})", opts.shard[0])
             } else {

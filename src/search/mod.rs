@@ -20,7 +20,6 @@
 
 pub mod config;
 pub mod dataset;
-pub mod deconvolve;
 pub mod merge;
 pub mod plan;
 pub mod race;

@@ -249,12 +249,10 @@ pub struct Proxy {
 
 /// The race `cfg` (one shard: `cfg.shard`) run on a stratified 1/`share` of the kept
 /// fragments — the first F/s of the race's own fragment order — with every block 1/s as
-/// large (first sample, early look). Each test compares the block mean with the threshold the
-/// full block would have (every half-width × 1/√s) and eliminates by confidence as many
-/// candidates as the full-size test is expected to ([`super::deconvolve`]: the proxy's means
-/// are √s times noisier, which alone would remove too many near-ties and keep too many just
-/// beyond the threshold), those with the largest margins. The cap and the stopping rule are
-/// the run's own code
+/// large (first sample, early look) and every half-width × 1/√s, so that each test compares the
+/// block mean with the threshold the full block would have: a candidate whose gap to the
+/// reference exceeds the full-size half-width leaves in the proxy as in the run, in
+/// expectation. Eliminations, the cap and the stopping rule are the run's own code
 /// ([`super::run_sweep`], in the scratch folder `scratch`, which it removes). Racing's cost
 /// depends on when candidates leave by confidence, which the fixed schedule ([`schedule`])
 /// cannot know; the proxy's LP solves × s, per candidate family, estimate it (costed by
@@ -283,7 +281,7 @@ pub fn proxy_race(
     let hooks = Hooks {
         stop_after_batches: None,
         progress: None,
-        proxy_share: Some(share),
+        half_width: Some(1.0 / (share as f64).sqrt()),
     };
     let parent = OutDir::new(scratch, true)?;
     static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);

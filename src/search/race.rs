@@ -169,29 +169,6 @@ pub fn normal_quantile(p: f64) -> f64 {
     }
 }
 
-/// Φ(x), the standard normal distribution function: erfc(−x/√2)/2 by the Chebyshev fit of
-/// Numerical Recipes (§6.2, `erfcc`, relative error < 1.2e-7).
-pub fn normal_cdf(x: f64) -> f64 {
-    let y = -x / std::f64::consts::SQRT_2;
-    let z = y.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    const C: [f64; 10] = [
-        -1.265_512_23,
-        1.000_023_68,
-        0.374_091_96,
-        0.096_784_18,
-        -0.186_288_06,
-        0.278_868_07,
-        -1.135_203_98,
-        1.488_515_87,
-        -0.822_152_23,
-        0.170_872_77,
-    ];
-    let poly = C.iter().rev().fold(0.0, |acc, &c| acc * t + c);
-    let erfc = t * (-z * z + poly).exp();
-    0.5 * if y >= 0.0 { erfc } else { 2.0 - erfc }
-}
-
 /// δ per test: α split evenly over `stages` planned looks (a stage's block is one or two looks,
 /// [`looks`]), the `candidates` tested in the stage and `shards` shards (Bonferroni).
 pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) -> f64 {
@@ -230,10 +207,9 @@ pub struct Rule {
     /// Cap: at most max(⌈keep·|C|⌉, top) of the |C| candidates tested stay.
     pub keep: f64,
     pub top: usize,
-    /// 1 in a run; s in the plan's proxy race, which sees 1/s of each block: its half-widths
-    /// are × 1/√s (the full block's threshold) and its confidence eliminations are the run's
-    /// expected count ([`super::deconvolve`]), the candidates with the largest margins.
-    pub share: f64,
+    /// Factor on every half-width: 1 in a run; 1/√s in the plan's proxy race, which decides on
+    /// 1/s of each block with the threshold the full block would have ([`super::plan`]).
+    pub width: f64,
 }
 
 /// The budget cap of a stage of `candidates`: at most max(⌈keep·candidates⌉, top) stay (the
@@ -244,11 +220,10 @@ pub fn cap(keep: f64, candidates: u64, top: u64) -> u64 {
 
 /// Lower confidence bound of μ_c − μ_R (in per-fragment error units) under `rule`.
 pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
-    let width = 1.0 / rule.share.max(1.0).sqrt();
     if rule.paired {
-        c.d.mean() - width * half_width(&c.d, rule.delta, rule.bound, 2.0)
+        c.d.mean() - rule.width * half_width(&c.d, rule.delta, rule.bound, 2.0)
     } else {
-        let h = |m: &Moments| width * half_width(m, rule.delta / 2.0, rule.bound, 1.0);
+        let h = |m: &Moments| rule.width * half_width(m, rule.delta / 2.0, rule.bound, 1.0);
         (c.e.mean() - h(&c.e)) - (r.e.mean() + h(&r.e))
     }
 }
@@ -267,9 +242,12 @@ pub fn decide(
         .iter()
         .find(|s| s.index == reference)
         .expect("the stage reference is scored in its stage");
-    let mut out: Vec<Option<Elimination>> = by_confidence(stats, r, rule)
-        .into_iter()
-        .map(|gone| gone.then_some(Elimination::Confidence))
+    let mut out: Vec<Option<Elimination>> = stats
+        .iter()
+        .map(|c| {
+            (c.index != reference && gap_lower_bound(c, r, rule) > 0.0)
+                .then_some(Elimination::Confidence)
+        })
         .collect();
     let mut alive: Vec<usize> = (0..stats.len()).filter(|&i| out[i].is_none()).collect();
     let cap = cap(rule.keep, stats.len() as u64, rule.top as u64) as usize;
@@ -282,43 +260,6 @@ pub fn decide(
         for &i in &alive[cap..] {
             out[i] = Some(Elimination::Cap);
         }
-    }
-    out
-}
-
-/// Which candidates leave by confidence against the reference `r` (never `r` itself): in a
-/// run those whose lower bound of the gap is above 0; in a proxy (`rule.share` > 1, paired)
-/// the run's expected number of them ([`super::deconvolve`]), those with the largest margins
-/// (lower bound / standard error).
-fn by_confidence(stats: &[StageStats], r: &StageStats, rule: &Rule) -> Vec<bool> {
-    let lower: Vec<f64> = stats.iter().map(|c| gap_lower_bound(c, r, rule)).collect();
-    let tested = |i: usize| stats[i].index != r.index;
-    if rule.share <= 1.0 || !rule.paired {
-        return (0..stats.len())
-            .map(|i| tested(i) && lower[i] > 0.0)
-            .collect();
-    }
-    let margin = |i: usize| {
-        let se = stats[i].d.se();
-        match (se > 0.0 && se.is_finite(), lower[i] > 0.0) {
-            (true, _) => lower[i] / se,
-            (false, true) => f64::INFINITY,
-            (false, false) => f64::NEG_INFINITY,
-        }
-    };
-    let mut order: Vec<usize> = (0..stats.len()).filter(|&i| tested(i)).collect();
-    let margins: Vec<f64> = order.iter().map(|&i| margin(i)).collect();
-    let expected: f64 = super::deconvolve::elimination_probabilities(&margins, rule.share)
-        .iter()
-        .sum();
-    order.sort_by(|&a, &b| {
-        margin(b)
-            .total_cmp(&margin(a))
-            .then(stats[a].index.cmp(&stats[b].index))
-    });
-    let mut out = vec![false; stats.len()];
-    for &i in &order[..(expected.round() as usize).min(order.len())] {
-        out[i] = true;
     }
     out
 }
@@ -403,11 +344,11 @@ mod tests {
                 paired: true,
                 keep: 1.0,
                 top: 1,
-                share: 1.0,
+                width: 1.0,
             };
             let full = gap_lower_bound(&stats(&full_d, &full_e), &reference, &rule);
             let proxy_rule = Rule {
-                share: s as f64,
+                width: 1.0 / (s as f64).sqrt(),
                 ..rule
             };
             let proxy = gap_lower_bound(&stats(&d, &e), &reference, &proxy_rule);
@@ -486,92 +427,6 @@ mod tests {
         assert_eq!(sizes, vec![1024, 4096, 16384, 65536, 44031 - 1024]);
     }
 
-    #[test]
-    fn normal_cdf_inverts_the_quantile() {
-        // Φ values from standard tables (R: pnorm), then Φ(Φ⁻¹(p)) = p over 1e-12 … 1 − 1e-12.
-        for (x, p) in [
-            (0.0, 0.5),
-            (1.0, 0.8413447460685429),
-            (-1.959963984540054, 0.025),
-            (-5.0, 2.866515718791939e-7),
-            (3.0, 0.9986501019683699),
-        ] {
-            let c = normal_cdf(x);
-            assert!(
-                (c - p).abs() < 1.2e-7 * p.min(1.0 - p).max(1e-300) + 1e-15,
-                "{x}: {c} vs {p}"
-            );
-        }
-        for k in -12i32..=12 {
-            for p in [10f64.powi(-k.abs()), 0.3, 0.5, 0.7] {
-                let p = if k < 0 { 1.0 - p } else { p };
-                if p > 0.0 && p < 1.0 {
-                    let back = normal_cdf(normal_quantile(p));
-                    assert!(
-                        (back - p).abs() < 2e-7 * p.min(1.0 - p) + 1e-15,
-                        "{p}: {back}"
-                    );
-                }
-            }
-        }
-    }
-
-    /// In a proxy (share s > 1) the confidence eliminations are the rounded sum of the
-    /// candidates' elimination probabilities, taken from the largest margins; in a run
-    /// (share 1) the same statistics give the test's own decisions.
-    #[test]
-    fn a_proxy_eliminates_the_expected_count_by_margin() {
-        // Reference 0 and 40 candidates whose differences to it are d = g + noise on 64
-        // fragments: 20 with g = 0 (below the full block's threshold 4.3·se/√8 ≈ 0.05), 20 with
-        // g = 2.
-        let base: Vec<f64> = (0..64).map(|k| 0.3 + 0.01 * (k % 7) as f64).collect();
-        let mut all = vec![stats(0, &base, &base)];
-        for c in 1..=40u64 {
-            let g = if c <= 20 { 0.0 } else { 2.0 };
-            let e: Vec<f64> = base
-                .iter()
-                .enumerate()
-                .map(|(k, b)| {
-                    b + g + 0.9 * (((k as u64 * 7919 + c * 104729) % 97) as f64 / 96.0 - 0.5)
-                })
-                .collect();
-            all.push(stats(c, &e, &base));
-        }
-        let rule = |share: f64| Rule {
-            delta: 1e-5,
-            bound: Bound::Normal,
-            paired: true,
-            keep: 1.0,
-            top: 1,
-            share,
-        };
-        let r = all[0];
-        let hard: Vec<bool> = all
-            .iter()
-            .map(|c| c.index != 0 && gap_lower_bound(c, &r, &rule(1.0)) > 0.0)
-            .collect();
-        assert_eq!(by_confidence(&all, &r, &rule(1.0)), hard);
-        let proxy = by_confidence(&all, &r, &rule(8.0));
-        let margins: Vec<f64> = all[1..]
-            .iter()
-            .map(|c| gap_lower_bound(c, &r, &rule(8.0)) / c.d.se())
-            .collect();
-        let expected: f64 = super::super::deconvolve::elimination_probabilities(&margins, 8.0)
-            .iter()
-            .sum();
-        let gone: Vec<usize> = (0..all.len()).filter(|&i| proxy[i]).collect();
-        assert_eq!(gone.len(), expected.round() as usize);
-        assert!(!proxy[0]);
-        // Every eliminated margin is at least every kept one.
-        let low = gone
-            .iter()
-            .map(|&i| margins[i - 1])
-            .fold(f64::INFINITY, f64::min);
-        assert!((1..all.len()).all(|i| proxy[i] || margins[i - 1] <= low));
-        // The 20 far candidates leave, the near ones stay.
-        assert_eq!(gone, (21..=40).collect::<Vec<_>>());
-    }
-
     fn stats(index: u64, e: &[f64], r: &[f64]) -> StageStats {
         let d: Vec<f64> = e.iter().zip(r).map(|(a, b)| a - b).collect();
         StageStats {
@@ -608,7 +463,7 @@ mod tests {
             paired: true,
             keep: 1.0,
             top: 1,
-            share: 1.0,
+            width: 1.0,
         };
         assert_eq!(
             decide(&s, &means, 0, &rule),

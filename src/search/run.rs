@@ -212,7 +212,7 @@ pub fn sweep_dataset(
     let hooks = Hooks {
         stop_after_batches: None,
         progress,
-        proxy_share: None,
+        half_width: None,
     };
     let outcome = run_sweep(&cfg, &scorer, results, &hooks)?;
     let sweep_seconds = t0.elapsed().as_secs_f64();

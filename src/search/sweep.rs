@@ -168,9 +168,9 @@ pub struct Hooks<'h> {
     /// Stop (as if killed) after this many flushed batches.
     pub stop_after_batches: Option<usize>,
     pub progress: Option<&'h (dyn Fn(Progress) + Sync)>,
-    /// The share s of the plan's proxy race ([`super::race::Rule::share`]; None: 1, a run).
-    /// Set only by [`super::plan::proxy_race`].
-    pub proxy_share: Option<usize>,
+    /// Factor on the racing tests' half-widths ([`super::race::Rule::width`]; None: 1). Set
+    /// only by the plan's proxy race ([`super::plan::proxy_race`]).
+    pub half_width: Option<f64>,
 }
 
 /// How [`run_sweep`] ended.

@@ -126,7 +126,7 @@ fn simulate(
             paired: true,
             keep,
             top: 1,
-            share: 1.0,
+            width: 1.0,
         };
         let looks = race::looks(r.len(), early_look);
         let mut next = cur.clone();

@@ -259,7 +259,7 @@ fn interrupted_runs_resume_to_the_same_file() {
             let hooks = Hooks {
                 stop_after_batches: Some(k),
                 progress: None,
-                proxy_share: None,
+                half_width: None,
             };
             match run_sweep(&cfg, &s, &dir, &hooks).unwrap() {
                 Outcome::Stopped => stops += 1,
@@ -287,7 +287,7 @@ fn interrupted_runs_resume_to_the_same_file() {
         let hooks = Hooks {
             stop_after_batches: Some(k),
             progress: None,
-            proxy_share: None,
+            half_width: None,
         };
         assert_eq!(run_sweep(&cfg, &s, &dir, &hooks).unwrap(), Outcome::Stopped);
         for name in [

@@ -180,7 +180,7 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
             paired: cfg.paired,
             keep: cfg.keep,
             top: cfg.top,
-            share: self.ctx.hooks.proxy_share.unwrap_or(1) as f64,
+            width: self.ctx.hooks.half_width.unwrap_or(1.0),
         };
         let out = match self.looks(w, k, &block, reference, &rule)? {
             Ok(out) => out,
