@@ -286,7 +286,8 @@ pub fn proxy_race(
     let parent = OutDir::new(scratch, true)?;
     static RUNS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let run = RUNS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    let name = format!("momentlab-plan-{}-{run}", std::process::id());
+    let name = format!("{SCRATCH_PREFIX}{}-{run}", std::process::id());
+    remove_stale_scratch(&parent, scratch)?;
     parent.remove_all(&name)?;
     let dir = parent.create_dir(&name)?;
     let t0 = Instant::now();
@@ -320,6 +321,44 @@ pub fn proxy_race(
         other: lp_solves.saturating_sub(candidates),
         seconds,
     })
+}
+
+/// The proxy races' scratch folders are `{SCRATCH_PREFIX}{pid}-{n}` under the scratch parent.
+const SCRATCH_PREFIX: &str = "momentlab-plan-";
+
+/// Remove the scratch folders under `root` left by plans that were killed: those whose pid
+/// names no live process (other processes' live plans and this one's are kept).
+fn remove_stale_scratch(parent: &OutDir, root: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(root) else {
+        return Ok(());
+    };
+    let own = std::process::id();
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(pid) = name
+            .to_str()
+            .and_then(|n| n.strip_prefix(SCRATCH_PREFIX))
+            .and_then(|rest| rest.split_once('-'))
+            .filter(|(_, n)| n.parse::<u64>().is_ok())
+            .and_then(|(pid, _)| pid.parse::<u32>().ok())
+        else {
+            continue;
+        };
+        if pid != own && !process_alive(pid) {
+            parent.remove_all(name.to_str().expect("checked above"))?;
+        }
+    }
+    Ok(())
+}
+
+/// Whether a process `pid` exists (kill(pid, 0) does not fail with ESRCH).
+fn process_alive(pid: u32) -> bool {
+    let Ok(pid) = libc::pid_t::try_from(pid) else {
+        return false;
+    };
+    // SAFETY: signal 0 only checks that the process exists and may be signalled.
+    let r = unsafe { libc::kill(pid, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() != Some(libc::ESRCH)
 }
 
 /// Proportional allocation of `k` samples to strata of the given sizes (largest remainder, at
@@ -436,6 +475,32 @@ pub fn calibrate(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn stale_scratch_of_killed_plans_is_removed() {
+        let root =
+            std::env::temp_dir().join(format!("momentlab-stale-test-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        std::fs::create_dir_all(&root).unwrap();
+        // A pid that has exited: a child we waited for.
+        let dead = std::process::Command::new("true").spawn().unwrap();
+        let dead_pid = dead.id();
+        let mut dead = dead;
+        dead.wait().unwrap();
+        let stale = format!("{SCRATCH_PREFIX}{dead_pid}-0");
+        let mine = format!("{SCRATCH_PREFIX}{}-7", std::process::id());
+        let live = format!("{SCRATCH_PREFIX}1-0"); // init: always alive
+        for d in [&stale, &mine, &live, &"unrelated-3-4".to_string()] {
+            std::fs::create_dir_all(root.join(d).join("inner")).unwrap();
+        }
+        let parent = OutDir::new(&root, true).unwrap();
+        remove_stale_scratch(&parent, &root).unwrap();
+        assert!(!root.join(&stale).exists());
+        for d in [&mine, &live, &"unrelated-3-4".to_string()] {
+            assert!(root.join(d).join("inner").exists(), "{d}");
+        }
+        std::fs::remove_dir_all(&root).unwrap();
+    }
 
     /// Family-weighted wall time: Σ_f LP_f · µs_f (unknown families and `other` at the
     /// sample's mean µs) / (threads · efficiency).
