@@ -1,6 +1,6 @@
 //! Small dense kernels shared by the certificates and the scaled simplex: error-free
 //! transformations (exact products and sums), a compensated dot product, exact power-of-two
-//! scales, and the double-double LU (the f64 one is [`crate::linalg::Lu`]).
+//! scales, and the double-double LU with its eta file (the f64 LU is [`crate::linalg::Lu`]).
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on tiny matrices
 
@@ -227,10 +227,23 @@ impl DdLu {
 
     #[inline(always)]
     fn solve_in<P: ExactProduct>(&self, x: &mut [f64]) {
+        let mut y = [Dd::default(); 32];
+        for i in 0..self.r {
+            y[i] = Dd::from(x[i]);
+        }
+        self.solve_dd_in::<P>(&mut y);
+        for i in 0..self.r {
+            x[i] = y[i].0 + y[i].1;
+        }
+    }
+
+    /// Solve A x = b in place in double-double (the first r entries of `x`).
+    #[inline(always)]
+    fn solve_dd_in<P: ExactProduct>(&self, x: &mut [Dd]) {
         let (r, lu) = (self.r, &self.lu);
         let mut y = [Dd::default(); 32];
         for i in 0..r {
-            y[i] = Dd::from(x[self.perm[i]]);
+            y[i] = x[self.perm[i]];
         }
         for i in 0..r {
             for c in 0..i {
@@ -243,9 +256,7 @@ impl DdLu {
             }
             y[i] = y[i].div_in::<P>(lu[i * r + i]);
         }
-        for i in 0..r {
-            x[i] = y[i].0 + y[i].1;
-        }
+        x[..r].copy_from_slice(&y[..r]);
     }
 
     /// Solve Aᵀ x = b in place.
@@ -275,11 +286,18 @@ impl DdLu {
 
     #[inline(always)]
     fn solve_t_dd_in<P: ExactProduct>(&self, b: &[f64], out: &mut [Dd]) {
+        for i in 0..self.r {
+            out[i] = Dd::from(b[i]);
+        }
+        self.solve_t_in_place::<P>(out);
+    }
+
+    /// Solve Aᵀ x = b in place in double-double (the first r entries of `x`).
+    #[inline(always)]
+    fn solve_t_in_place<P: ExactProduct>(&self, x: &mut [Dd]) {
         let (r, lu) = (self.r, &self.lu);
         let mut y = [Dd::default(); 32];
-        for i in 0..r {
-            y[i] = Dd::from(b[i]);
-        }
+        y[..r].copy_from_slice(&x[..r]);
         for i in 0..r {
             for c in 0..i {
                 y[i] = y[i].add(lu[c * r + i].mul_in::<P>(y[c]).neg());
@@ -292,8 +310,145 @@ impl DdLu {
             }
         }
         for i in 0..r {
-            out[self.perm[i]] = y[i];
+            x[self.perm[i]] = y[i];
         }
+    }
+}
+
+/// The double-double LU of a matrix B₀ and the eta file of the column replacements made since
+/// (the product form of the inverse). Replacing column l of B by a, with α = B⁻¹a and α_l ≠ 0,
+/// gives B′ = B F with F = I + (α − e_l) e_lᵀ; after k replacements B = B₀ F₁ ⋯ F_k, so
+/// B⁻¹ = F_k⁻¹ ⋯ F₁⁻¹ B₀⁻¹ and B⁻ᵀ = B₀⁻ᵀ F₁⁻ᵀ ⋯ F_k⁻ᵀ, where
+///
+/// * (F⁻¹v)_l = v_l / α_l and (F⁻¹v)_i = v_i − α_i v_l / α_l for i ≠ l,
+/// * (F⁻ᵀv)_l = (v_l − Σ_{i≠l} α_i v_i) / α_l and (F⁻ᵀv)_i = v_i for i ≠ l.
+///
+/// Each eta is stored as α with 1/α_l (in double-double) in place of α_l, so applying it is
+/// r − 1 multiply-adds and one product.
+#[derive(Clone, Debug, Default)]
+pub struct DdEtaLu {
+    lu: DdLu,
+    /// The etas, r entries each.
+    eta: Vec<Dd>,
+    /// The replaced position l of each eta.
+    at: Vec<usize>,
+}
+
+impl DdEtaLu {
+    /// Factorise B₀ = `a` (row-major r × r, f64 entries taken exactly) and empty the eta file;
+    /// false if singular.
+    pub fn factor(&mut self, a: &[f64], r: usize) -> bool {
+        self.eta.clear();
+        self.at.clear();
+        self.lu.factor(a, r)
+    }
+
+    /// Replacements since the factorisation.
+    pub fn etas(&self) -> usize {
+        self.at.len()
+    }
+
+    /// Record the replacement of column l by a column with α = B⁻¹a (B before the
+    /// replacement, α_l ≠ 0): B becomes B F.
+    pub fn push(&mut self, alpha: &[Dd], l: usize) {
+        let r = self.lu.r;
+        let start = self.eta.len();
+        self.eta.extend_from_slice(&alpha[..r]);
+        self.eta[start + l] = Dd::from(1.0).div_in::<Dekker>(alpha[l]);
+        self.at.push(l);
+    }
+
+    /// x ← B⁻¹x in place (the first r entries).
+    pub fn ftran(&self, x: &mut [Dd]) {
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.ftran_fma(x) };
+        }
+        self.ftran_in::<Dekker>(x)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn ftran_fma(&self, x: &mut [Dd]) {
+        self.ftran_in::<Fused>(x)
+    }
+
+    #[inline(always)]
+    fn ftran_in<P: ExactProduct>(&self, x: &mut [Dd]) {
+        self.lu.solve_dd_in::<P>(x);
+        for j in 0..self.at.len() {
+            self.apply_in::<P>(j, x);
+        }
+    }
+
+    /// x ← F_k⁻¹x for the last replacement only: the basic solution B⁻¹b of the basis before
+    /// it becomes that of the basis after it.
+    pub fn ftran_last(&self, x: &mut [Dd]) {
+        let Some(j) = self.at.len().checked_sub(1) else {
+            return;
+        };
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.apply_fma(j, x) };
+        }
+        self.apply_in::<Dekker>(j, x)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn apply_fma(&self, j: usize, x: &mut [Dd]) {
+        self.apply_in::<Fused>(j, x)
+    }
+
+    /// x ← F_j⁻¹x.
+    #[inline(always)]
+    fn apply_in<P: ExactProduct>(&self, j: usize, x: &mut [Dd]) {
+        let r = self.lu.r;
+        let (l, eta) = (self.at[j], &self.eta[j * r..(j + 1) * r]);
+        let z = x[l].mul_in::<P>(eta[l]);
+        x[l] = z;
+        if z.0 == 0.0 {
+            return;
+        }
+        for i in 0..r {
+            if i != l {
+                x[i] = x[i].add(eta[i].mul_in::<P>(z).neg());
+            }
+        }
+    }
+
+    /// y ← B⁻ᵀy in place (the first r entries).
+    pub fn btran(&self, y: &mut [Dd]) {
+        #[cfg(target_arch = "x86_64")]
+        if has_fma() {
+            // SAFETY: the CPU has FMA.
+            return unsafe { self.btran_fma(y) };
+        }
+        self.btran_in::<Dekker>(y)
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "fma")]
+    unsafe fn btran_fma(&self, y: &mut [Dd]) {
+        self.btran_in::<Fused>(y)
+    }
+
+    #[inline(always)]
+    fn btran_in<P: ExactProduct>(&self, y: &mut [Dd]) {
+        let r = self.lu.r;
+        for j in (0..self.at.len()).rev() {
+            let (l, eta) = (self.at[j], &self.eta[j * r..(j + 1) * r]);
+            let mut s = y[l];
+            for i in 0..r {
+                if i != l {
+                    s = s.add(eta[i].mul_in::<P>(y[i]).neg());
+                }
+            }
+            y[l] = s.mul_in::<P>(eta[l]);
+        }
+        self.lu.solve_t_in_place::<P>(y);
     }
 }
 
