@@ -216,20 +216,24 @@ pub fn run(
 }
 
 /// The Markdown table of corpus rows as docs/lp.md shows it: label, mean, median and p99 µs,
-/// the speed-up over microlp on the mean, failed answers. Reads the JSON of `bench lp --json`.
+/// the speed-up over microlp on the mean, escalations, exact solves and failed answers. Reads
+/// the JSON of `bench lp --json`.
 pub fn markdown_rows(rows: &serde_json::Value) -> Option<String> {
     let mut out = String::from(
-        "| row | mean µs | median | p99 | × microlp (mean) | failed |\n|---|---|---|---|---|---|",
+        "| row | mean µs | median | p99 | × microlp (mean) | escalated | exact | failed |\n\
+         |---|---|---|---|---|---|---|---|",
     );
     for r in rows.as_array()? {
         let f = &r["fast_us"];
         out += &format!(
-            "\n| {} | {:.1} | {:.1} | {:.1} | {:.0} | {} |",
+            "\n| {} | {:.1} | {:.1} | {:.1} | {:.0} | {} | {} | {} |",
             r["corpus"].as_str()?,
             f["mean"].as_f64()?,
             f["median"].as_f64()?,
             f["p99"].as_f64()?,
             r["speedup_mean"].as_f64()?,
+            r["escalations"].as_u64()?,
+            r["exact"].as_u64()?,
             r["failed"].as_u64()?
         );
     }
