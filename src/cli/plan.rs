@@ -64,13 +64,16 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
     )];
     rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
     // One shard's proxy race; the rows are totals over the shards, like the others.
-    let expected_seconds = expected.map(|p| c.seconds_for(&p.by_family, p.other, threads));
+    let expected_seconds = expected.map(|p| {
+        let (_, by_family, other) = p.expected();
+        c.seconds_for(by_family, other, threads)
+    });
     if let (Some(p), Some(secs)) = (expected, expected_seconds) {
         let all = secs * shards as f64;
         println!(
             "plan: {:<28} {:>12} {:>11} {:>18}",
             format!("* racing (keep {}, expected)", opts.keep),
-            big(p.lp_solves * shards as u64),
+            big(p.expected().0 * shards as u64),
             format!("{:.3}", all * threads as f64 / 3600.0),
             duration(setup + plan.references_seconds + all)
         );
@@ -88,15 +91,17 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         );
     }
     if let (Some(p), Some(secs)) = (expected, expected_seconds) {
-        let stages: Vec<String> = p
-            .stages
-            .iter()
-            .map(|(c, f)| format!("{} × {}", count(*c), count(*f)))
-            .collect();
+        let stages = |s: &mut dyn Iterator<Item = String>| s.collect::<Vec<_>>().join(", ");
+        let families = |f: &[(&str, u64)]| {
+            f.iter()
+                .map(|(f, n)| format!("{f} {}", big(*n)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
         println!(
-            "plan: expected from a proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; × {} → {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            "plan: proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; its LP solves × {} = {}",
             if shards > 1 {
-                format!(" of shard {}/{shards} (the row above: × {shards})", opts.shard[0])
+                format!(" of shard {}/{shards} (the expected row: × {shards})", opts.shard[0])
             } else {
                 String::new()
             },
@@ -104,17 +109,30 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             count(p.fragments),
             p.seconds,
             p.share,
-            stages.join(", "),
+            stages(&mut p.stages.iter().map(|(c, f)| format!("{} × {}", count(*c), count(*f)))),
             p.tied,
             p.share,
             count(p.lp_solves),
-            p.by_family
-                .iter()
-                .map(|(f, n)| format!("{f} {}", big(*n)))
-                .collect::<Vec<_>>()
-                .join(", "),
-            duration(secs)
         );
+        let (lps, by_family, _) = p.expected();
+        match &p.forecast {
+            Some(f) => println!(
+                "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family",
+                f.runs,
+                stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
+                count(lps),
+                big(f.range.0),
+                big(f.range.1),
+                families(by_family),
+                duration(secs)
+            ),
+            None => println!(
+                "plan: expected from the proxy race: {} LP solves ({}), {} at the calibrated µs per LP of each family",
+                count(lps),
+                families(by_family),
+                duration(secs)
+            ),
+        }
     }
     if let Some(s) = plan.racing.first().filter(|_| shards == 1) {
         let stages: Vec<String> = s

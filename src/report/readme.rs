@@ -349,8 +349,8 @@ fn race_times(reports: &Path) -> Result<String> {
 }
 
 /// docs/search.md's table of one race run in several fragment orders (`--race-seed`): stage
-/// sizes, LP solves against their mean, the LP solves `--plan` expected (its proxy race)
-/// against the run's, winner, tie set and how many of its candidates the first order's tie set
+/// sizes, LP solves against their mean, the LP solves `--plan` expected (its simulated runs,
+/// with their 80 % range) and its proxy race's own × S against the run's, winner, tie set and how many of its candidates the first order's tie set
 /// holds, from
 /// reports/search/race_orders_m<M>.json (`scripts/race-orders.sh M SEED…`).
 fn race_orders(reports: &Path) -> Result<String> {
@@ -364,7 +364,7 @@ fn race_orders(reports: &Path) -> Result<String> {
             s.push('\n');
         }
         s.push_str(
-            "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | `--plan` expected (vs the run) | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | ---: | --- | ---: | ---: |\n",
+            "| race | `--race-seed` | candidates per stage | LP solves | vs the mean | `--plan` expected (vs the run; 80 % of its simulated runs) | its proxy race × S (vs the run) | winner | tied | of them tied in the first order |\n| --- | ---: | --- | ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
         );
         let v = read_json(&file)?;
         let orders = v
@@ -397,13 +397,25 @@ fn race_orders(reports: &Path) -> Result<String> {
                 .and_then(Value::as_array)
                 .map(|a| a.iter().filter_map(Value::as_str).collect())
                 .unwrap_or_default();
-            let expected = match o.get("plan_lp_solves").and_then(Value::as_f64) {
+            let vs = |key: &str| match o.get(key).and_then(Value::as_f64) {
                 Some(p) => format!("{:.2} M ({:+.0} %)", p / 1e6, percent(p / lp)),
                 None => "–".to_string(),
             };
+            let range = o
+                .get("plan_range")
+                .and_then(Value::as_array)
+                .and_then(|r| Some((r.first()?.as_f64()?, r.get(1)?.as_f64()?)))
+                .map_or(String::new(), |(a, b)| {
+                    format!("; {:.2}–{:.2} M", a / 1e6, b / 1e6)
+                });
+            let expected = match vs("plan_lp_solves") {
+                e if range.is_empty() => e,
+                e => format!("{}{range})", e.trim_end_matches(')')),
+            };
+            let proxy = vs("plan_proxy_lp_solves");
             let _ = writeln!(
                 s,
-                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | {expected} | ({}) | {:.0} | {} |",
+                "| m = {m} | {:.0} | {} | {:.2} M | {:+.0} % | {expected} | {proxy} | ({}) | {:.0} | {} |",
                 f(o, "race_seed", &file)?,
                 stages.join(", "),
                 lp / 1e6,

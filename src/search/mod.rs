@@ -20,6 +20,7 @@
 
 pub mod config;
 pub mod dataset;
+pub mod forecast;
 pub mod merge;
 pub mod plan;
 pub mod race;

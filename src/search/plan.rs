@@ -15,13 +15,14 @@
 //! runs it on a stratified 1/s of the fragments and scales its LP solves by s.
 
 use super::config::SweepConfig;
+use super::forecast;
 use super::results::read_rows;
 use super::select;
-use super::sweep::{run_sweep, Hooks, Outcome};
+use super::sweep::{race_looks, run_sweep, Hooks, Outcome};
 use super::Scorer;
 use crate::artefact::OutDir;
 use anyhow::{bail, Result};
-use std::collections::BTreeSet;
+use std::collections::{BTreeSet, HashMap};
 use std::path::Path;
 use std::time::Instant;
 
@@ -245,7 +246,38 @@ pub struct Proxy {
     pub other: u64,
     /// Its wall time on this machine (all threads).
     pub seconds: f64,
+    /// The run simulated from the proxy's estimates ([`super::forecast`]; None when the proxy
+    /// raced no more than one candidate): racing's expected cost.
+    pub forecast: Option<Expected>,
 }
+
+/// Racing's expected cost from [`FORECAST_RUNS`] simulated runs of the race.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expected {
+    pub runs: usize,
+    /// Mean LP solves, and the 10th and 90th percentile of the runs'.
+    pub lp_solves: u64,
+    pub range: (u64, u64),
+    /// Of the mean, the candidates' per family and the rest (stage references and the pilot).
+    pub by_family: Vec<(&'static str, u64)>,
+    pub other: u64,
+    /// Mean candidates entering each stage.
+    pub stages: Vec<f64>,
+}
+
+impl Proxy {
+    /// Racing's expected LP solves, per family, and the rest: the simulated runs' when there
+    /// are any, else the proxy's own × s.
+    pub fn expected(&self) -> (u64, &[(&'static str, u64)], u64) {
+        match &self.forecast {
+            Some(f) => (f.lp_solves, &f.by_family, f.other),
+            None => (self.lp_solves, &self.by_family, self.other),
+        }
+    }
+}
+
+/// Simulated runs of the race behind the plan's expected cost ([`super::forecast::simulate`]).
+pub const FORECAST_RUNS: usize = 64;
 
 /// The race `cfg` (one shard: `cfg.shard`) run on a stratified 1/`share` of the kept
 /// fragments — the first F/s of the race's own fragment order — with every block 1/s as
@@ -291,26 +323,43 @@ pub fn proxy_race(
     parent.remove_all(&name)?;
     let dir = parent.create_dir(&name)?;
     let t0 = Instant::now();
-    let outcome =
-        run_sweep(&proxy_cfg, &sub_scorer, &dir, &hooks).and_then(|o| Ok((o, read_rows(&dir)?)));
+    let outcome = run_sweep(&proxy_cfg, &sub_scorer, &dir, &hooks)
+        .and_then(|o| Ok((o, read_rows(&dir)?, race_looks(&dir)?)));
     let seconds = t0.elapsed().as_secs_f64();
     parent.remove_all(&name)?;
-    let (summary, rows) = match outcome? {
-        (Outcome::Complete(s), rows) => (s, rows),
-        (Outcome::Stopped, _) => bail!("plan: the proxy race stopped"),
+    let (summary, rows, looks) = match outcome? {
+        (Outcome::Complete(s), rows, looks) => (s, rows, looks),
+        (Outcome::Stopped, ..) => bail!("plan: the proxy race stopped"),
     };
     let s = share as u64;
-    let mut by_family: Vec<(&'static str, u64)> = Vec::new();
-    for r in &rows {
-        let f = super::timing::family_of(&r.functions);
-        match by_family.iter_mut().find(|x| x.0 == f) {
-            Some(x) => x.1 += r.fragments * s,
-            None => by_family.push((f, r.fragments * s)),
-        }
-    }
-    by_family.sort();
+    let family: HashMap<u64, &'static str> = rows
+        .iter()
+        .map(|r| (r.index, super::timing::family_of(&r.functions)))
+        .collect();
+    let by_family = per_family(rows.iter().map(|r| (family[&r.index], r.fragments * s)));
     let lp_solves = summary.lp_solves * s;
     let candidates: u64 = by_family.iter().map(|x| x.1).sum();
+    let winner = summary.race.as_ref().and_then(|r| r.winner);
+    let forecast = winner.filter(|_| !looks.is_empty()).map(|w| {
+        let est = forecast::estimates(&looks, w);
+        let shape = forecast::Shape::of(cfg, order.len());
+        let f = forecast::simulate(&est, &shape, FORECAST_RUNS, cfg.seed);
+        let by_family = per_family(
+            est.iter()
+                .zip(&f.per_candidate)
+                .map(|(e, &n)| (family[&e.index], n.round() as u64)),
+        );
+        let lp_solves = f.lp_solves.round() as u64;
+        let own: u64 = by_family.iter().map(|x| x.1).sum();
+        Expected {
+            runs: f.replicates,
+            lp_solves,
+            range: f.range,
+            by_family,
+            other: lp_solves.saturating_sub(own),
+            stages: f.stages,
+        }
+    });
     Ok(Proxy {
         share,
         fragments: keep as u64,
@@ -320,7 +369,21 @@ pub fn proxy_race(
         by_family,
         other: lp_solves.saturating_sub(candidates),
         seconds,
+        forecast,
     })
+}
+
+/// LP solves summed per family, sorted by family.
+fn per_family(rows: impl Iterator<Item = (&'static str, u64)>) -> Vec<(&'static str, u64)> {
+    let mut out: Vec<(&'static str, u64)> = Vec::new();
+    for (f, n) in rows {
+        match out.iter_mut().find(|x| x.0 == f) {
+            Some(x) => x.1 += n,
+            None => out.push((f, n)),
+        }
+    }
+    out.sort();
+    out
 }
 
 /// The proxy races' scratch folders are `{SCRATCH_PREFIX}{pid}-{n}` under the scratch parent.

@@ -503,6 +503,30 @@ pub fn stage_file(dir: &Path, k: usize, j: usize) -> std::path::PathBuf {
     }
 }
 
+/// Every look's statistics of the race in `dir`, in order (stage 0's looks, stage 1's, …, then
+/// the survivors' completion block): what the plan's forecast estimates from
+/// ([`super::forecast::estimates`]).
+pub fn race_looks(dir: &Path) -> Result<Vec<Vec<StageStats>>> {
+    let mut paths = Vec::new();
+    for k in 0.. {
+        if !stage_file(dir, k, 0).exists() {
+            break;
+        }
+        paths.extend((0..2).map(|j| stage_file(dir, k, j)).filter(|p| p.exists()));
+    }
+    paths.push(dir.join(FINAL_FILE));
+    paths
+        .iter()
+        .filter(|p| p.exists())
+        .map(|p| {
+            Ok(read_jsonl::<StageRow>(p, false)?
+                .iter()
+                .map(StageRow::stats)
+                .collect())
+        })
+        .collect()
+}
+
 /// The best of `p` evenly spaced candidates of `cur` on the pilot block (stage-0 reference).
 fn pilot_best(ctx: &Ctx, cur: &[u64], p: usize, block: &[u32]) -> Result<u64> {
     let pilots: Vec<u64> = (0..p).map(|k| cur[k * cur.len() / p]).collect();

@@ -182,8 +182,8 @@ fn a_proxy_race_on_a_quarter_scales_the_blocks() {
         .is_none());
 }
 
-/// `search --plan` prints racing's expected cost from the proxy race as the chosen row, the
-/// upper bound beside it, and the proxy's stages; `--plan-proxy 0` leaves only the bound,
+/// `search --plan` prints racing's expected cost (runs simulated from the proxy race) as the
+/// chosen row, the upper bound beside it, the proxy's stages and the simulated runs' range; `--plan-proxy 0` leaves only the bound,
 /// chosen; `--plan-proxy` needs `--plan`. Nothing is left in the results folder.
 #[test]
 fn the_plan_prints_the_proxy_races_expected_cost() {
@@ -209,7 +209,8 @@ fn the_plan_prints_the_proxy_races_expected_cost() {
     };
     assert!(row("racing (keep 0.25, expected)").starts_with("plan: * racing"));
     assert!(row("racing (keep 0.25, at most)").starts_with("plan:   racing"));
-    assert!(row("expected from a proxy race on 1/2 of the fragments").contains("LP solves"));
+    assert!(row("proxy race on 1/2 of the fragments").contains("its LP solves × 2 = "));
+    assert!(row("expected from 64 runs of the race simulated").contains("80 % of the runs between"));
     let (code, out, err) = crate::common::run(&[&base[..], &["--plan-proxy", "0"]].concat(), None);
     assert_eq!(code, 0, "{err}");
     assert!(!out.contains("expected"), "{out}");
@@ -219,4 +220,50 @@ fn the_plan_prints_the_proxy_races_expected_cost() {
     assert_eq!(code, 2);
     assert!(err.contains("--plan"), "{err}");
     assert!(!results.exists());
+}
+
+/// The plan's forecast, simulated from a proxy race on a quarter of the fragments, follows the
+/// race's cost over fragment orders: the real races of six orders (a race where the cap keeps
+/// 60 %, so that eliminations by confidence decide most stages) average within 20 % of the
+/// forecast of the first, inside its 80 % range; the forecast never exceeds the fixed schedule,
+/// and its family split sums to it.
+#[test]
+fn the_forecast_follows_the_races_of_other_orders() {
+    let (grid, data) = racing_setup();
+    let table = table(&grid, &WITH_DEGENERATE);
+    let s = Scorer::new(&data, &table, "fast", 64).unwrap();
+    let mut cfg = racing_config(&s);
+    cfg.keep = 0.6;
+    cfg.top = 1;
+    let scratch = crate::common::tmp("proxy-forecast-scratch");
+    let planned = plan(&cfg, &s, [2, 10], Some((4, &scratch))).unwrap();
+    let p = planned.proxy.expect("racing with a proxy");
+    let f = p.forecast.clone().expect("a forecast");
+    let bound = planned.racing[0].lp_solves;
+    assert!(f.lp_solves <= bound, "{} vs {bound}", f.lp_solves);
+    assert!(
+        f.range.0 as f64 <= f.lp_solves as f64 && f.lp_solves <= f.range.1,
+        "{f:?}"
+    );
+    let own: u64 = f.by_family.iter().map(|x| x.1).sum();
+    assert_eq!(own + f.other, f.lp_solves);
+    assert_eq!(p.expected().0, f.lp_solves);
+    let runs: Vec<u64> = (1..=6)
+        .map(|seed| {
+            cfg.seed = seed;
+            actual(&cfg, &s, &format!("forecast-order{seed}")).lp_solves
+        })
+        .collect();
+    let mean = runs.iter().sum::<u64>() as f64 / runs.len() as f64;
+    assert!(
+        (f.lp_solves as f64 / mean - 1.0).abs() < 0.2,
+        "forecast {} vs the races' mean {mean} ({runs:?})",
+        f.lp_solves
+    );
+    assert!(
+        f.range.0 as f64 <= mean && mean <= f.range.1 as f64,
+        "{runs:?} vs {:?}",
+        f.range
+    );
+    assert!(runs.iter().any(|&r| r != runs[0]), "{runs:?}");
 }

@@ -1,0 +1,493 @@
+//! Racing's expected cost from a proxy race's estimates, by simulating the run (pure functions,
+//! no IO; `search --plan`, [`super::plan::proxy_race`]).
+//!
+//! The proxy race decides on 1/s of every block, so its block means are √s times noisier than
+//! the run's. Where many candidates lie a little below the run's threshold (m = 4) it eliminates
+//! them by noise, and its cap, ranking by noisier means, keeps a worse set; its own LP solves
+//! then fall short of the run's. Its statistics are used instead as estimates
+//! ([`estimates`]): each candidate's mean error gap g_c to the proxy's winner, paired over the
+//! looks both saw, and the per-fragment spread σ_c of its paired differences to a reference.
+//!
+//! [`simulate`] then runs the run's own race on them: the run's blocks and looks
+//! ([`race::blocks`], [`race::looks`]), δ ([`race::stage_delta`]) and decisions
+//! ([`race::decide`]: confidence, cap, `top`). On a look of n fragments each candidate's mean
+//! error is g_c + ι_c with independent ι_c ~ N(0, σ_c²/(2n)), so a paired difference to the
+//! reference R has variance (σ_c² + σ_R²)/(2n) ≈ σ_c²/n, half of it R's own noise, shared by
+//! every candidate of the look (as for exchangeable candidates). The mean LP solves over the
+//! replicates is the forecast; their spread is the race's spread over fragment orders.
+
+use super::config::SweepConfig;
+use super::race::{self, Bound, Moments, Rule, StageStats};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+use rayon::prelude::*;
+use std::collections::HashMap;
+
+/// One candidate's estimates from the proxy race.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Estimate {
+    pub index: u64,
+    /// Mean error gap to the proxy's winner over the looks both saw (fragment-weighted).
+    pub gap: f64,
+    /// Per-fragment standard deviation of its paired differences to a look's reference.
+    pub sd: f64,
+    /// Per-fragment standard deviation of its errors (for unpaired tests).
+    pub esd: f64,
+}
+
+/// The candidates' estimates from the statistics of every look of a race (`looks[l]`: each
+/// scored candidate's errors and paired differences on look l), gaps relative to `winner`,
+/// which must be scored on every look (a race's winner is). σ_c comes from the look with the
+/// most fragments on which c was not the reference (whose differences are 0); a candidate that
+/// was the reference on every look it saw takes the median σ of the others. Sorted by index.
+pub fn estimates(looks: &[Vec<StageStats>], winner: u64) -> Vec<Estimate> {
+    struct Acc {
+        gap_sum: f64,
+        n: u64,
+        sd: Option<(u64, f64)>,
+        esd: (u64, f64),
+    }
+    let mut acc: HashMap<u64, Acc> = HashMap::new();
+    for look in looks {
+        let Some(w) = look.iter().find(|s| s.index == winner) else {
+            continue;
+        };
+        let w_mean = w.e.mean();
+        for s in look {
+            let a = acc.entry(s.index).or_insert(Acc {
+                gap_sum: 0.0,
+                n: 0,
+                sd: None,
+                esd: (0, 0.0),
+            });
+            a.gap_sum += s.e.sum - s.e.n as f64 * w_mean;
+            a.n += s.e.n;
+            if s.e.n >= a.esd.0 && s.e.n >= 2 {
+                a.esd = (s.e.n, s.e.var().sqrt());
+            }
+            let is_reference = s.d.sum == 0.0 && s.d.sumsq == 0.0;
+            if !is_reference && s.d.n >= 2 && a.sd.is_none_or(|(n, _)| s.d.n >= n) {
+                a.sd = Some((s.d.n, s.d.var().sqrt()));
+            }
+        }
+    }
+    let mut known: Vec<f64> = acc.values().filter_map(|a| a.sd.map(|x| x.1)).collect();
+    known.sort_by(f64::total_cmp);
+    let median = known.get(known.len() / 2).copied().unwrap_or(0.0);
+    let mut out: Vec<Estimate> = acc
+        .into_iter()
+        .map(|(index, a)| Estimate {
+            index,
+            gap: if a.n == 0 {
+                0.0
+            } else {
+                a.gap_sum / a.n as f64
+            },
+            sd: a.sd.map_or(median, |x| x.1),
+            esd: a.esd.1,
+        })
+        .collect();
+    out.sort_by_key(|e| e.index);
+    out
+}
+
+/// The run a forecast simulates: its kept fragments and racing parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shape {
+    pub fragments: usize,
+    pub first_sample: usize,
+    pub growth: usize,
+    pub early_look: usize,
+    pub pilot: usize,
+    pub keep: f64,
+    pub top: usize,
+    pub confidence: f64,
+    pub bound: Bound,
+    pub paired: bool,
+    pub shards: usize,
+}
+
+impl Shape {
+    /// The race of `cfg` on `fragments` kept fragments.
+    pub fn of(cfg: &SweepConfig, fragments: usize) -> Shape {
+        Shape {
+            fragments,
+            first_sample: cfg.first_sample,
+            growth: cfg.growth,
+            early_look: cfg.early_look,
+            pilot: cfg.pilot,
+            keep: cfg.keep,
+            top: cfg.top,
+            confidence: cfg.confidence,
+            bound: cfg.bound,
+            paired: cfg.paired,
+            shards: cfg.shard[1],
+        }
+    }
+}
+
+/// Simulated runs of a race ([`simulate`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Forecast {
+    pub replicates: usize,
+    /// Mean LP solves per run (stage references and the pilot included).
+    pub lp_solves: f64,
+    /// 10th and 90th percentile of the runs' LP solves.
+    pub range: (u64, u64),
+    /// Mean LP solves of each candidate's own scoring (the fragments it was scored on), in the
+    /// order of the estimates.
+    pub per_candidate: Vec<f64>,
+    /// Mean candidates entering each stage (0 for a run that stopped before it).
+    pub stages: Vec<f64>,
+}
+
+/// `replicates` runs of the race `shape` on candidates with the true gaps and spreads `est`
+/// (sorted by index, as the run orders its candidates), each seeded from `seed` and its
+/// number, in parallel; the same inputs give the same forecast.
+pub fn simulate(est: &[Estimate], shape: &Shape, replicates: usize, seed: u64) -> Forecast {
+    let runs: Vec<Run> = (0..replicates.max(1) as u64)
+        .into_par_iter()
+        .map(|r| {
+            let mut rng = ChaCha8Rng::seed_from_u64(seed ^ r.wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            one_run(est, shape, &mut rng)
+        })
+        .collect();
+    let k = runs.len() as f64;
+    let mut totals: Vec<u64> = runs.iter().map(|r| r.lp_solves).collect();
+    totals.sort_unstable();
+    let pick = |q: f64| totals[(q * (totals.len() - 1) as f64).round() as usize];
+    let mut per_candidate = vec![0.0; est.len()];
+    let mut stages: Vec<f64> = Vec::new();
+    for r in &runs {
+        for (p, &x) in per_candidate.iter_mut().zip(&r.per_candidate) {
+            *p += x as f64 / k;
+        }
+        if stages.len() < r.stages.len() {
+            stages.resize(r.stages.len(), 0.0);
+        }
+        for (s, &x) in stages.iter_mut().zip(&r.stages) {
+            *s += x as f64 / k;
+        }
+    }
+    Forecast {
+        replicates: runs.len(),
+        lp_solves: totals.iter().map(|&t| t as f64).sum::<f64>() / k,
+        range: (pick(0.1), pick(0.9)),
+        per_candidate,
+        stages,
+    }
+}
+
+/// One simulated run.
+struct Run {
+    lp_solves: u64,
+    per_candidate: Vec<u64>,
+    stages: Vec<u64>,
+}
+
+/// A look's sums of one candidate: fragments and Σ of its simulated per-fragment errors.
+#[derive(Clone, Copy, Default)]
+struct Sums {
+    n: u64,
+    sum: f64,
+}
+
+impl Sums {
+    fn mean(&self) -> f64 {
+        self.sum / self.n.max(1) as f64
+    }
+}
+
+/// One run of the race of `shape` (the driver of `sweep::racing` on simulated look means).
+fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
+    let n = est.len();
+    let mut run = Run {
+        lp_solves: 0,
+        per_candidate: vec![0; n],
+        stages: Vec::new(),
+    };
+    if n == 0 || shape.fragments == 0 {
+        return run;
+    }
+    let (pilot, plan) = race::blocks(shape.fragments, shape.first_sample, shape.growth);
+    let planned_looks: usize = plan
+        .iter()
+        .map(|r| race::looks(r.len(), shape.early_look).len())
+        .sum();
+    // Sum of c's errors over m fragments: m·g_c + √m·σ_c/√2 · N(0, 1).
+    let mut draw = |c: usize, m: usize| -> f64 {
+        let z: f64 = StandardNormal.sample(rng);
+        m as f64 * est[c].gap + (m as f64 / 2.0).sqrt() * est[c].sd * z
+    };
+    let mut cur: Vec<usize> = (0..n).collect();
+    let p = shape.pilot.clamp(1, n);
+    run.lp_solves += (p * pilot.len()) as u64;
+    let pilot_sums: Vec<(usize, f64)> = (0..p)
+        .map(|k| cur[k * n / p])
+        .map(|c| (c, draw(c, pilot.len())))
+        .collect();
+    let mut reference = pilot_sums
+        .iter()
+        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+        .expect("p ≥ 1")
+        .0;
+    let mut pooled = vec![Sums::default(); n];
+    let mut stages_run = 0;
+    for block in &plan {
+        if cur.len() <= 1 {
+            break;
+        }
+        run.stages.push(cur.len() as u64);
+        let rule = Rule {
+            delta: race::stage_delta(
+                1.0 - shape.confidence,
+                planned_looks,
+                cur.len(),
+                shape.shards,
+            ),
+            bound: shape.bound,
+            paired: shape.paired,
+            keep: shape.keep,
+            top: shape.top,
+            width: 1.0,
+        };
+        let looks = race::looks(block.len(), shape.early_look);
+        let mut acc: HashMap<usize, Sums> = HashMap::with_capacity(cur.len());
+        let mut alive = cur.clone();
+        for (j, part) in looks.iter().enumerate() {
+            let m = part.len();
+            run.lp_solves += ((alive.len() + 1) * m) as u64;
+            for &c in &alive {
+                run.per_candidate[c] += m as u64;
+            }
+            let scored = alive
+                .iter()
+                .copied()
+                .chain((!alive.contains(&reference)).then_some(reference));
+            for c in scored.collect::<Vec<_>>() {
+                let x = draw(c, m);
+                let a = acc.entry(c).or_default();
+                a.n += m as u64;
+                a.sum += x;
+            }
+            let r = acc[&reference];
+            let stats: Vec<StageStats> = alive
+                .iter()
+                .map(|&c| stage_stats(&est[c], acc[&c], r, c == reference))
+                .collect();
+            let rank: Vec<f64> = alive
+                .iter()
+                .map(|&c| {
+                    let (p, a) = (pooled[c], acc[&c]);
+                    (p.sum + a.sum) / (p.n + a.n) as f64
+                })
+                .collect();
+            let look_rule = if j + 1 == looks.len() {
+                rule
+            } else {
+                Rule { keep: 1.0, ..rule }
+            };
+            let decisions = race::decide(&stats, &rank, est[reference].index, &look_rule);
+            alive = alive
+                .iter()
+                .zip(&decisions)
+                .filter(|(_, d)| d.is_none())
+                .map(|(&c, _)| c)
+                .collect();
+        }
+        for &c in &cur {
+            let a = acc[&c];
+            pooled[c].n += a.n;
+            pooled[c].sum += a.sum;
+        }
+        cur = alive;
+        stages_run += 1;
+        if let Some(&best) = cur.iter().min_by(|&&a, &&b| {
+            pooled[a]
+                .mean()
+                .total_cmp(&pooled[b].mean())
+                .then(est[a].index.cmp(&est[b].index))
+        }) {
+            reference = best;
+        }
+    }
+    // The survivors on every fragment they have not seen (`racing::Race::complete`).
+    let rest = if stages_run > 0 {
+        pilot.len() + plan[stages_run..].iter().map(|r| r.len()).sum::<usize>()
+    } else {
+        shape.fragments
+    };
+    if !cur.is_empty() && rest > 0 {
+        run.lp_solves += ((cur.len() + 1) * rest) as u64;
+        for &c in &cur {
+            run.per_candidate[c] += rest as u64;
+        }
+    }
+    run
+}
+
+/// A candidate's statistics on a look from its simulated sums `a` and the reference's `r`:
+/// means from the sums, spreads σ_c (paired) and its error spread (unpaired); the reference's
+/// own differences are 0, as in a run.
+fn stage_stats(e: &Estimate, a: Sums, r: Sums, is_reference: bool) -> StageStats {
+    let moments = |n: u64, mean: f64, sd: f64| {
+        let nf = n as f64;
+        Moments::new(n, nf * mean, (nf - 1.0) * sd * sd + nf * mean * mean)
+    };
+    StageStats {
+        index: e.index,
+        e: moments(a.n, a.mean(), e.esd),
+        d: if is_reference {
+            Moments::new(a.n, 0.0, 0.0)
+        } else {
+            moments(a.n, a.mean() - r.mean(), e.sd)
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shape(fragments: usize) -> Shape {
+        Shape {
+            fragments,
+            first_sample: 64,
+            growth: 4,
+            early_look: 0,
+            pilot: 4,
+            keep: 0.25,
+            top: 2,
+            confidence: 0.99,
+            bound: Bound::Normal,
+            paired: true,
+            shards: 1,
+        }
+    }
+
+    fn looks_of(rows: &[(u64, [f64; 5])]) -> Vec<StageStats> {
+        rows.iter()
+            .map(|&(index, [n, sum, sumsq, dsum, dsumsq])| StageStats {
+                index,
+                e: Moments::new(n as u64, sum, sumsq),
+                d: Moments::new(n as u64, dsum, dsumsq),
+            })
+            .collect()
+    }
+
+    /// Gaps are fragment-weighted over the looks a candidate shares with the winner; σ comes
+    /// from its largest look as a non-reference, else the median of the others.
+    #[test]
+    fn estimates_pool_gaps_over_shared_looks() {
+        // Look 0 (4 fragments): winner 7 mean 1.0, candidate 3 mean 1.5, reference 9 (d = 0).
+        // Look 1 (8 fragments): winner 7 mean 2.0 (the reference), candidate 3 mean 2.25.
+        let l0 = looks_of(&[
+            (3, [4.0, 6.0, 10.0, 2.0, 2.0]),
+            (7, [4.0, 4.0, 5.0, 1.0, 1.0]),
+            (9, [4.0, 3.0, 3.0, 0.0, 0.0]),
+        ]);
+        let l1 = looks_of(&[
+            (3, [8.0, 18.0, 41.0, 2.0, 0.625]),
+            (7, [8.0, 16.0, 33.0, 0.0, 0.0]),
+        ]);
+        let e = estimates(&[l0, l1], 7);
+        assert_eq!(e.iter().map(|x| x.index).collect::<Vec<_>>(), [3, 7, 9]);
+        // (4·0.5 + 8·0.25) / 12.
+        assert!((e[0].gap - 4.0 / 12.0).abs() < 1e-15);
+        assert_eq!(e[1].gap, 0.0);
+        assert!((e[2].gap + 0.25).abs() < 1e-15);
+        // Candidate 3: look 1, var = (0.625 − 4/8)/7.
+        assert!((e[0].sd - (0.125f64 / 7.0).sqrt()).abs() < 1e-15);
+        // Winner 7: look 0 only (it is the reference of look 1): var = (1 − 1/4)/3.
+        assert!((e[1].sd - 0.5).abs() < 1e-15);
+        // Reference 9 on its only look: the median of the others' σ (sorted, upper middle).
+        assert_eq!(e[2].sd, e[1].sd.max(e[0].sd));
+    }
+
+    /// Candidates far worse than the best leave at the first look and only the best is left:
+    /// the pilot, stage 0 with every candidate and the best on the rest of the fragments.
+    #[test]
+    fn clear_gaps_end_the_race_after_stage_zero() {
+        let est: Vec<Estimate> = (0..40u64)
+            .map(|i| Estimate {
+                index: i,
+                gap: if i == 0 { 0.0 } else { 1.0 },
+                sd: 0.1,
+                esd: 0.5,
+            })
+            .collect();
+        let s = Shape {
+            pilot: 40,
+            ..shape(4096)
+        };
+        let f = simulate(&est, &s, 8, 1);
+        let (pilot, blocks) = (64u64, 64u64);
+        let rest = 4096 - blocks;
+        assert_eq!(f.lp_solves, (40 * pilot + 41 * blocks + 2 * rest) as f64);
+        assert_eq!(f.range, (f.lp_solves as u64, f.lp_solves as u64));
+        assert_eq!(f.stages, [40.0]);
+        assert_eq!(f.per_candidate[0], (blocks + rest) as f64);
+        assert_eq!(f.per_candidate[1], blocks as f64);
+    }
+
+    /// Identical candidates never leave by confidence at δ ≈ 1e-4 (a few in a million looks),
+    /// so every stage is the cap's: the simulated runs are the fixed schedule.
+    #[test]
+    fn ties_follow_the_cap() {
+        let est: Vec<Estimate> = (0..256u64)
+            .map(|index| Estimate {
+                index,
+                gap: 0.0,
+                sd: 0.2,
+                esd: 0.3,
+            })
+            .collect();
+        let f = simulate(&est, &shape(8192), 16, 3);
+        // Blocks 64, 256, 1024, 4096, then 2688; the cap 256 → 64 → 16 → 4 → 2 (top).
+        assert_eq!(f.stages, [256.0, 64.0, 16.0, 4.0, 2.0]);
+        let lp = 4 * 64 + 257 * 64 + 65 * 256 + 17 * 1024 + 5 * 4096 + 3 * 2688 + 3 * 64;
+        assert_eq!(f.lp_solves, lp as f64);
+    }
+
+    /// At stage 0 a candidate whose gap to the reference is exactly the run's threshold
+    /// z·σ/√n leaves by confidence with probability 1/2 (the difference of two look means is
+    /// normal around it): counted over many simulated runs, the share of 200 such candidates
+    /// that reach stage 1 is 1/2 within sampling error (half the noise is the reference's,
+    /// shared by the run's candidates, so runs are the independent units).
+    #[test]
+    fn stage_zero_eliminations_match_the_normal_model() {
+        let s = Shape {
+            pilot: 1,
+            keep: 1.0,
+            top: 1000,
+            ..shape(4 * 64)
+        };
+        let (pilot, blocks) = race::blocks(s.fragments, s.first_sample, s.growth);
+        assert_eq!((pilot.len(), blocks[0].len(), blocks.len()), (64, 64, 2));
+        let k = 200;
+        let delta = race::stage_delta(0.01, 2, k + 1, 1);
+        let z = race::normal_quantile(1.0 - delta);
+        let (sd, n) = (1.0, 64.0f64);
+        // The reference (index 0, the pilot's only candidate) is far ahead of the others.
+        let mut est = vec![Estimate {
+            index: 0,
+            gap: -10.0,
+            sd,
+            esd: 1.0,
+        }];
+        est.extend((1..=k as u64).map(|index| Estimate {
+            index,
+            gap: -10.0 + z * sd / n.sqrt(),
+            sd,
+            esd: 1.0,
+        }));
+        let runs = 2000;
+        let f = simulate(&est, &s, runs, 11);
+        let stay = (f.stages[1] - 1.0) / k as f64;
+        // Per run the share that stays is Φ(Z) for the reference's shared noise Z: variance
+        // 1/12, plus the binomial part.
+        let se = ((1.0 / 12.0 + 0.25 / k as f64) / runs as f64).sqrt();
+        assert!((stay - 0.5).abs() < 4.0 * se, "stay {stay} (se {se})");
+    }
+}
