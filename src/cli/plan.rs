@@ -114,22 +114,22 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             p.share,
             count(p.lp_solves),
         );
-        let (lps, by_family, _) = p.expected();
+        let (lps, cost_by_family, _) = p.expected();
         match &p.forecast {
             Some(f) => println!(
-                "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family",
+                "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
                 f.runs,
                 stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
                 count(lps),
                 big(f.range.0),
                 big(f.range.1),
-                families(by_family),
+                families(&f.by_family),
                 duration(secs)
             ),
             None => println!(
                 "plan: expected from the proxy race: {} LP solves ({}), {} at the calibrated µs per LP of each family",
                 count(lps),
-                families(by_family),
+                families(cost_by_family),
                 duration(secs)
             ),
         }

@@ -201,114 +201,35 @@ impl Sums {
 
 /// One run of the race of `shape` (the driver of `sweep::racing` on simulated look means).
 fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
-    let n = est.len();
-    let mut run = Run {
-        lp_solves: 0,
-        per_candidate: vec![0; n],
-        stages: Vec::new(),
+    let mut sim = Sim {
+        est,
+        shape,
+        rng,
+        pooled: vec![Sums::default(); est.len()],
+        run: Run {
+            lp_solves: 0,
+            per_candidate: vec![0; est.len()],
+            stages: Vec::new(),
+        },
     };
-    if n == 0 || shape.fragments == 0 {
-        return run;
+    if est.is_empty() || shape.fragments == 0 {
+        return sim.run;
     }
     let (pilot, plan) = race::blocks(shape.fragments, shape.first_sample, shape.growth);
     let planned_looks: usize = plan
         .iter()
         .map(|r| race::looks(r.len(), shape.early_look).len())
         .sum();
-    // Sum of c's errors over m fragments: m·g_c + √m·σ_c/√2 · N(0, 1).
-    let mut draw = |c: usize, m: usize| -> f64 {
-        let z: f64 = StandardNormal.sample(rng);
-        m as f64 * est[c].gap + (m as f64 / 2.0).sqrt() * est[c].sd * z
-    };
-    let mut cur: Vec<usize> = (0..n).collect();
-    let p = shape.pilot.clamp(1, n);
-    run.lp_solves += (p * pilot.len()) as u64;
-    let pilot_sums: Vec<(usize, f64)> = (0..p)
-        .map(|k| cur[k * n / p])
-        .map(|c| (c, draw(c, pilot.len())))
-        .collect();
-    let mut reference = pilot_sums
-        .iter()
-        .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-        .expect("p ≥ 1")
-        .0;
-    let mut pooled = vec![Sums::default(); n];
+    let mut cur: Vec<usize> = (0..est.len()).collect();
+    let mut reference = sim.pilot(pilot.len());
     let mut stages_run = 0;
     for block in &plan {
         if cur.len() <= 1 {
             break;
         }
-        run.stages.push(cur.len() as u64);
-        let rule = Rule {
-            delta: race::stage_delta(
-                1.0 - shape.confidence,
-                planned_looks,
-                cur.len(),
-                shape.shards,
-            ),
-            bound: shape.bound,
-            paired: shape.paired,
-            keep: shape.keep,
-            top: shape.top,
-            width: 1.0,
-        };
-        let looks = race::looks(block.len(), shape.early_look);
-        let mut acc: HashMap<usize, Sums> = HashMap::with_capacity(cur.len());
-        let mut alive = cur.clone();
-        for (j, part) in looks.iter().enumerate() {
-            let m = part.len();
-            run.lp_solves += ((alive.len() + 1) * m) as u64;
-            for &c in &alive {
-                run.per_candidate[c] += m as u64;
-            }
-            let scored = alive
-                .iter()
-                .copied()
-                .chain((!alive.contains(&reference)).then_some(reference));
-            for c in scored.collect::<Vec<_>>() {
-                let x = draw(c, m);
-                let a = acc.entry(c).or_default();
-                a.n += m as u64;
-                a.sum += x;
-            }
-            let r = acc[&reference];
-            let stats: Vec<StageStats> = alive
-                .iter()
-                .map(|&c| stage_stats(&est[c], acc[&c], r, c == reference))
-                .collect();
-            let rank: Vec<f64> = alive
-                .iter()
-                .map(|&c| {
-                    let (p, a) = (pooled[c], acc[&c]);
-                    (p.sum + a.sum) / (p.n + a.n) as f64
-                })
-                .collect();
-            let look_rule = if j + 1 == looks.len() {
-                rule
-            } else {
-                Rule { keep: 1.0, ..rule }
-            };
-            let decisions = race::decide(&stats, &rank, est[reference].index, &look_rule);
-            alive = alive
-                .iter()
-                .zip(&decisions)
-                .filter(|(_, d)| d.is_none())
-                .map(|(&c, _)| c)
-                .collect();
-        }
-        for &c in &cur {
-            let a = acc[&c];
-            pooled[c].n += a.n;
-            pooled[c].sum += a.sum;
-        }
-        cur = alive;
+        cur = sim.stage(&cur, reference, block.len(), planned_looks);
         stages_run += 1;
-        if let Some(&best) = cur.iter().min_by(|&&a, &&b| {
-            pooled[a]
-                .mean()
-                .total_cmp(&pooled[b].mean())
-                .then(est[a].index.cmp(&est[b].index))
-        }) {
+        if let Some(best) = sim.leader(&cur) {
             reference = best;
         }
     }
@@ -319,12 +240,122 @@ fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
         shape.fragments
     };
     if !cur.is_empty() && rest > 0 {
-        run.lp_solves += ((cur.len() + 1) * rest) as u64;
-        for &c in &cur {
-            run.per_candidate[c] += rest as u64;
+        sim.score(&cur, rest);
+    }
+    sim.run
+}
+
+/// The state of one simulated run.
+struct Sim<'a, 'r> {
+    est: &'a [Estimate],
+    shape: &'a Shape,
+    rng: &'r mut ChaCha8Rng,
+    /// Each candidate's sums over every block it has seen.
+    pooled: Vec<Sums>,
+    run: Run,
+}
+
+impl Sim<'_, '_> {
+    /// Sum of candidate c's errors over m fragments: m·g_c + √(m/2)·σ_c · N(0, 1).
+    fn draw(&mut self, c: usize, m: usize) -> f64 {
+        let z: f64 = StandardNormal.sample(self.rng);
+        m as f64 * self.est[c].gap + (m as f64 / 2.0).sqrt() * self.est[c].sd * z
+    }
+
+    /// Count the LP solves of scoring `cands` and a reference on m fragments.
+    fn score(&mut self, cands: &[usize], m: usize) {
+        self.run.lp_solves += ((cands.len() + 1) * m) as u64;
+        for &c in cands {
+            self.run.per_candidate[c] += m as u64;
         }
     }
-    run
+
+    /// The stage-0 reference: the best of `pilot` evenly spaced candidates on the pilot block.
+    fn pilot(&mut self, block: usize) -> usize {
+        let n = self.est.len();
+        let p = self.shape.pilot.clamp(1, n);
+        self.run.lp_solves += (p * block) as u64;
+        let sums: Vec<(usize, f64)> = (0..p)
+            .map(|k| k * n / p)
+            .map(|c| (c, self.draw(c, block)))
+            .collect();
+        sums.iter()
+            .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
+            .expect("p ≥ 1")
+            .0
+    }
+
+    /// One stage of `cur` against `reference` on a block of `len` fragments: its looks, each
+    /// decided by [`race::decide`] (the early look by confidence only); the survivors.
+    fn stage(&mut self, cur: &[usize], reference: usize, len: usize, planned: usize) -> Vec<usize> {
+        self.run.stages.push(cur.len() as u64);
+        let shape = self.shape;
+        let rule = Rule {
+            delta: race::stage_delta(1.0 - shape.confidence, planned, cur.len(), shape.shards),
+            bound: shape.bound,
+            paired: shape.paired,
+            keep: shape.keep,
+            top: shape.top,
+            width: 1.0,
+        };
+        let looks = race::looks(len, shape.early_look);
+        let mut acc: HashMap<usize, Sums> = HashMap::with_capacity(cur.len() + 1);
+        let mut alive = cur.to_vec();
+        for (j, part) in looks.iter().enumerate() {
+            let m = part.len();
+            self.score(&alive, m);
+            let mut scored = alive.clone();
+            if !alive.contains(&reference) {
+                scored.push(reference);
+            }
+            for c in scored {
+                let x = self.draw(c, m);
+                let a = acc.entry(c).or_default();
+                a.n += m as u64;
+                a.sum += x;
+            }
+            let r = acc[&reference];
+            let stats: Vec<StageStats> = alive
+                .iter()
+                .map(|&c| stage_stats(&self.est[c], acc[&c], r, c == reference))
+                .collect();
+            let rank: Vec<f64> = alive
+                .iter()
+                .map(|&c| {
+                    let (p, a) = (self.pooled[c], acc[&c]);
+                    (p.sum + a.sum) / (p.n + a.n) as f64
+                })
+                .collect();
+            let look_rule = if j + 1 == looks.len() {
+                rule
+            } else {
+                Rule { keep: 1.0, ..rule }
+            };
+            let decisions = race::decide(&stats, &rank, self.est[reference].index, &look_rule);
+            alive = alive
+                .iter()
+                .zip(&decisions)
+                .filter(|(_, d)| d.is_none())
+                .map(|(&c, _)| c)
+                .collect();
+        }
+        for &c in cur {
+            let a = acc[&c];
+            self.pooled[c].n += a.n;
+            self.pooled[c].sum += a.sum;
+        }
+        alive
+    }
+
+    /// The candidate of `cur` with the smallest pooled mean (ties: smallest index).
+    fn leader(&self, cur: &[usize]) -> Option<usize> {
+        cur.iter().copied().min_by(|&a, &b| {
+            self.pooled[a]
+                .mean()
+                .total_cmp(&self.pooled[b].mean())
+                .then(self.est[a].index.cmp(&self.est[b].index))
+        })
+    }
 }
 
 /// A candidate's statistics on a look from its simulated sums `a` and the reference's `r`:

@@ -16,7 +16,7 @@
 
 use super::config::SweepConfig;
 use super::forecast;
-use super::results::read_rows;
+use super::results::{read_rows, Row};
 use super::select;
 use super::sweep::{race_looks, run_sweep, Hooks, Outcome};
 use super::Scorer;
@@ -261,16 +261,20 @@ pub struct Expected {
     /// Of the mean, the candidates' per family and the rest (stage references and the pilot).
     pub by_family: Vec<(&'static str, u64)>,
     pub other: u64,
+    /// The candidates' per family, each weighted by its cost per LP relative to its family's in
+    /// the proxy race ([`relative_cost`]): what the calibration's µs per family are applied to.
+    pub cost_by_family: Vec<(&'static str, u64)>,
     /// Mean candidates entering each stage.
     pub stages: Vec<f64>,
 }
 
 impl Proxy {
-    /// Racing's expected LP solves, per family, and the rest: the simulated runs' when there
-    /// are any, else the proxy's own × s.
+    /// Racing's expected LP solves, those of the candidates per family as they are costed (see
+    /// [`Expected::cost_by_family`]), and the rest: the simulated runs' when there are any,
+    /// else the proxy's own × s.
     pub fn expected(&self) -> (u64, &[(&'static str, u64)], u64) {
         match &self.forecast {
-            Some(f) => (f.lp_solves, &f.by_family, f.other),
+            Some(f) => (f.lp_solves, &f.cost_by_family, f.other),
             None => (self.lp_solves, &self.by_family, self.other),
         }
     }
@@ -344,11 +348,15 @@ pub fn proxy_race(
         let est = forecast::estimates(&looks, w);
         let shape = forecast::Shape::of(cfg, order.len());
         let f = forecast::simulate(&est, &shape, FORECAST_RUNS, cfg.seed);
-        let by_family = per_family(
-            est.iter()
-                .zip(&f.per_candidate)
-                .map(|(e, &n)| (family[&e.index], n.round() as u64)),
-        );
+        let lps = || est.iter().zip(&f.per_candidate).map(|(e, &n)| (e.index, n));
+        let by_family = per_family(lps().map(|(i, n)| (family[&i], n.round() as u64)));
+        let cost = relative_cost(&rows, &family);
+        let cost_by_family = per_family(lps().map(|(i, n)| {
+            (
+                family[&i],
+                (n * cost.get(&i).unwrap_or(&1.0)).round() as u64,
+            )
+        }));
         let lp_solves = f.lp_solves.round() as u64;
         let own: u64 = by_family.iter().map(|x| x.1).sum();
         Expected {
@@ -356,6 +364,7 @@ pub fn proxy_race(
             lp_solves,
             range: f.range,
             by_family,
+            cost_by_family,
             other: lp_solves.saturating_sub(own),
             stages: f.stages,
         }
@@ -371,6 +380,28 @@ pub fn proxy_race(
         seconds,
         forecast,
     })
+}
+
+/// Each candidate's CPU time per LP in the proxy race relative to its family's (Σ seconds /
+/// Σ fragments over the family's rows): the candidates that survive to the later stages cost
+/// more than their family's average (m = 4: exp(±20z) 19–26 µs per LP in stages 2–4 against
+/// 16 µs in stage 0), while the proxy's small blocks, whose fragments lie further apart, set
+/// no level (the calibration on the run's own first block does).
+fn relative_cost(rows: &[Row], family: &HashMap<u64, &'static str>) -> HashMap<u64, f64> {
+    let mut per: HashMap<&str, (f64, u64)> = HashMap::new();
+    for r in rows.iter().filter(|r| r.fragments > 0) {
+        let e = per.entry(family[&r.index]).or_default();
+        e.0 += r.seconds;
+        e.1 += r.fragments;
+    }
+    rows.iter()
+        .filter(|r| r.fragments > 0 && r.seconds > 0.0)
+        .filter_map(|r| {
+            let (secs, n) = per[family[&r.index]];
+            let mean = secs / n as f64;
+            (mean > 0.0).then(|| (r.index, r.seconds / r.fragments as f64 / mean))
+        })
+        .collect()
 }
 
 /// LP solves summed per family, sorted by family.
@@ -563,6 +594,32 @@ mod tests {
             assert!(root.join(d).join("inner").exists(), "{d}");
         }
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// A candidate's cost is its seconds per LP over its family's (Σ seconds / Σ fragments);
+    /// rows without fragments or time get none (costed at 1).
+    #[test]
+    fn relative_cost_is_per_lp_over_the_familys() {
+        let row = |index, seconds, fragments| Row {
+            seconds,
+            fragments,
+            ..Row::plain(index, vec![])
+        };
+        let rows = [
+            row(1, 1.0, 100),
+            row(2, 3.0, 100),
+            row(3, 2.0, 400),
+            row(4, 0.0, 0),
+        ];
+        let family: HashMap<u64, &'static str> = [(1, "a"), (2, "a"), (3, "b"), (4, "b")]
+            .into_iter()
+            .collect();
+        let cost = relative_cost(&rows, &family);
+        // Family a: 4 s / 200 LPs = 0.02 s per LP; family b: 2 s / 400.
+        assert_eq!(cost[&1], 0.01 / 0.02);
+        assert_eq!(cost[&2], 0.03 / 0.02);
+        assert_eq!(cost[&3], 1.0);
+        assert!(!cost.contains_key(&4));
     }
 
     /// Family-weighted wall time: Σ_f LP_f · µs_f (unknown families and `other` at the
