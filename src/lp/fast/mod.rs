@@ -24,8 +24,8 @@
 //!   resumed with the full pricing pass (after a refactorisation) and the usual verification.
 //! * **Phase 1** uses a single artificial column: from any start basis B with x = B⁻¹c, the
 //!   artificial d = −Σ_{x_t<0} a_{B_t} replaces the most negative basic variable, which makes the
-//!   basis feasible; phase 1 then minimises the artificial's weight. Moments are infeasible when
-//!   that weight stays positive.
+//!   basis feasible; phase 1 then minimises the artificial's weight and ends as soon as it is
+//!   zero (to rounding). Moments are infeasible when that weight stays positive.
 //! * **Warm start.** The optimal basis of the previous problem is the start basis of the next one:
 //!   when the moments are unchanged (only z_f moves) it is primal feasible and phase 2 starts
 //!   at once; otherwise phase 1 starts from a nearby basis.
@@ -155,6 +155,9 @@ pub struct FastStats {
     /// Of which certified on the whole grid (as they stand or after accurate pivots): no
     /// escalation.
     pub band_certified: u64,
+    /// Phase-1 runs ended as soon as the artificial's weight reached zero (to rounding),
+    /// before pricing found no entering column.
+    pub phase1_at_zero: u64,
 }
 
 /// Index of the artificial column in a basis.

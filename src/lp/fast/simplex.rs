@@ -21,6 +21,10 @@ const ZERO_COST: f64 = 1e-13;
 const EXCHANGE_COND: f64 = 1e4;
 /// Rescues ([`FastSolver::rescue`]) allowed per run.
 const MAX_RESCUES: usize = 3;
+/// Phase 1 ends as soon as the artificial's weight x_a satisfies x_a‖d‖ ≤ this · (1 + ‖c‖):
+/// dropping it then changes B x by no more than rounding, and the phase-1 objective x_a ≥ 0 is
+/// at its least value, whatever the reduced costs say.
+const ART_ZERO: f64 = 1e-14;
 
 /// The state of one simplex run ([`FastSolver::run`]) between iterations.
 struct Run {
@@ -254,6 +258,14 @@ impl FastSolver {
             self.full_pass_skipped = true;
             return self.at_optimum(st, 0.0);
         }
+        if st.phase1 && !st.perturbed && self.artificial_at_zero(st) {
+            // Phase 1 is optimal: its objective x_a ≥ 0 has reached 0. Pricing on would only
+            // take degenerate pivots at x_a = 0 (boundary moments, such as those of one or
+            // two grid atoms, whose only representation phase 1 has just found).
+            self.stats.phase1_at_zero += 1;
+            self.duals(true, st.kf);
+            return self.drive_out_artificial(st);
+        }
         let bland = st.bland_always || st.degenerate >= DEGENERATE_LIMIT;
         let (q, dq) = self.price_step(st, bland)?;
         if dq >= -TOL_D {
@@ -273,6 +285,12 @@ impl FastSolver {
         let l = self.ratio_test(bland).ok_or(Jump::End(Outcome::Failed))?;
         self.pivot_step(st, l, q, dq);
         Ok(())
+    }
+
+    /// Phase 1 has reached its least objective: the artificial's weight x_a is zero to
+    /// rounding, x_a‖d‖ ≤ [`ART_ZERO`] (1 + ‖c‖) (never the case outside phase 1).
+    fn artificial_at_zero(&self, st: &Run) -> bool {
+        st.phase1 && self.x[st.art_pos].max(0.0) * st.art_norm <= ART_ZERO * (1.0 + st.c_norm)
     }
 
     /// The basic solution is feasible and puts no mass below z_f (grid points 0..kf).
@@ -472,8 +490,8 @@ impl FastSolver {
         self.drive_out_artificial(st)
     }
 
-    /// Feasible: drive the (zero) artificial out of the basis. With the phase-1 duals,
-    /// s = row art_pos of B⁻¹A; pick the largest pivot element.
+    /// Feasible: drive the (zero) artificial out of the basis. With the phase-1 duals
+    /// (y = row art_pos of B⁻¹), s = row art_pos of B⁻¹A; pick the largest pivot element.
     fn drive_out_artificial(&mut self, st: &mut Run) -> Result<(), Jump> {
         let (n, r) = (self.n, self.r);
         price(
@@ -619,6 +637,45 @@ mod tests {
     use super::*;
     use crate::lp::GridTable;
     use crate::Grid;
+
+    /// The moments of one grid atom, δ(z_a), lie on the boundary of the moment space: the
+    /// only representation is the atom itself, so phase 1 must reach it exactly, and from
+    /// there on (artificial weight 0) it ends instead of pricing on. Power basis m = 4 on
+    /// n = 257 points, atoms at every eighth grid point, each from the previous answer's basis:
+    /// G(z_f) = [z_a < z_f] exactly, with the atom as the support.
+    #[test]
+    fn phase1_ends_when_the_artificial_reaches_zero() {
+        use crate::lp::{MomentSolver, Status};
+        let grid = Grid::uniform(257).unwrap();
+        let table = GridTable::from_fn(&grid, 4, |z, o| {
+            for (k, v) in o.iter_mut().enumerate() {
+                *v = z.powi(k as i32 + 1);
+            }
+        })
+        .unwrap();
+        let z = grid.points().to_vec();
+        let mut s = FastSolver::new(table);
+        for a in (3..257).step_by(8) {
+            let b: Vec<f64> = (1..=4).map(|k| z[a].powi(k)).collect();
+            for zf in [z[a] - 0.01, z[a] + 0.01] {
+                let sol = s.solve(&b, zf).unwrap();
+                assert_eq!(sol.status, Status::Optimal);
+                assert_eq!(
+                    sol.g,
+                    if z[a] < zf { 1.0 } else { 0.0 },
+                    "atom {a}, z_f {zf}"
+                );
+                // The support: the atom with weight 1, degenerate columns at rounding level.
+                let heavy: Vec<_> = sol.support.iter().filter(|p| p.1 > 1e-30).collect();
+                if sol.g == 1.0 {
+                    assert_eq!(heavy, vec![&(z[a], 1.0)], "atom {a}");
+                }
+            }
+        }
+        let st = s.stats();
+        assert!(st.phase1 > 0 && st.phase1_at_zero > 0, "{st:?}");
+        assert_eq!((st.escalations, st.failed), (0, 0));
+    }
 
     /// The phase-1 set-up by one exchange equals a fresh factorisation of the basis with the
     /// artificial. (z, z², z³) on the grid {i/8}, basis z = 0, 1/4, 1/2, 3/4 and the moments of
