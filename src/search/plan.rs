@@ -384,9 +384,9 @@ pub fn proxy_race(
 
 /// Each candidate's CPU time per LP in the proxy race relative to its family's (Σ seconds /
 /// Σ fragments over the family's rows): the candidates that survive to the later stages cost
-/// more than their family's average (m = 4: exp(±20z) 19–26 µs per LP in stages 2–4 against
-/// 16 µs in stage 0), while the proxy's small blocks, whose fragments lie further apart, set
-/// no level (the calibration on the run's own first block does).
+/// more than their family's average (m = 4: exp(±20z) 19–20 µs per LP in stages 2–4 against
+/// 15.5 µs in stage 0), while the proxy's small blocks, slower per LP than the run's, set no
+/// level (the calibration on the run's own first block does).
 fn relative_cost(rows: &[Row], family: &HashMap<u64, &'static str>) -> HashMap<u64, f64> {
     let mut per: HashMap<&str, (f64, u64)> = HashMap::new();
     for r in rows.iter().filter(|r| r.fragments > 0) {
