@@ -158,6 +158,9 @@ pub struct FastStats {
     /// Phase-1 runs ended as soon as the artificial's weight reached zero (to rounding),
     /// before pricing found no entering column.
     pub phase1_at_zero: u64,
+    /// Solves given moments only that are those of a single grid point (its column equals
+    /// the transformed moments): started from that atom as from a given distribution.
+    pub single_atom: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -236,6 +239,8 @@ pub struct FastSolver {
     lo_rhs: Vec<f64>,
     /// Crossover workspace.
     cross: starts::Crossover,
+    /// Finds the grid point of single-atom moments.
+    atoms: starts::Atoms,
     /// Fast solvers on bands of the grid, for windows the whole-grid run cannot certify.
     bands: band::Bands,
 }
@@ -250,6 +255,7 @@ impl FastSolver {
         let r = ortho.r;
         let b0 = max_volume_rows(&ortho.rows, n, r);
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
+        let atoms = starts::Atoms::new(&cols, n, r);
         let cert_rows: Vec<usize> = (0..mm).filter(|&j| ortho.kept[j].is_some()).collect();
         let oscale = ortho
             .fscale
@@ -298,6 +304,7 @@ impl FastSolver {
                 coarse_idx: Vec::new(),
                 coarse_pos: vec![u32::MAX; n],
             },
+            atoms,
             ls: refine::LeastSquares {
                 sup: vec![0; r],
                 a: vec![0.0; r * r],
@@ -533,6 +540,14 @@ impl FastSolver {
         self.accurate = false;
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
+        let transformed = c_given || self.ortho.transform(moments, &mut self.u, &mut self.c);
+        // Moments of a single grid point have that point as their only representation: it is
+        // the start, as a given distribution would be.
+        let atom = match hint {
+            None if transformed => self.single_atom(),
+            _ => None,
+        };
+        let hint = hint.or(atom.as_ref().map(|a| &a[..]));
         if let Some(dist) = hint.filter(|d| d.iter().all(|&(i, w)| i as usize >= kf || w <= 0.0)) {
             // No atom below z_f: the distribution itself has the least possible mass, 0.
             if let Ok(c) = self.cert.zero_mass(moments, kf, dist) {
@@ -549,7 +564,7 @@ impl FastSolver {
                 return Ok(certified(c));
             }
         }
-        let mut verdict = if c_given || self.ortho.transform(moments, &mut self.u, &mut self.c) {
+        let mut verdict = if transformed {
             self.c0.copy_from_slice(&self.c);
             self.partial_optimum = true;
             self.full_pass_skipped = false;

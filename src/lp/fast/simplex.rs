@@ -682,11 +682,11 @@ mod tests {
         }
     }
 
-    /// The moments of one grid atom, δ(z_a), lie on the boundary of the moment space: the
-    /// only representation is the atom itself, so phase 1 must reach it exactly, and from
-    /// there on (artificial weight 0) it ends instead of pricing on. Power basis m = 4 on
-    /// n = 257 points, atoms at every eighth grid point, each from the previous answer's basis:
-    /// G(z_f) = [z_a < z_f] exactly, with the atom as the support.
+    /// The moments of two grid atoms, ¼δ(z_a) + ¾δ(z_{a+5}), lie on the boundary of the moment
+    /// space (m = 4): the only representation is the pair itself, so phase 1 must reach it
+    /// exactly, and from there on (artificial weight 0) it ends instead of pricing on. Power
+    /// basis m = 4 on n = 257 points, pairs at every eighth grid point, each from the previous
+    /// answer's basis: G(z_f) = ¼[z_a < z_f] + ¾[z_{a+5} < z_f], with the pair as the support.
     #[test]
     fn phase1_ends_when_the_artificial_reaches_zero() {
         use crate::lp::{MomentSolver, Status};
@@ -699,26 +699,33 @@ mod tests {
         .unwrap();
         let z = grid.points().to_vec();
         let mut s = FastSolver::new(table);
-        for a in (3..257).step_by(8) {
-            let b: Vec<f64> = (1..=4).map(|k| z[a].powi(k)).collect();
-            for zf in [z[a] - 0.01, z[a] + 0.01] {
+        for a in (3..250).step_by(8) {
+            let e = a + 5;
+            let b: Vec<f64> = (1..=4)
+                .map(|k| 0.25 * z[a].powi(k) + 0.75 * z[e].powi(k))
+                .collect();
+            for zf in [z[a] - 0.001, z[a] + 0.001, z[e] + 0.001] {
                 let sol = s.solve(&b, zf).unwrap();
                 assert_eq!(sol.status, Status::Optimal);
-                assert_eq!(
-                    sol.g,
-                    if z[a] < zf { 1.0 } else { 0.0 },
-                    "atom {a}, z_f {zf}"
+                let want = 0.25 * (z[a] < zf) as u8 as f64 + 0.75 * (z[e] < zf) as u8 as f64;
+                assert!(
+                    (sol.g - want).abs() <= 1e-12,
+                    "pair {a}, z_f {zf}: {}",
+                    sol.g
                 );
-                // The support: the atom with weight 1, degenerate columns at rounding level.
-                let heavy: Vec<_> = sol.support.iter().filter(|p| p.1 > 1e-30).collect();
-                if sol.g == 1.0 {
-                    assert_eq!(heavy, vec![&(z[a], 1.0)], "atom {a}");
-                }
+                // The support: the pair, degenerate columns at rounding level.
+                let heavy: Vec<_> = sol.support.iter().filter(|p| p.1 > 1e-12).collect();
+                assert_eq!(heavy.len(), 2, "pair {a}: {heavy:?}");
+                assert!(
+                    (heavy[0].0, heavy[1].0) == (z[a], z[e]),
+                    "pair {a}: {heavy:?}"
+                );
+                assert!((heavy[0].1 - 0.25).abs() < 1e-12 && (heavy[1].1 - 0.75).abs() < 1e-12);
             }
         }
         let st = s.stats();
         assert!(st.phase1 > 0 && st.phase1_at_zero > 0, "{st:?}");
-        assert_eq!((st.escalations, st.failed), (0, 0));
+        assert_eq!((st.escalations, st.failed, st.single_atom), (0, 0, 0));
     }
 
     /// The phase-1 set-up by one exchange equals a fresh factorisation of the basis with the
