@@ -386,15 +386,18 @@ fn distribution_above_zf_is_its_own_optimum() {
 
 /// After `reset` a solver answers bit for bit as a new one (what `evaluate` relies on to give
 /// the same bits however its chunks are scheduled): random and kernel distributions, through
-/// `solve` (moments) and `solve_distribution`, on the power basis and a steep exponential one.
+/// `solve` (moments) and `solve_distribution`, on power bases (m = 4, 6) and a steep
+/// exponential one.
 #[test]
 fn reset_answers_as_a_new_solver() {
     let mut rng = ChaCha8Rng::seed_from_u64(21);
     let mut differs_without_reset = 0;
-    for (t, n) in [(0, 1024), (1, 256), (0, 4096)] {
+    for (t, n) in [(0, 1024), (1, 256), (0, 4096), (2, 1024)] {
         let grid = Grid::uniform(n).unwrap();
         let table = if t == 0 {
             power_table(&grid, 4).unwrap()
+        } else if t == 2 {
+            power_table(&grid, 6).unwrap()
         } else {
             GridTable::from_fn(&grid, 4, |z, out| {
                 out.copy_from_slice(&[(40.0 * z).exp(), z, z * z, (10.0 * (z - 0.5)).tanh()])

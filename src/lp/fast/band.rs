@@ -309,7 +309,7 @@ impl FastSolver {
         // No certificate pass stands in for the full pricing pass here.
         self.partial_optimum = false;
         self.full_pass_skipped = false;
-        match self.attempts(kf, Some(dist)) {
+        match self.attempts(kf, Some(dist), false) {
             Verdict::Optimal if self.basis.iter().all(|&i| i < self.n) => {
                 self.remember_optimal();
                 Some(self.basis.clone())

@@ -54,6 +54,7 @@ mod band;
 mod linalg;
 mod ortho;
 mod price;
+mod recognise;
 mod refine;
 mod simplex;
 mod starts;
@@ -159,8 +160,14 @@ pub struct FastStats {
     /// before pricing found no entering column.
     pub phase1_at_zero: u64,
     /// Solves given moments only that are those of a single grid point (its column equals
-    /// the transformed moments): started from that atom as from a given distribution.
+    /// the transformed moments).
     pub single_atom: u64,
+    /// Solves given moments only that are those of two grid points under a power basis
+    /// (recognised by Prony's method): started from that pair.
+    pub two_atoms: u64,
+    /// Solves given moments only started from a basis built from the moments
+    /// ([`recognise`]: boundary atoms, or the canonical representation through z_f).
+    pub moments_starts: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -239,8 +246,8 @@ pub struct FastSolver {
     lo_rhs: Vec<f64>,
     /// Crossover workspace.
     cross: starts::Crossover,
-    /// Finds the grid point of single-atom moments.
-    atoms: starts::Atoms,
+    /// The starts from moments alone ([`recognise`]).
+    recognise: recognise::Recognise,
     /// Fast solvers on bands of the grid, for windows the whole-grid run cannot certify.
     bands: band::Bands,
 }
@@ -255,7 +262,7 @@ impl FastSolver {
         let r = ortho.r;
         let b0 = max_volume_rows(&ortho.rows, n, r);
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
-        let atoms = starts::Atoms::new(&cols, n, r);
+        let recognise = recognise::Recognise::new(&table, &cols, r);
         let cert_rows: Vec<usize> = (0..mm).filter(|&j| ortho.kept[j].is_some()).collect();
         let oscale = ortho
             .fscale
@@ -304,7 +311,7 @@ impl FastSolver {
                 coarse_idx: Vec::new(),
                 coarse_pos: vec![u32::MAX; n],
             },
-            atoms,
+            recognise,
             ls: refine::LeastSquares {
                 sup: vec![0; r],
                 a: vec![0.0; r * r],
@@ -541,13 +548,14 @@ impl FastSolver {
         self.b_orig.copy_from_slice(moments);
         let kf = self.table.grid().points().partition_point(|&z| z < zf);
         let transformed = c_given || self.ortho.transform(moments, &mut self.u, &mut self.c);
-        // Moments of a single grid point have that point as their only representation: it is
-        // the start, as a given distribution would be.
-        let atom = match hint {
-            None if transformed => self.single_atom(),
+        // Moments of one grid point, or of two under a power basis, have those points as their
+        // only representation: the distribution, as if given.
+        let atoms = match hint {
+            None if transformed => self.boundary_atoms(moments),
             _ => None,
         };
-        let hint = hint.or(atom.as_ref().map(|a| &a[..]));
+        let moments_only = hint.is_none() && transformed;
+        let hint = hint.or(atoms.as_ref().map(|(a, k)| &a[..*k]));
         if let Some(dist) = hint.filter(|d| d.iter().all(|&(i, w)| i as usize >= kf || w <= 0.0)) {
             // No atom below z_f: the distribution itself has the least possible mass, 0.
             if let Ok(c) = self.cert.zero_mass(moments, kf, dist) {
@@ -568,7 +576,10 @@ impl FastSolver {
             self.c0.copy_from_slice(&self.c);
             self.partial_optimum = true;
             self.full_pass_skipped = false;
-            self.attempts(kf, hint)
+            // From the moments alone: a start basis built from them, not the crossover.
+            let given = moments_only && self.moments_start(moments, kf, hint);
+            self.stats.moments_starts += given as u64;
+            self.attempts(kf, hint.filter(|_| !given), given)
         } else {
             // A dependent function's moment contradicts the others: its dependency is the
             // Farkas ray, checked on every row (the usual certifier holds the kept rows only).

@@ -1,10 +1,9 @@
-//! Where a simplex run starts: the sequence of attempts (given distribution, warm basis, cold
-//! basis, Bland's rule), the crossover from a known distribution to a basic feasible solution,
+//! Where a simplex run starts: the sequence of attempts (given distribution, a basis built
+//! from the moments, warm basis, cold basis, Bland's rule), the crossover from a known distribution to a basic feasible solution,
 //! and the warm-start memory of the last optimum.
 
 use super::linalg::{complete_basis, dot, norm};
 use super::{FastSolver, Outcome, Verdict, REFACTOR_EVERY};
-use crate::lp::pricing::ColumnTable;
 
 /// The basis a simplex attempt starts from.
 #[derive(Clone, Copy)]
@@ -13,65 +12,12 @@ enum Start {
     Hint,
     /// The last optimal basis.
     Warm,
+    /// The basis built from the moments ([`super::recognise`]).
+    Given,
     /// The well-conditioned cold-start basis.
     Cold,
     /// The basis the previous attempt ended on.
     Current,
-}
-
-/// Relative distance ‖c − a_j‖/‖c‖ up to which transformed moments c are taken as those of
-/// the single grid point j (rounding of c = √n R⁻ᵀ b̄ is far below; a second atom of weight
-/// w moves c by about w‖a_i − a_j‖).
-const ATOM_TOL: f64 = 1e-12;
-
-/// Rows of the transformed LP at most (m ≤ 12 functions and the constant).
-const MAX_ROWS: usize = 13;
-
-/// The grid point of single-atom moments ([`FastSolver::single_atom`]): a coordinate k ≥ 1
-/// strictly monotone over the grid, with its direction (+1 increasing), for a binary search;
-/// else the columns with their squared norms as a last row, (a_i, ‖a_i‖²), whose scan with
-/// y = (2c, −1) and no step finds the column nearest c (least ‖a_i‖² − 2 c·a_i).
-pub(super) struct Atoms {
-    pub(super) axis: Option<(usize, f64)>,
-    pub(super) table: ColumnTable,
-}
-
-impl Atoms {
-    /// For the transformed columns `cols` (column-major, cols[k·n + i] = a_i[k]) of r rows.
-    pub(super) fn new(cols: &[f64], n: usize, r: usize) -> Atoms {
-        let coordinate = |k: usize| &cols[k * n..(k + 1) * n];
-        let monotone =
-            |k: usize, sign: f64| coordinate(k).windows(2).all(|w| sign * w[0] < sign * w[1]);
-        let axis = (1..r)
-            .flat_map(|k| [(k, 1.0), (k, -1.0)])
-            .find(|&(k, sign)| monotone(k, sign));
-        let table = if axis.is_some() || r > MAX_ROWS {
-            ColumnTable::default()
-        } else {
-            ColumnTable::new(r + 1, n, |k, i| {
-                if k < r {
-                    cols[k * n + i]
-                } else {
-                    (0..r).map(|t| cols[t * n + i] * cols[t * n + i]).sum()
-                }
-            })
-        };
-        Atoms { axis, table }
-    }
-}
-
-/// The first i in 0..n with `!below(i)` (n if none), for `below` true on a prefix.
-fn partition_point(n: usize, below: impl Fn(usize) -> bool) -> usize {
-    let (mut lo, mut hi) = (0, n);
-    while lo < hi {
-        let mid = (lo + hi) / 2;
-        if below(mid) {
-            lo = mid + 1;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
 }
 
 /// Smallest pivot element of a crossover step.
@@ -105,8 +51,16 @@ pub(super) struct Crossover {
 impl FastSolver {
     /// Simplex runs from the hint, warm or cold bases, retrying after numerical trouble
     /// (two cold runs, the second with Bland's rule throughout).
-    pub(super) fn attempts(&mut self, kf: usize, hint: Option<&[(u32, f64)]>) -> Verdict {
-        let (start, warm_or_cold) = self.first_start(hint.is_some());
+    pub(super) fn attempts(
+        &mut self,
+        kf: usize,
+        hint: Option<&[(u32, f64)]>,
+        given: bool,
+    ) -> Verdict {
+        let (mut start, warm_or_cold) = self.first_start(hint.is_some());
+        if given {
+            start = Start::Given;
+        }
         self.attempts_from(kf, hint, start, warm_or_cold)
     }
 
@@ -158,7 +112,7 @@ impl FastSolver {
                     if cold_runs >= 2 || stash.is_some() {
                         break;
                     }
-                    start = if matches!(start, Start::Hint) {
+                    start = if matches!(start, Start::Hint | Start::Given) {
                         warm_or_cold
                     } else {
                         Start::Cold
@@ -196,6 +150,11 @@ impl FastSolver {
     fn load_start(&mut self, start: Start, cold_runs: &mut usize) {
         match start {
             Start::Hint | Start::Current => {}
+            Start::Given => {
+                self.mark_basic(false);
+                self.basis.copy_from_slice(&self.recognise.basis);
+                self.mark_basic(true);
+            }
             Start::Warm => {
                 self.mark_basic(false);
                 let wb = self.warm.basis.as_ref().expect("warm basis");
@@ -246,49 +205,6 @@ impl FastSolver {
             self.warm.basis = Some(basis.to_vec());
             self.warm.last_c.copy_from_slice(&self.c0);
         }
-    }
-
-    /// The grid point whose column equals the transformed moments c to rounding,
-    /// ‖c − a_j‖ ≤ [`ATOM_TOL`] ‖c‖, as a one-atom distribution: such moments lie on the
-    /// boundary of the moment space and that atom is their only representation.
-    pub(super) fn single_atom(&mut self) -> Option<[(u32, f64); 1]> {
-        let r = self.r;
-        let gap = |j: usize| {
-            let aj = &self.ortho.rows[j * r..(j + 1) * r];
-            aj.iter()
-                .zip(&self.c)
-                .map(|(a, c)| (a - c) * (a - c))
-                .sum::<f64>()
-        };
-        let j = match self.atoms.axis {
-            Some((k, sign)) => {
-                // a_i[k] is strictly monotone in i: the two grid points around c[k].
-                let key = |i: usize| sign * self.ortho.rows[i * r + k];
-                let p = partition_point(self.n, |i| key(i) < sign * self.c[k]);
-                let lo = p.saturating_sub(1);
-                let hi = p.min(self.n - 1);
-                if gap(lo) <= gap(hi) {
-                    lo
-                } else {
-                    hi
-                }
-            }
-            None if r > MAX_ROWS => return None,
-            None => {
-                let near = &self.atoms.table;
-                let mut y = [0.0; MAX_ROWS + 1];
-                for (yk, ck) in y.iter_mut().zip(&self.c) {
-                    *yk = 2.0 * ck;
-                }
-                y[r] = -1.0;
-                let none = (usize::MAX, f64::INFINITY);
-                near.scan(&y[..r + 1], 0, 0, near.blocks(), none).0
-            }
-        };
-        (j < self.n && gap(j).sqrt() <= ATOM_TOL * norm(&self.c)).then(|| {
-            self.stats.single_atom += 1;
-            [(j as u32, 1.0)]
-        })
     }
 
     /// The support of a distribution with at most r atoms, completed to r columns from the
@@ -611,85 +527,8 @@ fn last_max(v: &[f64]) -> (f64, usize) {
 
 #[cfg(test)]
 mod tests {
-    use super::{last_max, partition_point};
-    use crate::lp::{FastSolver, GridTable, MomentSolver, Status};
-    use crate::Grid;
+    use super::last_max;
     use rand::{Rng, SeedableRng};
-
-    /// Moments of one grid point z_j have that atom as their only representation: G is
-    /// [z_j < z_f] with support δ(z_j) (to rounding), found by the binary search on a monotone
-    /// coordinate (power basis) and by the nearest-column scan (trigonometric basis, no
-    /// monotone coordinate); two neighbouring atoms are not taken for one.
-    #[test]
-    fn single_atom_moments_start_from_that_atom() {
-        let power = |z: f64, o: &mut [f64]| {
-            for (k, v) in o.iter_mut().enumerate() {
-                *v = z.powi(k as i32 + 1);
-            }
-        };
-        let trig = |z: f64, o: &mut [f64]| {
-            let t = std::f64::consts::TAU * z;
-            o.copy_from_slice(&[t.sin(), t.cos(), (2.0 * t).sin(), (2.0 * t).cos()]);
-        };
-        type Basis<'a> = &'a dyn Fn(f64, &mut [f64]);
-        let tables: [(Basis, bool); 2] = [(&power, true), (&trig, false)];
-        for (f, monotone) in tables {
-            let grid = Grid::uniform(301).unwrap();
-            let table = GridTable::from_fn(&grid, 4, f).unwrap();
-            let mut s = FastSolver::new(table.clone());
-            assert_eq!(s.atoms.axis.is_some(), monotone);
-            let z = grid.points();
-            let mut b = [0.0; 4];
-            // (The trigonometric columns of z = 0 and z = 1 coincide: the ends are left out.)
-            for j in (1..300).step_by(7) {
-                f(z[j], &mut b);
-                for zf in [z[j] - 1e-3, z[j] + 1e-3] {
-                    let before = s.stats().single_atom;
-                    let sol = s.solve(&b, zf).unwrap();
-                    assert_eq!(s.stats().single_atom, before + 1, "z = {}", z[j]);
-                    assert_eq!(sol.status, Status::Optimal);
-                    let want = if z[j] < zf { 1.0 } else { 0.0 };
-                    assert!((sol.g - want).abs() <= 1e-12, "{} {want}", sol.g);
-                    // Other basic points carry rounding-level weights at most.
-                    for &(zi, w) in &sol.support {
-                        let at = if zi == z[j] { 1.0 } else { 0.0 };
-                        assert!((w - at).abs() <= 1e-12, "{:?}", sol.support);
-                    }
-                }
-            }
-            // Half the mass on each of two neighbours: not one atom; G as from the distribution.
-            let (mut b1, mut b2) = ([0.0; 4], [0.0; 4]);
-            f(z[150], &mut b1);
-            f(z[151], &mut b2);
-            let mix: Vec<f64> = b1.iter().zip(&b2).map(|(u, v)| 0.5 * (u + v)).collect();
-            let before = s.stats().single_atom;
-            let g = s.solve(&mix, 0.5).unwrap().g;
-            assert_eq!(s.stats().single_atom, before);
-            let mut d = FastSolver::new(table);
-            let want = d
-                .solve_distribution(&[(150, 0.5), (151, 0.5)], 0.5)
-                .unwrap()
-                .g;
-            assert!((g - want).abs() < 1e-9, "{g} {want}");
-        }
-    }
-
-    /// The first index where the predicate turns false, as the slice method finds it.
-    #[test]
-    fn partition_point_matches_the_slice_method() {
-        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
-        for _ in 0..500 {
-            let mut v: Vec<u32> = (0..rng.gen_range(0..30))
-                .map(|_| rng.gen_range(0..20))
-                .collect();
-            v.sort();
-            let t = rng.gen_range(0..21);
-            assert_eq!(
-                partition_point(v.len(), |i| v[i] < t),
-                v.partition_point(|&x| x < t)
-            );
-        }
-    }
 
     /// Against the definition (fold then rposition) on random vectors with ties, −∞ and NaN.
     #[test]
