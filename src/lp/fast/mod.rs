@@ -29,6 +29,11 @@
 //! * **Warm start.** The optimal basis of the previous problem is the start basis of the next one:
 //!   when the moments are unchanged (only z_f moves) it is primal feasible and phase 2 starts
 //!   at once; otherwise phase 1 starts from a nearby basis.
+//! * **Start from the moments alone** ([`recognise`]). Moments of one grid point, or of two
+//!   under a power basis (Prony's method), are the boundary of the moment space and those
+//!   points their only representation: with no atom below z_f they are the answer, otherwise
+//!   they and their neighbours towards z_f start the run. Interior moments under z, …, z⁴ start
+//!   from the grid points around the canonical representation through z_f (Algorithm 3).
 //! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
 //!   case: the moments are those of a kernel's depth distribution). The moments are formed in
 //!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible
