@@ -89,7 +89,7 @@ impl FastSolver {
     }
 
     /// The start basis from the moments alone into `recognise.basis`; false when there is
-    /// none. With `atoms` (boundary moments): each atom and its grid neighbour towards z_f,
+    /// none. With `atoms` (boundary moments) and r = 5 rows: each atom and its grid neighbour towards z_f,
     /// where the optimal dual polynomial touches the step from below, then the first grid
     /// point at or above z_f and the ends of the grid. Otherwise, under the power basis with
     /// m = 4: the canonical representation through z_kf ([`Self::canonical_atoms`]), each of
@@ -104,6 +104,9 @@ impl FastSolver {
         let mut basis = std::mem::take(&mut self.recognise.basis);
         basis.clear();
         match atoms {
+            // More rows than z, …, z⁴ would fill the basis with neighbouring grid points (cond
+            // beyond 1e12 under a power basis): the crossover from the atoms instead.
+            Some(_) if self.r != 5 => return false,
             Some(atoms) => {
                 for &(i, _) in atoms {
                     let i = i as usize;
