@@ -299,7 +299,7 @@ fn partition_point(n: usize, below: impl Fn(usize) -> bool) -> usize {
 #[cfg(test)]
 mod tests {
     use super::{partition_point, quadratic_roots};
-    use crate::bench::corpus::{problem, Kind};
+    use crate::bench::corpus::{moments_groups, problem, Kind};
     use crate::lp::{distribution_moments, FastSolver, GridTable, MomentSolver, Status};
     use crate::Grid;
     use rand::{Rng, SeedableRng};
@@ -488,31 +488,31 @@ mod tests {
     }
 
     /// From the moments alone the fast solver answers as from the distribution: 2 500
-    /// problems at n = 1024 (1–4 Diracs on grid points, boundary moments, mixtures, clusters,
-    /// adjacent points; power basis m = 4, z_f uniform) certified both ways with G within
-    /// 2e-9, most of them started from a basis built from the moments, none failed.
+    /// problems at n = 1024 (the Dirac row of `bench lp --corpus moments`: 1–4 Diracs on grid
+    /// points, z_f uniform; and boundary moments, mixtures, clusters, adjacent points; power
+    /// basis m = 4) certified both ways with G within 2e-9, most of them started from a basis
+    /// built from the moments, none failed.
     #[test]
     fn moments_starts_answer_as_the_distribution_start() {
         let mut from_moments = solver(1024, 4, power);
         let mut from_dist = solver(1024, 4, power);
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        let diracs = moments_groups(from_moments.table(), "z..z^4", 2000, 11).swap_remove(0);
         let kinds = [Kind::Boundary, Kind::Mixture, Kind::Cluster, Kind::Adjacent];
-        for t in 0..2500 {
-            let dist = if t % 5 == 4 {
-                problem(&mut rng, 1024, 4, kinds[t % 4]).dist
-            } else {
-                let k = rng.gen_range(1..=4);
-                let mut d: Vec<(u32, f64)> = (0..k)
-                    .map(|_| (rng.gen_range(0..1024u32), rng.gen_range(0.05..1.0)))
-                    .collect();
-                d.sort_by_key(|a| a.0);
-                d.dedup_by_key(|a| a.0);
-                d
-            };
-            let zf = rng.gen_range(0.0..1.0);
-            let b = distribution_moments(from_moments.table(), &dist).unwrap();
-            let got = from_moments.solve(&b, zf).unwrap();
-            let want = from_dist.solve_distribution(&dist, zf).unwrap();
+        let others = (0..500).map(|t| {
+            let dist = problem(&mut rng, 1024, 4, kinds[t % 4]).dist;
+            (dist, rng.gen_range(0.0..1.0))
+        });
+        let problems: Vec<(Vec<(u32, f64)>, f64)> = diracs
+            .problems
+            .into_iter()
+            .map(|p| (p.dist, p.zf[0]))
+            .chain(others.collect::<Vec<_>>())
+            .collect();
+        for (t, (dist, zf)) in problems.iter().enumerate() {
+            let b = distribution_moments(from_moments.table(), dist).unwrap();
+            let got = from_moments.solve(&b, *zf).unwrap();
+            let want = from_dist.solve_distribution(dist, *zf).unwrap();
             assert_eq!(got.status, Status::Optimal, "{t}: {dist:?} {zf}");
             assert_eq!(want.status, Status::Optimal, "{t}");
             assert!((got.g - want.g).abs() <= 2e-9, "{t}: {} {}", got.g, want.g);
