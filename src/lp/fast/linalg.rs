@@ -221,12 +221,26 @@ pub(super) fn least_squares(
 }
 
 /// Complete the grid columns `cols` (independent) to a basis of r columns by greedily adding the
-/// column with the largest component orthogonal to the span so far; None if that fails.
+/// column with the largest component orthogonal to the span so far, first from `first` (such as
+/// the cold-start basis of maximal volume: r candidates instead of the grid), then, if those do
+/// not complete it, from every column; None if that fails.
 pub(super) fn complete_basis(
     rows: &[f64],
     n: usize,
     r: usize,
     cols: &[usize],
+    first: &[usize],
+) -> Option<Vec<usize>> {
+    complete_from(rows, r, cols, first.iter().copied())
+        .or_else(|| complete_from(rows, r, cols, 0..n))
+}
+
+/// [`complete_basis`] from the columns `candidates` (in index order among equals).
+fn complete_from(
+    rows: &[f64],
+    r: usize,
+    cols: &[usize],
+    candidates: impl Iterator<Item = usize> + Clone,
 ) -> Option<Vec<usize>> {
     let mut basis: Vec<usize> = cols.to_vec();
     let mut q: Vec<Vec<f64>> = Vec::with_capacity(r);
@@ -235,18 +249,21 @@ pub(super) fn complete_basis(
             return None;
         }
     }
-    // res[i]: squared residual of column i after projecting out q, updated per new vector.
-    let mut res: Vec<f64> = (0..n)
+    // res[i]: squared residual of candidate i after projecting out q, updated per new vector.
+    let mut res: Vec<(usize, f64)> = candidates
         .map(|i| {
             let row = &rows[i * r..(i + 1) * r];
-            q.iter()
-                .fold(dot(row, row), |v, qi| v - dot(qi, row).powi(2))
+            (
+                i,
+                q.iter()
+                    .fold(dot(row, row), |v, qi| v - dot(qi, row).powi(2)),
+            )
         })
         .collect();
     while basis.len() < r {
         let mut best = None;
         let mut best_v = 0.0;
-        for (i, &v) in res.iter().enumerate() {
+        for &(i, v) in &res {
             if v > best_v && !basis.contains(&i) {
                 best_v = v;
                 best = Some(i);
@@ -259,8 +276,8 @@ pub(super) fn complete_basis(
         basis.push(i);
         if basis.len() < r {
             let qn = &q[q.len() - 1];
-            for (k, v) in res.iter_mut().enumerate() {
-                *v -= dot(qn, &rows[k * r..(k + 1) * r]).powi(2);
+            for (k, v) in res.iter_mut() {
+                *v -= dot(qn, &rows[*k * r..(*k + 1) * r]).powi(2);
             }
         }
     }
@@ -328,6 +345,24 @@ pub(super) fn max_volume_rows(rows: &[f64], n: usize, r: usize) -> Vec<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Completion on the rows (1, i, i²), i = 0..4, by the largest residual: from the
+    /// candidates first ({1} with 2 and 4: residuals 14/3 and 126, so 4 then 2), from the grid
+    /// when the candidates cannot complete it ({2} with only 2 itself: 4, residual 19.2, then 0),
+    /// and None for dependent columns.
+    #[test]
+    fn complete_basis_prefers_the_candidates() {
+        let rows: Vec<f64> = (0..5)
+            .flat_map(|i| [1.0, i as f64, (i * i) as f64])
+            .collect();
+        assert_eq!(
+            complete_basis(&rows, 5, 3, &[1], &[2, 4]),
+            Some(vec![1, 4, 2])
+        );
+        assert_eq!(complete_basis(&rows, 5, 3, &[2], &[2]), Some(vec![2, 4, 0]));
+        assert_eq!(complete_basis(&rows, 5, 3, &[2], &[]), Some(vec![2, 4, 0]));
+        assert_eq!(complete_basis(&rows, 5, 3, &[1, 1], &[0, 4]), None);
+    }
 
     /// Columns of a 3-row LP: a_i = (1, i, i²) for i = 0..4, and an "artificial" (index 9).
     fn column(i: usize) -> &'static [f64] {

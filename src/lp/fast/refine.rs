@@ -117,7 +117,7 @@ impl FastSolver {
             .map(|&t| (self.basis[t], self.x[t]))
             .collect();
         let cols: Vec<usize> = support.iter().map(|&(i, _)| i).collect();
-        let Some(full) = complete_basis(&self.ortho.rows, self.n, r, &cols) else {
+        let Some(full) = complete_basis(&self.ortho.rows, self.n, r, &cols, &self.b0) else {
             return false;
         };
         self.mark_basic(false);

@@ -221,7 +221,7 @@ impl FastSolver {
             }
         }
         let rows = &self.ortho.rows;
-        complete_basis(rows, self.n, self.r, &basis)
+        complete_basis(rows, self.n, self.r, &basis, &self.b0)
     }
 
     /// Crossover from a known distribution `start` = [(grid index, weight)] with these moments
