@@ -33,8 +33,8 @@
 //!   under a power basis (Prony's method), are the boundary of the moment space and those
 //!   points their only representation: with no atom below z_f they are the answer, otherwise
 //!   they and their neighbours towards z_f start the run (five rows; with more, the crossover
-//!   from the atoms). Interior moments under z, …, z⁴ start
-//!   from the grid points around the canonical representation through z_f (Algorithm 3).
+//!   from the atoms). Interior moments under z, …, z⁴ start from the grid points around the
+//!   canonical representation through z_f (Algorithm 3).
 //! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
 //!   case: the moments are those of a kernel's depth distribution). The moments are formed in
 //!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible

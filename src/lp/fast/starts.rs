@@ -1,6 +1,6 @@
 //! Where a simplex run starts: the sequence of attempts (given distribution, a basis built
-//! from the moments, warm basis, cold basis, Bland's rule), the crossover from a known distribution to a basic feasible solution,
-//! and the warm-start memory of the last optimum.
+//! from the moments, warm basis, cold basis, Bland's rule), the crossover from a known
+//! distribution to a basic feasible solution, and the warm-start memory of the last optimum.
 
 use super::linalg::{complete_basis, dot, norm};
 use super::{FastSolver, Outcome, Verdict, REFACTOR_EVERY};
