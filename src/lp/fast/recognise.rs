@@ -217,8 +217,8 @@ impl FastSolver {
         }
         let p1 = (m1 * m2 - m3) / var;
         let (z1, z2) = quadratic_roots(p1, -m2 - p1 * m1)?;
-        let z = self.table.grid().points();
-        let (i, j) = (nearest_point(z, z1), nearest_point(z, z2));
+        let grid = self.table.grid();
+        let (i, j) = (grid.nearest(z1), grid.nearest(z2));
         if i == j {
             return None;
         }
@@ -267,18 +267,6 @@ fn push_distinct(basis: &mut Vec<usize>, r: usize, cols: &[usize], n: usize) {
         if basis.len() < r && c < n && !basis.contains(&c) {
             basis.push(c);
         }
-    }
-}
-
-/// The index of the grid point nearest z (points ascending).
-fn nearest_point(points: &[f64], z: f64) -> usize {
-    let p = points.partition_point(|&x| x < z);
-    if p == 0 {
-        0
-    } else if p == points.len() || z - points[p - 1] <= points[p] - z {
-        p - 1
-    } else {
-        p
     }
 }
 
