@@ -730,7 +730,7 @@ impl<'a> ExactSimplex<'a> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::lp::GridTable;
     use crate::Grid;
@@ -738,7 +738,7 @@ mod tests {
     use rand::{Rng, SeedableRng};
 
     /// Exact solution of the square system M v = rhs (rational Gaussian elimination).
-    fn solve_q(
+    pub(in crate::lp) fn solve_q(
         mut m: Vec<Vec<BigRational>>,
         mut rhs: Vec<BigRational>,
     ) -> Option<Vec<BigRational>> {

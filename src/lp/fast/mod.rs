@@ -174,6 +174,11 @@ pub struct FastStats {
     /// Solves given moments only started from a basis built from the moments
     /// ([`recognise`]: boundary atoms, or the canonical representation through z_f).
     pub moments_starts: u64,
+    /// Solves given moments only that are close to one grid point's column (a cluster):
+    /// solved first on a short band of the grid around that point ([`band`]).
+    pub clusters: u64,
+    /// Of which certified on the whole grid.
+    pub cluster_certified: u64,
 }
 
 /// Index of the artificial column in a basis.
@@ -261,10 +266,15 @@ pub struct FastSolver {
 impl FastSolver {
     /// Prepare the solver for `table` (orthonormalisation and cold-start basis; O(n m²)).
     pub fn new(table: GridTable) -> FastSolver {
+        let (ortho, cols) = orthonormalise(&table);
+        FastSolver::with_coordinates(table, ortho, cols)
+    }
+
+    /// The solver for `table` in the coordinates `ortho` (columns `cols`, column-major).
+    fn with_coordinates(table: GridTable, ortho: Ortho, cols: Vec<f64>) -> FastSolver {
         let n = table.n();
         let m = table.m();
         let mm = m + 1;
-        let (ortho, cols) = orthonormalise(&table);
         let r = ortho.r;
         let b0 = max_volume_rows(&ortho.rows, n, r);
         let fine = ColumnTable::new(r, n, |k, i| cols[k * n + i]);
@@ -576,6 +586,17 @@ impl FastSolver {
             self.c0.copy_from_slice(&self.c);
             if let Some(c) = self.band_certified(moments, kf, zf, dist, true) {
                 return Ok(certified(c));
+            }
+        }
+        if moments_only && atoms.is_none() {
+            if let Some((center, gap)) = self.nearest_column() {
+                if gap <= band::CLUSTER_GAP {
+                    self.c0.copy_from_slice(&self.c);
+                    self.stats.clusters += 1;
+                    if let Some(c) = self.cluster_certified(moments, kf, zf, center) {
+                        return Ok(certified(c));
+                    }
+                }
             }
         }
         let mut verdict = if transformed {

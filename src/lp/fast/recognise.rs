@@ -161,6 +161,18 @@ impl FastSolver {
     /// The grid point whose column equals the transformed moments c to rounding,
     /// ‖c − a_j‖ ≤ [`ATOM_TOL`] ‖c‖, as a one-atom distribution.
     pub(super) fn single_atom(&mut self) -> Option<(u32, f64)> {
+        let (j, gap) = self.nearest_column()?;
+        (gap <= ATOM_TOL).then(|| {
+            self.stats.single_atom += 1;
+            (j as u32, 1.0)
+        })
+    }
+
+    /// The grid point j whose column is nearest the transformed moments c, with the relative
+    /// distance ‖c − a_j‖/‖c‖: by a binary search on the monotone coordinate (the nearer of
+    /// the two grid points around c), else by the scan of `recognise.table`. None with more
+    /// rows than the scan holds.
+    pub(super) fn nearest_column(&self) -> Option<(usize, f64)> {
         let r = self.r;
         let gap = |j: usize| {
             let aj = &self.ortho.rows[j * r..(j + 1) * r];
@@ -193,10 +205,7 @@ impl FastSolver {
                 near.scan(&y[..r + 1], 0, 0, near.blocks(), none).0
             }
         };
-        (j < self.n && gap(j).sqrt() <= ATOM_TOL * norm(&self.c)).then(|| {
-            self.stats.single_atom += 1;
-            (j as u32, 1.0)
-        })
+        (j < self.n).then(|| (j, gap(j).sqrt() / norm(&self.c)))
     }
 
     /// Under a power basis z, …, z^m (m ≥ 4): the two grid points whose mixture has the

@@ -159,19 +159,8 @@ impl FastSolver {
             if res0.is_nan() {
                 res0 = res;
             }
-            // u = √n R⁻ᵀ ρ (forward substitution, every function kept).
-            for j in 0..mm {
-                let coef = &self.ortho.rcoef[j * r..(j + 1) * r];
-                let mut acc = self.lo_rhs[j];
-                for k in 0..j {
-                    acc -= coef[k] * self.u[k];
-                }
-                self.u[j] = acc / coef[j];
-            }
-            let sn = (self.n as f64).sqrt();
-            for k in 0..r {
-                self.u[k] *= sn;
-            }
+            // u = √n R⁻ᵀ ρ (every function kept), in the solver's coordinates.
+            self.ortho.apply(&self.lo_rhs, &mut self.u);
             self.binv.apply(&self.u, &mut self.alpha);
             for t in 0..r {
                 self.x[t] += self.alpha[t];

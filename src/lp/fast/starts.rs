@@ -3,7 +3,7 @@
 //! distribution to a basic feasible solution, and the warm-start memory of the last optimum.
 
 use super::linalg::{complete_basis, dot, norm};
-use super::{FastSolver, Outcome, Verdict, REFACTOR_EVERY};
+use super::{FastSolver, Outcome, Verdict, ART, REFACTOR_EVERY};
 
 /// The basis a simplex attempt starts from.
 #[derive(Clone, Copy)]
@@ -196,6 +196,19 @@ impl FastSolver {
             }
             self.warm.last_c.copy_from_slice(&self.c0);
         }
+    }
+
+    /// The rounding bound of [`Self::remember_optimal`] for `basis`, certified without this
+    /// solver's simplex (a band in local coordinates), from its factorisation in these
+    /// coordinates (∞ where it is singular there).
+    pub(super) fn set_bound_of(&mut self, basis: &[usize]) {
+        let (r, rows) = (self.r, &self.ortho.rows);
+        let column = |i: usize| &rows[i * r..(i + 1) * r];
+        self.last_bound = if self.binv.factor(basis, column, ART, f64::INFINITY) {
+            f64::EPSILON * self.ortho.condition * norm(&self.binv.inv) * (1.0 + norm(&self.c))
+        } else {
+            f64::INFINITY
+        };
     }
 
     /// After accurate pivots certified `basis` (not the basis the simplex ended on): it is
