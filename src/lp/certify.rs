@@ -15,7 +15,8 @@
 //!   (or the tighter Σ_i u_i min(0, d_i) with u_i the bound on w_i from sign-definite rows):
 //!   every distribution with exactly these moments has mass ≥ L ≥ G − 1e-9 below z_f. The d_i
 //!   are computed in f64 and lowered by their rounding bound; the duals are double-double
-//!   (y + y_lo). The support's residual ρ must not move the bound: |y·ρ| ≤ 1e-9, unless ρ is
+//!   (y + y_lo). A check stops after the f64 pass when one point's u_i·(d_i + γe_i) already
+//!   brings the bound below G − 1e-9. The support's residual ρ must not move the bound: |y·ρ| ≤ 1e-9, unless ρ is
 //!   rounding-level (≤ 64 ε of the row's terms); then, when L > G + 1e-9 (huge duals near the
 //!   boundary of the moment space), G must instead match L′ = L + y·ρ to 1e-9, the bound for
 //!   the support's own moments b̄ + ρ, which equal b̄ at f64 resolution.

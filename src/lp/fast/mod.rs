@@ -34,7 +34,9 @@
 //!   points their only representation: with no atom below z_f they are the answer, otherwise
 //!   they and their neighbours towards z_f start the run (five rows; with more, the crossover
 //!   from the atoms). Interior moments under z, …, z⁴ start from the grid points around the
-//!   canonical representation through z_f (Algorithm 3).
+//!   canonical representation through z_f (Algorithm 3). Moments close to one grid point's
+//!   column (a cluster, as under a flat receiver) go first to a short band around it, solved
+//!   in coordinates local to the band and certified on the whole grid ([`band`]).
 //! * **Start from a known distribution** ([`MomentSolver::solve_distribution`], the pipeline's
 //!   case: the moments are those of a kernel's depth distribution). The moments are formed in
 //!   the orthonormalised coordinates, c = Σ w_i a_i, and the distribution itself is a feasible
