@@ -363,24 +363,19 @@ impl FastSolver {
         self.full_pass_skipped = false;
         let given = dist.is_none() && self.moments_start(moments, kf, None);
         let mut verdict = self.attempts(kf, dist, given);
-        if dist.is_none() && !matches!(verdict, Verdict::Optimal) {
-            // Moments of a few neighbouring grid points lie on the boundary of the moment
-            // space to rounding, and may miss the band's by more than phase 1 accepts: the
-            // optimal basis of moments moved [`INWARD`] of the way to the band's mean column
-            // (an interior point), for the whole-grid certificate to judge on the moments as
-            // given.
-            let r = self.r;
-            let mut mean = vec![0.0; r];
-            for i in 0..self.n {
-                for (mk, ak) in mean.iter_mut().zip(&self.ortho.rows[i * r..(i + 1) * r]) {
-                    *mk += ak / self.n as f64;
+        if let Some(mean) = self.ortho.local_mean().filter(|_| dist.is_none()) {
+            if !matches!(verdict, Verdict::Optimal) {
+                // Moments of a few neighbouring grid points lie on the boundary of the moment
+                // space to rounding, and may miss the band's by more than phase 1 accepts:
+                // the optimal basis of moments moved [`INWARD`] of the way to the band's
+                // mean column (an interior point), for the whole-grid certificate to judge
+                // on the moments as given.
+                for (ck, mk) in self.c0.iter_mut().zip(mean) {
+                    *ck += INWARD * (mk - *ck);
                 }
+                self.c.copy_from_slice(&self.c0);
+                verdict = self.attempts(kf, None, false);
             }
-            for (ck, mk) in self.c0.iter_mut().zip(&mean) {
-                *ck += INWARD * (mk - *ck);
-            }
-            self.c.copy_from_slice(&self.c0);
-            verdict = self.attempts(kf, None, false);
         }
         match verdict {
             Verdict::Optimal if self.basis.iter().all(|&i| i < self.n) => {

@@ -16,6 +16,9 @@ pub(super) struct Local {
     lu: DdLu,
     /// The diagonal of S.
     scale: Vec<f64>,
+    /// The mean of the columns from the first to the last reference point: the moments of
+    /// the uniform distribution on them, an interior point of their moment space.
+    mean: Vec<f64>,
 }
 
 /// The orthonormalised table: the coordinates every LP of the table is solved in, fixed for
@@ -133,6 +136,12 @@ pub(super) fn local_coordinates(table: &GridTable, refs: &[usize]) -> Option<(Or
     if !rows.iter().all(|a| a.is_finite()) {
         return None;
     }
+    let mut mean = vec![0.0; mm];
+    for i in lo..=hi {
+        for (mk, ak) in mean.iter_mut().zip(&rows[i * mm..(i + 1) * mm]) {
+            *mk += ak / (hi - lo + 1) as f64;
+        }
+    }
     let amax = (0..n)
         .map(|i| norm(&rows[i * mm..(i + 1) * mm]))
         .fold(0.0, f64::max);
@@ -152,7 +161,7 @@ pub(super) fn local_coordinates(table: &GridTable, refs: &[usize]) -> Option<(Or
         // own condition.
         condition: 1.0,
         amax,
-        local: Some(Local { lu, scale }),
+        local: Some(Local { lu, scale, mean }),
     };
     Some((ortho, cols))
 }
@@ -217,6 +226,12 @@ impl Ortho {
             c[k] = sn * u[k];
         }
         true
+    }
+
+    /// For local coordinates, the mean column of the points between the reference points
+    /// (an interior point of their moment space).
+    pub(super) fn local_mean(&self) -> Option<&[f64]> {
+        self.local.as_ref().map(|l| &l.mean[..])
     }
 
     /// c = T v for v over the rows 0..=m, every function kept (r = m + 1): T = √n R⁻ᵀ by
