@@ -568,11 +568,15 @@ impl FastSolver {
         let transformed = c_given || self.ortho.transform(moments, &mut self.u, &mut self.c);
         // Moments of one grid point, or of two under a power basis, have those points as their
         // only representation: the distribution, as if given.
-        let atoms = match hint {
-            None if transformed => self.boundary_atoms(moments),
-            _ => None,
-        };
         let moments_only = hint.is_none() && transformed;
+        // The grid point whose column is nearest the moments: a single atom's, or a cluster's
+        // centre.
+        let nearest = moments_only.then(|| self.nearest_column()).flatten();
+        let atoms = if moments_only {
+            self.boundary_atoms(moments, nearest)
+        } else {
+            None
+        };
         let hint = hint.or(atoms.as_ref().map(|(a, k)| &a[..*k]));
         if let Some(dist) = hint.filter(|d| d.iter().all(|&(i, w)| i as usize >= kf || w <= 0.0)) {
             // No atom below z_f: the distribution itself has the least possible mass, 0.
@@ -590,14 +594,12 @@ impl FastSolver {
                 return Ok(certified(c));
             }
         }
-        if moments_only && atoms.is_none() {
-            if let Some((center, gap)) = self.nearest_column() {
-                if gap <= band::CLUSTER_GAP {
-                    self.c0.copy_from_slice(&self.c);
-                    self.stats.clusters += 1;
-                    if let Some(c) = self.cluster_certified(moments, kf, zf, center) {
-                        return Ok(certified(c));
-                    }
+        if let Some((center, _)) = nearest.filter(|&(_, gap)| gap <= band::CLUSTER_GAP) {
+            if atoms.is_none() {
+                self.c0.copy_from_slice(&self.c);
+                self.stats.clusters += 1;
+                if let Some(c) = self.cluster_certified(moments, kf, zf, center) {
+                    return Ok(certified(c));
                 }
             }
         }

@@ -80,9 +80,14 @@ impl Recognise {
 
 impl FastSolver {
     /// The one or two grid points whose moments are `b` (transformed: c), if they are such
-    /// moments ([`Self::single_atom`], [`Self::two_atoms`]), as (atoms, count).
-    pub(super) fn boundary_atoms(&mut self, b: &[f64]) -> Option<([(u32, f64); 2], usize)> {
-        if let Some(a) = self.single_atom() {
+    /// moments ([`Self::single_atom`] given the `nearest` column, [`Self::two_atoms`]), as
+    /// (atoms, count).
+    pub(super) fn boundary_atoms(
+        &mut self,
+        b: &[f64],
+        nearest: Option<(usize, f64)>,
+    ) -> Option<([(u32, f64); 2], usize)> {
+        if let Some(a) = self.single_atom(nearest) {
             return Some(([a, a], 1));
         }
         self.two_atoms(b).map(|p| (p, 2))
@@ -159,9 +164,10 @@ impl FastSolver {
     }
 
     /// The grid point whose column equals the transformed moments c to rounding,
-    /// ‖c − a_j‖ ≤ [`ATOM_TOL`] ‖c‖, as a one-atom distribution.
-    pub(super) fn single_atom(&mut self) -> Option<(u32, f64)> {
-        let (j, gap) = self.nearest_column()?;
+    /// ‖c − a_j‖ ≤ [`ATOM_TOL`] ‖c‖, as a one-atom distribution, given the `nearest` column
+    /// ([`Self::nearest_column`]).
+    pub(super) fn single_atom(&mut self, nearest: Option<(usize, f64)>) -> Option<(u32, f64)> {
+        let (j, gap) = nearest?;
         (gap <= ATOM_TOL).then(|| {
             self.stats.single_atom += 1;
             (j as u32, 1.0)
