@@ -256,12 +256,25 @@ impl FastSolver {
         if first {
             return None;
         }
-        let mut basis = self.bands.failed.take()?;
+        let basis = self.bands.failed.take()?;
+        let c = self.improve_band_basis(moments, kf, basis)?;
+        self.stats.band_certified += 1;
+        Some(c)
+    }
+
+    /// Accurate pivots ([`IMPROVE_STEPS`]) from a band basis that did not certify on the whole
+    /// grid; the basis they certify sets the rounding bound and the next warm start.
+    fn improve_band_basis(
+        &mut self,
+        moments: &[f64],
+        kf: usize,
+        mut basis: Vec<usize>,
+    ) -> Option<Certified> {
         let c = self
             .cert
             .improve(moments, kf, &mut basis, IMPROVE_STEPS)
             .ok()?;
-        self.stats.band_certified += 1;
+        self.set_bound_of(&basis);
         self.remember_certified(&basis);
         Some(c)
     }
@@ -422,14 +435,8 @@ impl FastSolver {
             }
             failed.get_or_insert(basis);
         }
-        let mut basis = failed?;
-        let c = self
-            .cert
-            .improve(moments, kf, &mut basis, IMPROVE_STEPS)
-            .ok()?;
+        let c = self.improve_band_basis(moments, kf, failed?)?;
         self.stats.cluster_certified += 1;
-        self.set_bound_of(&basis);
-        self.remember_certified(&basis);
         Some(c)
     }
 }
