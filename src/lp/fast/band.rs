@@ -417,6 +417,7 @@ impl FastSolver {
         if !self.bands.on || n < MIN_GRID {
             return None;
         }
+        self.stats.clusters += 1;
         let len = (n / CLUSTER_BAND_DIV).max(CLUSTER_BAND_MIN);
         let step = len / 2;
         let lo = center.saturating_sub(step / 2);

@@ -597,7 +597,6 @@ impl FastSolver {
         if let Some((center, _)) = nearest.filter(|&(_, gap)| gap <= band::CLUSTER_GAP) {
             if atoms.is_none() {
                 self.c0.copy_from_slice(&self.c);
-                self.stats.clusters += 1;
                 if let Some(c) = self.cluster_certified(moments, kf, zf, center) {
                     return Ok(certified(c));
                 }
