@@ -16,7 +16,8 @@
 //!   every distribution with exactly these moments has mass ≥ L ≥ G − 1e-9 below z_f. The d_i
 //!   are computed in f64 and lowered by their rounding bound; the duals are double-double
 //!   (y + y_lo). A check stops after the f64 pass when one point's u_i·(d_i + γe_i) already
-//!   brings the bound below G − 1e-9. The support's residual ρ must not move the bound: |y·ρ| ≤ 1e-9, unless ρ is
+//!   brings the bound below G − 1e-9. The support's residual ρ must not move the bound:
+//!   |y·ρ| ≤ 1e-9, unless ρ is
 //!   rounding-level (≤ 64 ε of the row's terms); then, when L > G + 1e-9 (huge duals near the
 //!   boundary of the moment space), G must instead match L′ = L + y·ρ to 1e-9, the bound for
 //!   the support's own moments b̄ + ρ, which equal b̄ at f64 resolution.

@@ -83,14 +83,13 @@ pub(super) fn orthonormalise(table: &GridTable) -> (Ortho, Vec<f64>) {
 /// B = [ā_ref…] factorised in double-double and each a_i solved in double-double and rounded,
 /// S the powers of two that bring each row's RMS over the grid points from the first to the
 /// last reference point near 1 (points beyond, far from the references, have far larger
-/// coordinates). The LP is the same in
-/// any coordinates (both sides multiplied by S B⁻¹). Where the columns of neighbouring grid
-/// points agree to 12 digits (a cluster of depths on a fine grid under z, …, z⁴), the
-/// orthonormalised coordinates keep their differences only to the rounding of Q and R
-/// relative to the whole column; these keep them to the rounding of each a_i, so bases of
-/// points near the reference points are well conditioned and their weights accurate. None
-/// when B is singular or a coordinate is not finite. Returns the coordinates and the columns
-/// column-major (cols[k·n + i] = a_i[k]).
+/// coordinates). The LP is the same in any coordinates (both sides multiplied by S B⁻¹).
+/// Where the columns of neighbouring grid points agree to 12 digits (a cluster of depths on a
+/// fine grid under z, …, z⁴), the orthonormalised coordinates keep their differences only to
+/// the rounding of Q and R relative to the whole column; these keep them to the rounding of
+/// each a_i, so bases of points near the reference points are well conditioned and their
+/// weights accurate. None when B is singular or a coordinate is not finite. Returns the
+/// coordinates and the columns column-major (cols[k·n + i] = a_i[k]).
 pub(super) fn local_coordinates(table: &GridTable, refs: &[usize]) -> Option<(Ortho, Vec<f64>)> {
     let (n, mm) = (table.n(), table.m() + 1);
     if refs.len() != mm || mm > 32 {

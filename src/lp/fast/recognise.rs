@@ -94,11 +94,12 @@ impl FastSolver {
     }
 
     /// The start basis from the moments alone into `recognise.basis`; false when there is
-    /// none. With `atoms` (boundary moments) and r = 5 rows: each atom and its grid neighbour towards z_f,
-    /// where the optimal dual polynomial touches the step from below, then the first grid
-    /// point at or above z_f and the ends of the grid. Otherwise, under the power basis with
-    /// m = 4: the canonical representation through z_kf ([`Self::canonical_atoms`]), each of
-    /// its two other atoms bracketed by its grid neighbours, and z_kf.
+    /// none. With `atoms` (boundary moments) and r = 5 rows: each atom and its grid neighbour
+    /// towards z_f, where the optimal dual polynomial touches the step from below, then the
+    /// first grid point at or above z_f and the ends of the grid. Otherwise, under the power
+    /// basis with m = 4: the canonical representation through z_kf
+    /// ([`Self::canonical_atoms`]), each of its two other atoms bracketed by its grid
+    /// neighbours, and z_kf.
     pub(super) fn moments_start(
         &mut self,
         b: &[f64],
