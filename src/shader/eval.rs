@@ -3,22 +3,54 @@
 //! (IEEE add/sub/mul/div/sqrt are exact roundings, as in a shader with `precise`; Rust never
 //! contracts a·b + c into an FMA). Transcendentals (cos, sin, acos, atan2, exp, log) use the
 //! Rust f32 functions; GPUs implement them to a few ulp, so only they can differ.
+//!
+//! Two orders ([`Order`]): `Unfused` rounds every operation; `Fused` computes every sum or
+//! difference with a product operand as one fused multiply-add, fma(a, b, c) = round(a·b + c),
+//! which is what a driver may do where `precise` is unavailable or dropped (WGSL, naga):
+//! `a·b + c` and `c + a·b` → fma(a, b, c), `a·b − c` → fma(a, b, −c), `c − a·b` → fma(−a, b, c)
+//! (the first operand is taken when both are products).
 
-use super::ir::{Cmp, Func, Node, Op};
+use super::ir::{Cmp, Func, Node, Op, V};
 use anyhow::{bail, Result};
+
+/// The order of the interpreter's floating-point operations.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Order {
+    /// Every operation rounded on its own (a shader with `precise`).
+    #[default]
+    Unfused,
+    /// Every a·b ± c fused into one rounding (a contracting compiler).
+    Fused,
+}
 
 impl Func {
     /// Run the function on flattened inputs (parameters in order); returns the flattened
     /// outputs (return value first, then the out parameters in order).
     pub fn eval(&self, inputs: &[f32]) -> Result<Vec<f32>> {
+        self.eval_in(Order::Unfused, inputs)
+    }
+
+    /// As [`Func::eval`], in the given operation order.
+    pub fn eval_in(&self, order: Order, inputs: &[f32]) -> Result<Vec<f32>> {
         let mut scratch = Vec::new();
         let mut out = vec![0.0; self.n_outputs()];
-        self.eval_into(inputs, &mut scratch, &mut out)?;
+        self.eval_order_into(order, inputs, &mut scratch, &mut out)?;
         Ok(out)
     }
 
     /// As [`Func::eval`], reusing `scratch` and writing into `out` (length n_outputs).
     pub fn eval_into(&self, inputs: &[f32], scratch: &mut Vec<f32>, out: &mut [f32]) -> Result<()> {
+        self.eval_order_into(Order::Unfused, inputs, scratch, out)
+    }
+
+    /// As [`Func::eval_into`], in the given operation order.
+    pub fn eval_order_into(
+        &self,
+        order: Order,
+        inputs: &[f32],
+        scratch: &mut Vec<f32>,
+        out: &mut [f32],
+    ) -> Result<()> {
         if inputs.len() != self.n_inputs() {
             bail!(
                 "{}: {} inputs given, the function takes {}",
@@ -57,7 +89,10 @@ impl Func {
                     if op.last_arg() as usize >= i {
                         bail!("{}: statement {i} uses a later value", self.name);
                     }
-                    apply(op, scratch)
+                    match order {
+                        Order::Unfused => apply_unfused(op, scratch),
+                        Order::Fused => apply_fused(op, &self.nodes, scratch),
+                    }
                 }
                 Node::Var(init) => {
                     if init.0 as usize >= i {
@@ -109,7 +144,34 @@ impl Func {
     }
 }
 
-fn apply(op: &Op, s: &[f32]) -> f32 {
+/// The factors of `v` if it is a product statement.
+fn product(nodes: &[Node], v: V) -> Option<(V, V)> {
+    match nodes.get(v.0 as usize) {
+        Some(Node::Op(Op::Mul(a, b))) => Some((*a, *b)),
+        _ => None,
+    }
+}
+
+/// One operation in the fused order: a sum or difference with a product operand is one fma.
+pub(crate) fn apply_fused(op: &Op, nodes: &[Node], s: &[f32]) -> f32 {
+    let g = |v: V| s[v.0 as usize];
+    match *op {
+        Op::Add(x, y) => match (product(nodes, x), product(nodes, y)) {
+            (Some((a, b)), _) => g(a).mul_add(g(b), g(y)),
+            (None, Some((a, b))) => g(a).mul_add(g(b), g(x)),
+            _ => g(x) + g(y),
+        },
+        Op::Sub(x, y) => match (product(nodes, x), product(nodes, y)) {
+            (Some((a, b)), _) => g(a).mul_add(g(b), -g(y)),
+            (None, Some((a, b))) => (-g(a)).mul_add(g(b), g(x)),
+            _ => g(x) - g(y),
+        },
+        _ => apply_unfused(op, s),
+    }
+}
+
+/// One operation, rounded on its own.
+pub(crate) fn apply_unfused(op: &Op, s: &[f32]) -> f32 {
     let g = |v: &super::ir::V| s[v.0 as usize];
     match op {
         Op::Add(a, b) => g(a) + g(b),
@@ -142,5 +204,34 @@ fn apply(op: &Op, s: &[f32]) -> f32 {
         Op::Atan2(y, x) => g(y).atan2(g(x)),
         Op::Exp(a) => g(a).exp(),
         Op::Log(a) => g(a).ln(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shader::Shape;
+
+    /// z·z + c where the fused rounding differs from the two-step one: z = 1 + 2⁻¹², c = −1.
+    #[test]
+    fn fused_order_rounds_a_product_and_sum_once() {
+        let mut f = Func::new("k");
+        let z = f.input_scalar("z");
+        let c = f.input_scalar("c");
+        let p = f.mul(z, z);
+        let s = f.add(p, c);
+        let one = f.c(1.0);
+        let d = f.sub(one, p);
+        f.ret(Shape::Vector(2), &[s, d]);
+        let z = 1.0 + 2f32.powi(-12);
+        let unfused = f.eval_in(Order::Unfused, &[z, -1.0]).unwrap();
+        let fused = f.eval_in(Order::Fused, &[z, -1.0]).unwrap();
+        // z² = 1 + 2⁻¹¹ + 2⁻²⁴: the product alone rounds 2⁻²⁴ away
+        assert_eq!(unfused, vec![2f32.powi(-11), -(2f32.powi(-11))]);
+        assert_eq!(
+            fused,
+            vec![2f32.powi(-11) + 2f32.powi(-24), -(2f32.powi(-11) + 2f32.powi(-24))]
+        );
+        assert_eq!(f.eval(&[z, -1.0]).unwrap(), unfused);
     }
 }

@@ -1,5 +1,5 @@
 //! Shader code from one representation: a straight-line f32 program ([`ir::Func`]) printed as
-//! GLSL or HLSL ([`print`]) and executed by an f32 interpreter ([`eval`]) that performs the same
+//! GLSL or HLSL ([`print`]) or WGSL ([`wgsl`]) and executed by an f32 interpreter ([`eval`]) that performs the same
 //! operations in the same order, so tests measure what a shader computes.
 //!
 //! ```
@@ -19,6 +19,9 @@
 pub mod eval;
 pub mod ir;
 pub mod print;
+pub mod wgsl;
 
+pub use eval::Order;
 pub use ir::{Cmp, Func, Module, Op, Param, Shape, V};
 pub use print::{glsl, hlsl, literal, Lang};
+pub use wgsl::wgsl;
