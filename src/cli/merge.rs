@@ -19,24 +19,39 @@ pub struct Args {
     /// Merge even if shards are missing or unfinished.
     #[arg(long)]
     pub allow_partial: bool,
-    /// Print {"rows", "shards", "out"} as JSON instead of a line.
+    /// Print {"rows", "candidates", "shards", "out", "complete"} as JSON instead of a line; a
+    /// partial merge adds "partial": true and what is missing (see `partial.json`).
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let n = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial, args.force)?;
+    let m = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial, args.force)?;
     if args.json {
-        println!(
-            "{}",
-            serde_json::json!({"rows": n, "shards": args.dirs.len(), "out": args.out})
-        );
+        let mut v = serde_json::json!({
+            "rows": m.rows,
+            "candidates": m.candidates,
+            "shards": args.dirs.len(),
+            "out": args.out,
+            "complete": m.partial.is_none(),
+        });
+        if let Some(p) = &m.partial {
+            v.as_object_mut()
+                .unwrap()
+                .extend(serde_json::to_value(p)?.as_object().unwrap().clone());
+        }
+        println!("{v}");
         return Ok(());
     }
     eprintln!(
-        "merge: {n} rows from {} shards into {}",
+        "merge: {} rows from {} shards into {}{}",
+        m.rows,
         args.dirs.len(),
-        args.out.display()
+        args.out.display(),
+        match &m.partial {
+            None => " (complete)".to_string(),
+            Some(p) => format!("; {} (no complete.json)", p.line()),
+        }
     );
     Ok(())
 }

@@ -312,7 +312,10 @@ pub fn run(args: Args) -> Result<()> {
     let results_dir = OutDir::new(&results, true).context("--results")?;
     let mut verified = None;
     if args.report_only {
-        let v = crate::search::merge::verify_results(&results, false).context("--report-only")?;
+        // A partial merge (`partial.json`, no completion marker) is reported as partial.
+        let partial =
+            std::fs::symlink_metadata(results.join(crate::search::results::PARTIAL_FILE)).is_ok();
+        let v = crate::search::merge::verify_results(&results, partial).context("--report-only")?;
         let [i, n] = v.config.shard;
         if n > 1 {
             bail!(
@@ -363,8 +366,9 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(rows) = verified {
         let (summary, refs) =
             references_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
-        sweep_report::write(&report, &rows, &data, &refs, &report_opts())?;
-        print_ranking(&summary, args.json)?;
+        let ro = report_opts();
+        sweep_report::write(&report, &rows, &data, &refs, &ro)?;
+        print_ranking(&summary, args.json, ro.partial.as_ref())?;
         eprintln!("report: written to {}", report_dir.display());
         return Ok(());
     }
@@ -401,7 +405,7 @@ pub fn run(args: Args) -> Result<()> {
         if writes_report {
             sweep_report::write(&report, &r.rows, &data, &r.references, &report_opts())?;
         }
-        print_ranking(summary, args.json)?;
+        print_ranking(summary, args.json, None)?;
         if writes_report {
             eprintln!("report: written to {}", report_dir.display());
         }
@@ -409,12 +413,25 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn print_ranking(s: &Summary, json: bool) -> Result<()> {
+/// The ranking lines (stderr) and, with `json`, the summary (stdout); results of a partial
+/// merge say so first, and the JSON gains "partial" (what is missing).
+fn print_ranking(
+    s: &Summary,
+    json: bool,
+    partial: Option<&crate::search::merge::Partial>,
+) -> Result<()> {
+    if let Some(p) = partial {
+        eprintln!("search: {}", p.line());
+    }
     for line in ranking_lines(s) {
         eprintln!("{line}");
     }
     if json {
-        println!("{}", serde_json::to_string_pretty(s)?);
+        let mut v = serde_json::to_value(s)?;
+        if let (Some(p), Some(o)) = (partial, v.as_object_mut()) {
+            o.insert("partial".into(), serde_json::to_value(p)?);
+        }
+        println!("{}", serde_json::to_string_pretty(&v)?);
     }
     Ok(())
 }

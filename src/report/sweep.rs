@@ -10,7 +10,9 @@ use crate::search::race::normal_quantile;
 use crate::search::reference::{
     errors_of, fig3_panels, pick_kernels, rank_of, summarize, Reference, Summary,
 };
-use crate::search::results::{ranking, read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE};
+use crate::search::results::{
+    ranking, read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE, PARTIAL_FILE,
+};
 use crate::search::tieset::{status, tie_set, winner_of, TieSet};
 use crate::search::{Dataset, RaceSummary, SweepConfig, SweepOptions, SweepSummary};
 use anyhow::{bail, Result};
@@ -35,6 +37,8 @@ pub struct ReportOptions {
     pub confidence: f64,
     /// The cap of the race (kept fraction per stage).
     pub keep: f64,
+    /// What a partial merge lacks (`partial.json`): the report says "partial" and names it.
+    pub partial: Option<crate::search::merge::Partial>,
 }
 
 impl Default for ReportOptions {
@@ -48,6 +52,7 @@ impl Default for ReportOptions {
             race: None,
             confidence: 0.99,
             keep: 0.25,
+            partial: None,
         }
     }
 }
@@ -66,6 +71,7 @@ impl ReportOptions {
                 .and_then(|s| s.race),
             confidence: opts.confidence,
             keep: opts.keep,
+            partial: read_json(&results.join(PARTIAL_FILE)).ok(),
             ..ReportOptions::default()
         }
     }
@@ -146,6 +152,17 @@ pub fn write(
         tie_table(&ties, opts.confidence, 50),
         top_table(rows, 20)
     );
+    if let Some(p) = &opts.partial {
+        let head = md.find("\n\n").map_or(md.len(), |i| i + 2);
+        md.insert_str(
+            head,
+            &format!(
+                "**Partial results** (`merge --allow-partial`, no `complete.json`): {}. The \
+                 ranking below covers only the candidates present.\n\n",
+                p.line().trim_start_matches("partial: ")
+            ),
+        );
+    }
     md.push_str(
         "\nReference values: LP candidates (label \"(LP)\") are scored on every fragment of the \
          sweep's dataset with the same grid and solver as the candidates; closed forms (label \

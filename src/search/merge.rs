@@ -2,11 +2,12 @@
 
 use super::config::SweepConfig;
 use super::results::{
-    read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE, FAILED_FILE, RESULTS_FILE,
+    read_json, read_rows, Row, COMPLETE_FILE, CONFIG_FILE, FAILED_FILE, PARTIAL_FILE, RESULTS_FILE,
 };
 use super::sweep::SweepSummary;
 use crate::artefact::{read_bytes, Limit, OutDir};
 use anyhow::{bail, Context, Result};
+use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
@@ -92,16 +93,97 @@ pub fn verify_results(d: &Path, allow_partial: bool) -> Result<Verified> {
     })
 }
 
+/// What a merge lacks (`partial.json` of a partial merge; also in `merge --json`): the shards
+/// not given, the shards given but unfinished, and the candidates of the sweep without a row.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Partial {
+    /// Always true: the merged folder is not the whole sweep.
+    pub partial: bool,
+    /// Shard count N of the sweep.
+    pub shards: usize,
+    /// Shards i of 0..N not among the inputs.
+    pub missing_shards: Vec<usize>,
+    /// Shards given without their completion marker.
+    pub incomplete_shards: Vec<usize>,
+    /// Candidates of the sweep's selection (all shards).
+    pub candidates: u64,
+    /// Candidates of the sweep's selection with no row.
+    pub missing_candidates: u64,
+    /// The first [`Partial::LISTED`] of them, by index.
+    pub missing_candidate_list: Vec<u64>,
+}
+
+impl Partial {
+    /// How many missing candidate indices are listed.
+    pub const LISTED: usize = 100;
+
+    /// One line: "partial: shards 2/6, 5/6 missing; shard 1/6 unfinished; 12 of 40 candidates
+    /// missing (3, 7, …)".
+    pub fn line(&self) -> String {
+        let n = self.shards;
+        let list = |v: &[usize]| {
+            v.iter()
+                .map(|i| format!("{i}/{n}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let mut parts = Vec::new();
+        if !self.missing_shards.is_empty() {
+            parts.push(format!("shards {} missing", list(&self.missing_shards)));
+        }
+        if !self.incomplete_shards.is_empty() {
+            parts.push(format!(
+                "shards {} unfinished",
+                list(&self.incomplete_shards)
+            ));
+        }
+        let mut idx: Vec<String> = self
+            .missing_candidate_list
+            .iter()
+            .map(|i| i.to_string())
+            .collect();
+        if self.missing_candidates > self.missing_candidate_list.len() as u64 {
+            idx.push("…".into());
+        }
+        parts.push(format!(
+            "{} of {} candidates missing ({})",
+            self.missing_candidates,
+            self.candidates,
+            idx.join(", ")
+        ));
+        format!("partial: {}", parts.join("; "))
+    }
+}
+
+/// What [`merge_dirs`] wrote.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Merged {
+    /// Rows written.
+    pub rows: usize,
+    /// Candidates of the sweep's selection (all shards).
+    pub candidates: u64,
+    /// None: complete (`complete.json` written); else what is missing (`partial.json`).
+    pub partial: Option<Partial>,
+}
+
 /// Merge the results directories of the shards of one sweep into `out`: every shard verified
 /// ([`verify_results`]), the configs agree (except the shard), every shard 0..N is present
 /// once, and no candidate appears twice; writes the rows sorted by index through the output
-/// writer (existing files refused unless `force`). Returns the number of rows.
-pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool) -> Result<usize> {
+/// writer (existing files refused unless `force`). The completion marker `complete.json` is
+/// written only when every shard is present and complete and every candidate of the selection
+/// has its row; otherwise (`allow_partial`) `partial.json` names what is missing and no
+/// completion marker exists in `out`.
+pub fn merge_dirs(
+    dirs: &[PathBuf],
+    out: &Path,
+    allow_partial: bool,
+    force: bool,
+) -> Result<Merged> {
     if dirs.is_empty() {
         bail!("merge: no input directories");
     }
     let od = OutDir::new(out, force).context("merge --out")?;
-    od.reserve([CONFIG_FILE, RESULTS_FILE, COMPLETE_FILE])
+    od.reserve([CONFIG_FILE, RESULTS_FILE, COMPLETE_FILE, PARTIAL_FILE])
         .context("merge --out")?;
     // A folder that exists may be in use by another writer: refuse that first. A new one is
     // created (and locked) only after every shard passed.
@@ -110,6 +192,7 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
     }
     let mut base: Option<SweepConfig> = None;
     let mut shards = BTreeSet::new();
+    let mut incomplete = Vec::new();
     let mut count = None;
     let mut rows: Vec<Row> = Vec::new();
     for d in dirs {
@@ -125,6 +208,9 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
         }
         if !shards.insert(i) {
             bail!("merge: shard {i}/{n} given twice ({})", d.display());
+        }
+        if !v.complete {
+            incomplete.push(i);
         }
         let mut plain = cfg.clone();
         plain.shard = [0, 1];
@@ -142,7 +228,8 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
         rows.extend(v.rows);
     }
     let n = count.unwrap();
-    if let Some(missing) = (0..n).find(|i| !shards.contains(i)) {
+    let missing_shards: Vec<usize> = (0..n).filter(|i| !shards.contains(i)).collect();
+    if let Some(missing) = missing_shards.first() {
         if !allow_partial {
             bail!("merge: shard {missing}/{n} is missing");
         }
@@ -151,18 +238,44 @@ pub fn merge_dirs(dirs: &[PathBuf], out: &Path, allow_partial: bool, force: bool
     if let Some(w) = rows.windows(2).find(|w| w[0].index == w[1].index) {
         bail!("merge: candidate {} appears twice", w[0].index);
     }
+    let base = base.unwrap();
+    let selection = super::select::selected(&base).context("merge: the sweep's candidates")?;
+    let have: BTreeSet<u64> = rows.iter().map(|r| r.index).collect();
+    let missing: Vec<u64> = selection
+        .iter()
+        .map(|c| c.0)
+        .filter(|i| !have.contains(i))
+        .collect();
+    let partial = (!missing_shards.is_empty() || !incomplete.is_empty() || !missing.is_empty())
+        .then(|| Partial {
+            partial: true,
+            shards: n,
+            missing_shards,
+            incomplete_shards: incomplete,
+            candidates: selection.len() as u64,
+            missing_candidates: missing.len() as u64,
+            missing_candidate_list: missing.iter().take(Partial::LISTED).copied().collect(),
+        });
     od.lock().context("merge --out")?;
-    od.write_json(CONFIG_FILE, base.as_ref().unwrap())?;
+    // Neither marker of an earlier merge into this folder (--force) may outlive this one.
+    od.remove(COMPLETE_FILE)?;
+    od.remove(PARTIAL_FILE)?;
+    od.write_json(CONFIG_FILE, &base)?;
     let mut text = Vec::new();
     for r in &rows {
         serde_json::to_writer(&mut text, r)?;
         text.push(b'\n');
     }
     od.write(RESULTS_FILE, &text)?;
-    if shards.len() == n {
-        od.write_json(COMPLETE_FILE, &SweepSummary::merged(n, rows.len() as u64))?;
-    }
-    Ok(rows.len())
+    match &partial {
+        None => od.write_json(COMPLETE_FILE, &SweepSummary::merged(n, rows.len() as u64))?,
+        Some(p) => od.write_json(PARTIAL_FILE, p)?,
+    };
+    Ok(Merged {
+        rows: rows.len(),
+        candidates: selection.len() as u64,
+        partial,
+    })
 }
 
 /// Refuse a shard directory whose task recorded a failure, or that was never started.

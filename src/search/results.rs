@@ -15,6 +15,9 @@ pub const RESULTS_FILE: &str = "results.jsonl";
 pub const CONFIG_FILE: &str = "config.json";
 /// Written when a run (or merge) has finished.
 pub const COMPLETE_FILE: &str = "complete.json";
+/// Written by `merge --allow-partial` instead of [`COMPLETE_FILE`] when shards or candidates are
+/// missing: what is missing ([`crate::search::merge::Partial`]).
+pub const PARTIAL_FILE: &str = "partial.json";
 /// Written into a shard's directory by a batch task that failed (scripts/slurm/search-array.sh):
 /// one line saying how and where; removed when the task starts again.
 pub const FAILED_FILE: &str = "FAILED";

@@ -230,7 +230,10 @@ mod tests {
         assert_eq!(unfused, vec![2f32.powi(-11), -(2f32.powi(-11))]);
         assert_eq!(
             fused,
-            vec![2f32.powi(-11) + 2f32.powi(-24), -(2f32.powi(-11) + 2f32.powi(-24))]
+            vec![
+                2f32.powi(-11) + 2f32.powi(-24),
+                -(2f32.powi(-11) + 2f32.powi(-24))
+            ]
         );
         assert_eq!(f.eval(&[z, -1.0]).unwrap(), unfused);
     }

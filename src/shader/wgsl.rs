@@ -53,8 +53,7 @@ fn folded(f: &Func) -> Result<Vec<Option<f32>>> {
         let v = match n {
             Node::Const(c) => Some(*c),
             Node::Op(op) => {
-                let args: Option<Vec<f32>> =
-                    op.args().iter().map(|a| out[a.0 as usize]).collect();
+                let args: Option<Vec<f32>> = op.args().iter().map(|a| out[a.0 as usize]).collect();
                 match args {
                     Some(_) => {
                         let scratch: Vec<f32> = out.iter().map(|x| x.unwrap_or(0.0)).collect();
@@ -244,7 +243,16 @@ mod tests {
 
     #[test]
     fn literals_carry_the_f32_suffix_and_parse_back() {
-        for v in [0.0f32, -0.0, 1.0, -2.5, 1e-7, f32::MAX, f32::MIN_POSITIVE, 0.1] {
+        for v in [
+            0.0f32,
+            -0.0,
+            1.0,
+            -2.5,
+            1e-7,
+            f32::MAX,
+            f32::MIN_POSITIVE,
+            0.1,
+        ] {
             let s = literal(v);
             let t = s.trim_start_matches('(').trim_end_matches(')');
             assert!(t.ends_with('f'), "{s}");
@@ -265,7 +273,12 @@ mod tests {
         f.output("o", Shape::Array(2), &[x, v[0]]);
         f.ret(Shape::Vector(2), &[x, y]);
         let s = func(&f).unwrap();
-        assert!(s.contains("fn k(z: f32, b: array<f32, 2>, o: ptr<function, array<f32, 2>>) -> vec2<f32>"), "{s}");
+        assert!(
+            s.contains(
+                "fn k(z: f32, b: array<f32, 2>, o: ptr<function, array<f32, 2>>) -> vec2<f32>"
+            ),
+            "{s}"
+        );
         assert!(s.contains("let t_4: f32 = z * 5e-1f;"), "{s}");
         assert!(s.contains("select(t_4, b[1], t_4 < b[0])"), "{s}");
         assert!(s.contains("var t_6: f32 = t_5;"), "{s}");
@@ -282,6 +295,9 @@ mod tests {
         let y = f.add(z, inf);
         f.ret(Shape::Scalar, &[y]);
         let e = func(&f).unwrap_err().to_string();
-        assert!(e.contains("k: statement") && e.contains("non-finite"), "{e}");
+        assert!(
+            e.contains("k: statement") && e.contains("non-finite"),
+            "{e}"
+        );
     }
 }

@@ -341,7 +341,9 @@ fn shards_merge_to_the_single_run() {
         // Missing shard is an error.
         let e = merge_dirs(&dirs[..2], &merged, false, false).unwrap_err();
         assert!(format!("{e:#}").contains("shard 2/3 is missing"), "{e:#}");
-        assert_eq!(merge_dirs(&dirs, &merged, false, false).unwrap(), 28);
+        let m = merge_dirs(&dirs, &merged, false, false).unwrap();
+        assert_eq!((m.rows, m.partial), (28, None));
+        assert!(merged.join("complete.json").exists() && !merged.join("partial.json").exists());
         let (a, b) = (rows(&single), rows(&merged));
         if exhaustive {
             assert_eq!(a, b);
@@ -366,5 +368,125 @@ fn shards_merge_to_the_single_run() {
         for d in dirs.into_iter().chain([single, merged]) {
             std::fs::remove_dir_all(d).unwrap();
         }
+    }
+}
+
+/// `merge --allow-partial` with a shard missing, or a shard unfinished, writes no completion
+/// marker: `partial.json` names the missing shards and candidates, and so do the merge's JSON
+/// output, its line and the sweep report.
+#[test]
+fn partial_merge_is_never_labelled_complete() {
+    use crate::common::run as cli;
+    use momentlab::search::merge::Partial;
+    let f = fixture();
+    let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
+    let mut cfg = config(&s, 2);
+    cfg.exhaustive = true;
+    let mut dirs = Vec::new();
+    for i in 0..3 {
+        let mut c = cfg.clone();
+        c.shard = [i, 3];
+        let d = tmp_path(&format!("partial-shard{i}"));
+        run(&c, &s, &d);
+        dirs.push(d);
+    }
+    let all: Vec<u64> = dirs.iter().flat_map(|d| rows(d)).map(|r| r.index).collect();
+    assert_eq!(all.len(), 28);
+    let of_shard = |i: u64| -> Vec<u64> {
+        let mut v: Vec<u64> = all.iter().copied().filter(|c| c % 3 == i).collect();
+        v.sort();
+        v
+    };
+    let s = |d: &Path| d.to_str().unwrap().to_string();
+    // Shard 2 missing: the rows of shards 0 and 1, no completion marker.
+    let out = tmp_path("partial-merged");
+    let (code, stdout, stderr) = cli(
+        &[
+            "merge",
+            &s(&dirs[0]),
+            &s(&dirs[1]),
+            "--allow-partial",
+            "--json",
+            "--out",
+            &s(&out),
+        ],
+        None,
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        !out.join("complete.json").exists(),
+        "a partial merge marked complete"
+    );
+    let p: Partial =
+        serde_json::from_slice(&std::fs::read(out.join("partial.json")).unwrap()).unwrap();
+    assert!(p.partial);
+    assert_eq!(p.missing_shards, vec![2]);
+    assert!(p.incomplete_shards.is_empty());
+    assert_eq!(p.candidates, 28);
+    assert_eq!(p.missing_candidate_list, of_shard(2));
+    assert_eq!(p.missing_candidates, of_shard(2).len() as u64);
+    let v: serde_json::Value = serde_json::from_str(&stdout).unwrap();
+    assert_eq!(v["partial"], true);
+    assert_eq!(v["complete"], false);
+    assert_eq!(v["missing_shards"], serde_json::json!([2]));
+    assert_eq!(v["missing_candidate_list"], serde_json::json!(of_shard(2)));
+    assert_eq!(v["rows"], 28 - of_shard(2).len());
+    // The line form says partial and names shard 2/3.
+    let out2 = tmp_path("partial-merged-line");
+    let (code, _, stderr) = cli(
+        &[
+            "merge",
+            &s(&dirs[0]),
+            &s(&dirs[1]),
+            "--allow-partial",
+            "--out",
+            &s(&out2),
+        ],
+        None,
+    );
+    assert_eq!(code, 0, "{stderr}");
+    assert!(
+        stderr.contains("partial: shards 2/3 missing") && stderr.contains("no complete.json"),
+        "{stderr}"
+    );
+    // All shards given, one unfinished (killed: no marker, rows cut): still partial.
+    std::fs::remove_file(dirs[1].join("complete.json")).unwrap();
+    let text = std::fs::read_to_string(dirs[1].join("results.jsonl")).unwrap();
+    let kept: Vec<&str> = text.lines().take(3).collect();
+    std::fs::write(dirs[1].join("results.jsonl"), kept.join("\n") + "\n").unwrap();
+    let lost: Vec<u64> = of_shard(1)
+        .into_iter()
+        .filter(|i| !kept.iter().any(|l| l.contains(&format!("\"index\":{i},"))))
+        .collect();
+    assert_eq!(lost.len(), of_shard(1).len() - 3);
+    let out3 = tmp_path("partial-merged-unfinished");
+    let e = merge_dirs(&dirs, &out3, false, false).unwrap_err();
+    assert!(format!("{e:#}").contains("not complete"), "{e:#}");
+    let m = merge_dirs(&dirs, &out3, true, false).unwrap();
+    let p = m.partial.expect("an unfinished shard merged as complete");
+    assert!(!out3.join("complete.json").exists());
+    assert!(p.missing_shards.is_empty());
+    assert_eq!(p.incomplete_shards, vec![1]);
+    assert_eq!(p.missing_candidate_list, lost);
+    // The sweep report of the partial merge says so and names what is missing.
+    let od = momentlab::artefact::OutDir::new(tmp_path("partial-report"), false).unwrap();
+    let opts = momentlab::report::sweep::ReportOptions {
+        partial: Some(p.clone()),
+        fig3_points: 8,
+        solver: "reference".into(),
+        ..Default::default()
+    };
+    momentlab::report::sweep::write(&od, &read_rows(&out3).unwrap(), &f.data, &[], &opts).unwrap();
+    let md = std::fs::read_to_string(od.root().join("search_m2.md")).unwrap();
+    assert!(
+        md.contains("**Partial results**") && md.contains("shards 1/3 unfinished"),
+        "{md}"
+    );
+    assert!(md.contains(&format!("{} of 28 candidates missing", lost.len())));
+    for d in dirs
+        .into_iter()
+        .chain([out, out2, out3, od.root().to_path_buf()])
+    {
+        std::fs::remove_dir_all(d).unwrap();
     }
 }
