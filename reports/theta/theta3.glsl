@@ -6,9 +6,14 @@
 // Encoder: each channel as a Chebyshev series in x = 2z - 1 (Clenshaw's recurrence), accurate in f32; clamped to [0,1].
 // Store s (16-bit UNORM or 32-bit float), filter linearly, decode the filtered sample.
 // Moment bias α, b*: depend on the reconstruction (none recommended for this m).
-// MOMENTLAB_PRECISE (default `precise`) keeps the operations unfused as momentlab tests them; define it empty for GLSL ES 3.10.
+// Accuracy: momentlab checks it with every operation rounded on its own (`precise`) and with every a*b + c fused, as drivers may without `precise` (WGSL, GLSL before 4.00 / ES 3.20).
+// MOMENTLAB_PRECISE: `precise` (no fused a*b + c) in GLSL >= 4.00 and GLSL ES >= 3.20, empty in older GLSL; define it before this text to override.
 #ifndef MOMENTLAB_PRECISE
+#if (defined(GL_ES) && __VERSION__ >= 320) || (!defined(GL_ES) && __VERSION__ >= 400)
 #define MOMENTLAB_PRECISE precise
+#else
+#define MOMENTLAB_PRECISE
+#endif
 #endif
 
 void encodeMoments3(float z, out float s[3])

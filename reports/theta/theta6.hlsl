@@ -7,7 +7,8 @@
 // Store s (16-bit UNORM or 32-bit float), filter linearly, decode the filtered sample.
 // Reconstruction: Hamburger 6MSM with b' = (1 - α) b + α b*, b* = (0.5, ..., 0.5);
 // α = 1e-4 with 16-bit UNORM storage, α = 1e-6 with 32-bit float storage (smallest usable α, momentlab quantize study, docs/theta.md).
-// MOMENTLAB_PRECISE (default `precise`) keeps the operations unfused as momentlab tests them; define it empty for GLSL ES 3.10.
+// Accuracy: momentlab checks it with every operation rounded on its own (`precise`) and with every a*b + c fused, as drivers may without `precise` (WGSL, GLSL before 4.00 / ES 3.20).
+// MOMENTLAB_PRECISE: `precise` (no fused a*b + c); define it before this text to override.
 #ifndef MOMENTLAB_PRECISE
 #define MOMENTLAB_PRECISE precise
 #endif

@@ -1,5 +1,5 @@
 //! `momentlab theta`: optimal affine quantization transform θ for a basis (Section 4.3 of the
-//! 2015 paper). theta{m}.json and HLSL/GLSL snippets into --out DIR
+//! 2015 paper). theta{m}.json and HLSL/GLSL/WGSL snippets into --out DIR
 //! (default a run directory under results/; never overwrites without --force). Parses the flags
 //! and calls [`crate::pipeline::theta`].
 
@@ -44,7 +44,7 @@ pub struct Args {
     /// Starts within this many bits of the best count as reaching the best basin.
     #[arg(long, default_value_t = 1e-3)]
     pub basin_tol: f64,
-    /// Output folder for theta{m}.json and the HLSL/GLSL snippets theta{m}.hlsl|glsl
+    /// Output folder for theta{m}.json and the HLSL/GLSL/WGSL snippets theta{m}.hlsl|glsl|wgsl
     /// (default results/theta{m}-seed{seed}; for --basis a hash of the names replaces m); with
     /// --summary, for the comparison files.
     #[arg(long)]
@@ -62,7 +62,7 @@ pub struct Args {
     /// Other transforms always use the search's order.
     #[arg(long, value_enum, default_value_t = Order::Paper)]
     pub channel_order: Order,
-    /// Instead of searching: re-emit theta*.hlsl / theta*.glsl for every theta*.json in DIR (the
+    /// Instead of searching: re-emit theta*.hlsl / .glsl / .wgsl for every theta*.json in DIR (the
     /// JSON files are only read); existing snippets are replaced only with --force.
     #[arg(long, conflicts_with_all = ["m", "basis", "summary"])]
     pub snippets: Option<PathBuf>,

@@ -42,7 +42,7 @@ pub struct Args {
     /// Seed of the fragment sample.
     #[arg(long, default_value_t = 2015)]
     pub seed: u64,
-    /// Write tune.json and export/<scene>/ (setting.json, shadow.glsl, shadow.hlsl) into this
+    /// Write tune.json and export/<scene>/ (setting.json, shadow.glsl/.hlsl/.wgsl) into this
     /// folder.
     #[arg(long)]
     pub out: Option<PathBuf>,

@@ -1,5 +1,5 @@
 //! Optimal quantization transforms θ_m as artefacts (Section 4.3 of the 2015 paper): one search
-//! into `theta{tag}.json` with its HLSL/GLSL snippets, the snippets re-emitted from a JSON, and
+//! into `theta{tag}.json` with its HLSL/GLSL/WGSL snippets, the snippets re-emitted from a JSON, and
 //! the comparison with the published θ (`comparison.md`, `summary.json`, Fig. 5 analogue).
 //! Step 5 of the pipeline ([`run`]) and `momentlab theta` call these with typed options.
 
@@ -28,10 +28,13 @@ pub struct Search {
     pub order: ChannelOrder,
 }
 
-/// The file names of one search: `theta{tag}.json`, `.hlsl`, `.glsl`.
-pub fn file_names(tag: &str) -> [String; 3] {
-    ["json", "hlsl", "glsl"].map(|e| format!("theta{tag}.{e}"))
+/// The file names of one search: `theta{tag}.json`, then the snippets ([`SNIPPET_EXTENSIONS`]).
+pub fn file_names(tag: &str) -> [String; 4] {
+    ["json", "hlsl", "glsl", "wgsl"].map(|e| format!("theta{tag}.{e}"))
 }
+
+/// The languages of the snippets, as file extensions.
+pub const SNIPPET_EXTENSIONS: [&str; 3] = ["hlsl", "glsl", "wgsl"];
 
 /// The tag of a basis in file names: m for the power basis (z, …, z^m), otherwise `_` and an
 /// FNV-1a hash of the names.
@@ -48,7 +51,8 @@ pub fn snippet_tag(curve: &dyn Curve) -> String {
     }
 }
 
-/// Write `theta{tag}.glsl` and `theta{tag}.hlsl` for θ into `od`; returns the channel order used.
+/// Write `theta{tag}.glsl`, `theta{tag}.hlsl` and `theta{tag}.wgsl` (the GLSL-named functions)
+/// for θ into `od`; returns the channel order used.
 fn write_snippets(
     od: &OutDir,
     th: &theta::Theta,
@@ -59,6 +63,7 @@ fn write_snippets(
     let sn = codegen::snippet(th, curve, tag, order)?;
     od.write_text(&format!("theta{tag}.glsl"), &shader::glsl(&sn.glsl)?)?;
     od.write_text(&format!("theta{tag}.hlsl"), &shader::hlsl(&sn.hlsl)?)?;
+    od.write_text(&format!("theta{tag}.wgsl"), &shader::wgsl(&sn.glsl)?)?;
     Ok(sn.order)
 }
 
@@ -88,14 +93,14 @@ pub fn snippets(dir: &Path, order: ChannelOrder, force: bool) -> Result<()> {
         };
         let curve = curve::from_names(&th.basis).with_context(|| p.display().to_string())?;
         let tag = snippet_tag(curve.as_ref());
-        od.reserve([format!("theta{tag}.glsl"), format!("theta{tag}.hlsl")])
+        od.reserve(SNIPPET_EXTENSIONS.map(|e| format!("theta{tag}.{e}")))
             .context("--snippets")?;
         todo.push((p, th, curve, tag));
     }
     for (p, th, curve, tag) in &todo {
         let used = write_snippets(&od, th, curve.as_ref(), tag, order)?;
         eprintln!(
-            "{}: wrote theta{tag}.glsl, theta{tag}.hlsl ({used} channel order)",
+            "{}: wrote theta{tag}.glsl, theta{tag}.hlsl, theta{tag}.wgsl ({used} channel order)",
             p.display()
         );
     }

@@ -470,7 +470,7 @@ pub fn snippet(
     if power {
         h.extend(bias_lines(m));
     }
-    h.push("MOMENTLAB_PRECISE (default `precise`) keeps the operations unfused as momentlab tests them; define it empty for GLSL ES 3.10.".into());
+    h.push("Accuracy: momentlab checks it with every operation rounded on its own (`precise`) and with every a*b + c fused, as drivers may without `precise` (WGSL, GLSL before 4.00 / ES 3.20).".into());
     let glsl = module(&th, &form, tag, false, &h);
     let hlsl = module(&th, &form, tag, true, &h);
     Ok(Snippet {

@@ -1,10 +1,20 @@
 //! GLSL and HLSL text of a [`Module`]: one `MOMENTLAB_PRECISE float t_N = …;` line per
 //! statement, in node order, with one operation each; a loop is a `for` with a constant trip
-//! count, its variables declared before it and assigned at the end of its body. `MOMENTLAB_PRECISE` defaults to the
-//! `precise` qualifier (GLSL ≥ 4.00, GLSL ES 3.20, HLSL), which forbids the compiler to fuse or
-//! reorder the operations; define it empty beforehand where `precise` is unavailable
-//! (GLSL ES 3.10). Constants print as the shortest decimal of their f64 value, which parses
-//! back to exactly the same f32.
+//! count, its variables declared before it and assigned at the end of its body. Constants
+//! print as the shortest decimal of their f64 value in exponent form (`1.5e-3`, negative ones
+//! parenthesized), which parses back to exactly the same f32.
+//!
+//! `MOMENTLAB_PRECISE` is the `precise` qualifier, which forbids the compiler to fuse a·b + c
+//! into an FMA or to reorder, where the language has it: HLSL, GLSL ≥ 4.00 and GLSL ES ≥ 3.20.
+//! The GLSL text chooses by `__VERSION__` and `GL_ES` and defines it empty in older GLSL
+//! (3.30, ES 3.00, ES 3.10), so it compiles as shipped in every version; a definition made
+//! before the text overrides the choice. Without `precise` the driver may fuse: the
+//! interpreter's fused order ([`super::eval::Order::Fused`]) computes that case.
+//!
+//! Everything else printed is GLSL 3.30 / GLSL ES 3.00 and HLSL SM 5: scalar `float`,
+//! `vecN`/`floatN`, `float x[n]` (also as `out` parameters), `for` loops over an `int`,
+//! `?:`, and the built-ins abs, sqrt, min, max, clamp, cos, sin, acos, atan(y, x) / atan2,
+//! exp, log.
 
 use super::ir::{Cmp, Func, Module, Node, Op, Shape, V};
 use anyhow::{bail, Result};
@@ -199,14 +209,39 @@ pub fn func(f: &Func, lang: Lang) -> Result<String> {
     Ok(s)
 }
 
-/// Print a module: header comment, the `MOMENTLAB_PRECISE` default, then every function.
+/// The `MOMENTLAB_PRECISE` default of a module: a comment line and the preprocessor lines.
+pub fn precise_default(lang: Lang) -> &'static str {
+    match lang {
+        Lang::Glsl => {
+            "// MOMENTLAB_PRECISE: `precise` (no fused a*b + c) in GLSL >= 4.00 and GLSL ES >= 3.20, \
+             empty in older GLSL; define it before this text to override.\n\
+             #ifndef MOMENTLAB_PRECISE\n\
+             #if (defined(GL_ES) && __VERSION__ >= 320) || (!defined(GL_ES) && __VERSION__ >= 400)\n\
+             #define MOMENTLAB_PRECISE precise\n\
+             #else\n\
+             #define MOMENTLAB_PRECISE\n\
+             #endif\n\
+             #endif\n"
+        }
+        Lang::Hlsl => {
+            "// MOMENTLAB_PRECISE: `precise` (no fused a*b + c); define it before this text to \
+             override.\n\
+             #ifndef MOMENTLAB_PRECISE\n\
+             #define MOMENTLAB_PRECISE precise\n\
+             #endif\n"
+        }
+    }
+}
+
+/// Print a module: header comment, the `MOMENTLAB_PRECISE` default ([`precise_default`]),
+/// then every function.
 pub fn module(m: &Module, lang: Lang) -> Result<String> {
     m.validate()?;
     let mut s = String::new();
     for h in &m.header {
         let _ = writeln!(s, "// {h}");
     }
-    s.push_str("#ifndef MOMENTLAB_PRECISE\n#define MOMENTLAB_PRECISE precise\n#endif\n");
+    s.push_str(precise_default(lang));
     for f in &m.funcs {
         s.push('\n');
         s.push_str(&func(f, lang)?);

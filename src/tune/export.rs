@@ -1,5 +1,6 @@
-//! The export of a tuned setting: `setting.json` (the constants) and `shadow.glsl` /
-//! `shadow.hlsl` with three functions written in the shader IR (`crate::shader`):
+//! The export of a tuned setting: `setting.json` (the constants) and `shadow.glsl`,
+//! `shadow.hlsl` and `shadow.wgsl` with three functions written in the shader IR
+//! (`crate::shader`):
 //! `tunedEncode(z)` → the values a texel stores (θ(b(z)) for 16-bit UNORM with θ, b(z) else),
 //! `tunedDecode(s)` → the moments b, and `tunedShadow(s, z_f)` → G: decode, bias
 //! b' = (1 − α)·b + α·b*, the technique's reconstruction in f32 in the same operations and order
@@ -825,6 +826,18 @@ pub fn header(s: &Setting) -> Vec<String> {
     ]
 }
 
+/// The shader files of an export, in the order of [`shader_texts`].
+pub const SHADER_FILES: [&str; 3] = ["shadow.glsl", "shadow.hlsl", "shadow.wgsl"];
+
+/// The text of each of the [`SHADER_FILES`] for an export's module.
+pub fn shader_texts(m: &Module) -> Result<[String; 3]> {
+    Ok([
+        crate::shader::glsl(m)?,
+        crate::shader::hlsl(m)?,
+        crate::shader::wgsl(m)?,
+    ])
+}
+
 /// What `setting.json` of an export holds.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Exported<'a> {
@@ -846,7 +859,7 @@ fn target_dir(dir: &str, scene: &str) -> String {
 }
 
 /// Every file [`write`] may write into folder `dir` of its writer for the targets of `scenes`
-/// and `all` (all scenes): `<dir>/<scene>/setting.json`, `shadow.glsl` and `shadow.hlsl`. Known
+/// and `all` (all scenes): `<dir>/<scene>/setting.json` and the [`SHADER_FILES`]. Known
 /// before the tuning, so the caller can [`reserve`](crate::artefact::OutDir::reserve) them first.
 pub fn file_names<S: AsRef<str>>(dir: &str, scenes: &[S]) -> Vec<String> {
     scenes
@@ -855,24 +868,26 @@ pub fn file_names<S: AsRef<str>>(dir: &str, scenes: &[S]) -> Vec<String> {
         .chain(std::iter::once("all"))
         .flat_map(|scene| {
             let d = target_dir(dir, scene);
-            ["setting.json", "shadow.glsl", "shadow.hlsl"].map(|f| format!("{d}/{f}"))
+            std::iter::once("setting.json")
+                .chain(SHADER_FILES)
+                .map(move |f| format!("{d}/{f}"))
         })
         .collect()
 }
 
 /// Write the export of every target's chosen setting into folder `dir` of `out`, one folder
 /// per target (`<dir>/<scene>/`, scene "all" for all scenes): `setting.json`, and
-/// `shadow.glsl` + `shadow.hlsl` where a reconstruction exists. The names are among
-/// [`file_names`].
+/// the [`SHADER_FILES`] where a reconstruction exists. The names are among [`file_names`].
 pub fn write(out: &crate::artefact::OutDir, dir: &str, t: &super::Tuning) -> Result<()> {
     for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
         let dir = target_dir(dir, &target.scene);
         let s = &target.chosen.setting;
         let mut shaders = Vec::new();
         if let Some(m) = module(s, header(s))? {
-            out.write_text(&format!("{dir}/shadow.glsl"), &crate::shader::glsl(&m)?)?;
-            out.write_text(&format!("{dir}/shadow.hlsl"), &crate::shader::hlsl(&m)?)?;
-            shaders = vec!["shadow.glsl".into(), "shadow.hlsl".into()];
+            for (name, text) in SHADER_FILES.into_iter().zip(shader_texts(&m)?) {
+                out.write_text(&format!("{dir}/{name}"), &text)?;
+                shaders.push(name.to_string());
+            }
         }
         out.write_json(
             &format!("{dir}/setting.json"),

@@ -180,7 +180,10 @@ fn scan(dir: &Path) -> Vec<String> {
                 continue;
             }
             let ext = p.extension().and_then(|e| e.to_str()).unwrap_or("");
-            if !matches!(ext, "json" | "md" | "html" | "csv" | "glsl" | "hlsl") {
+            if !matches!(
+                ext,
+                "json" | "md" | "html" | "csv" | "glsl" | "hlsl" | "wgsl"
+            ) {
                 continue;
             }
             let text = std::fs::read_to_string(&p).unwrap_or_default();

@@ -5,6 +5,7 @@
 mod common;
 
 mod cli;
+mod committed_shaders;
 mod optimum;
 mod published;
 mod quantize_study;

@@ -2,7 +2,8 @@
 //! interpreter applies each operation once in f32 (a loop body once per iteration, its
 //! variables assigned in order at its end), malformed functions (including misused loops) are
 //! refused, and a module using every operation and a loop compiles in all wrappers
-//! (GLSL 450 / ES 310 / HLSL).
+//! (GLSL 3.30 / 4.50 / ES 3.00 / ES 3.10, HLSL, WGSL through naga) as printed, with
+//! `MOMENTLAB_PRECISE` `precise` exactly where the GLSL version has it.
 
 use crate::common::shader as shader_common;
 
@@ -282,9 +283,7 @@ fn malformed_functions_are_refused() {
 
 #[test]
 fn every_operation_compiles_in_all_wrappers() {
-    if !shader_common::tools_present("every_operation_compiles_in_all_wrappers") {
-        return;
-    }
+    let glslang = shader_common::tools_present("every_operation_compiles_in_all_wrappers");
     let m = Module {
         header: vec!["all operations".into()],
         funcs: vec![all_ops(), heron(20)],
@@ -293,13 +292,59 @@ fn every_operation_compiles_in_all_wrappers() {
     assert!(g.contains("atan(") && !g.contains("atan2("));
     assert!(g.contains("for (int t_loop") && g.contains("< 20;"));
     assert!(shader::hlsl(&m).unwrap().contains("atan2("));
-    shader_common::compile_check("all_ops", &m).unwrap_or_else(|e| panic!("{e}"));
-    // the check itself rejects broken code
+    assert!(shader::wgsl(&m).unwrap().contains("atan2("));
+    shader_common::check("all_ops", &m, glslang).unwrap_or_else(|e| panic!("{e}"));
+    // the check itself rejects broken code, in every language
     let mut bad = all_ops();
-    bad.name = "main".into(); // clashes with the wrapper's entry point
+    bad.name = "main".into(); // clashes with the wrappers' entry point
     let m = Module {
         header: vec![],
         funcs: vec![bad],
     };
-    assert!(shader_common::compile_check("clash", &m).is_err());
+    let e = shader_common::check("clash", &m, glslang).unwrap_err();
+    assert!(e.contains("WGSL (naga"), "{e}");
+    if glslang {
+        for what in [
+            "GLSL 3.30",
+            "GLSL 4.50",
+            "GLSL ES 3.00",
+            "GLSL ES 3.10",
+            "HLSL",
+        ] {
+            assert!(e.contains(&format!("clash: {what}")), "{what}: {e}");
+        }
+    }
+    // a WGSL type error (f32 + i32) is caught by naga's parser
+    let e =
+        shader_common::naga_check("typed", "fn f(x: f32) -> f32 { return x + 1i; }").unwrap_err();
+    assert!(e.contains("typed: WGSL"), "{e}");
+}
+
+/// The GLSL version guard: `MOMENTLAB_PRECISE` is `precise` in GLSL ≥ 4.00 and GLSL ES ≥ 3.20,
+/// empty before, and a definition made before the text wins.
+#[test]
+fn precise_is_guarded_by_glsl_version() {
+    if !shader_common::tools_present("precise_is_guarded_by_glsl_version") {
+        return;
+    }
+    let m = Module {
+        header: vec![],
+        funcs: vec![heron(2)],
+    };
+    for (version, es, precise) in shader_common::GLSL_VERSIONS {
+        let pp = shader_common::glsl_preprocessed("guard", &m, version, es);
+        let declared = pp.lines().filter(|l| l.contains("float t_")).count();
+        let with = pp
+            .lines()
+            .filter(|l| l.contains("precise float t_"))
+            .count();
+        assert!(declared > 0, "{version}: {pp}");
+        assert_eq!(with, if precise { declared } else { 0 }, "{version}: {pp}");
+    }
+    // HLSL keeps `precise`; an earlier definition overrides the default
+    let h = shader::hlsl(&m).unwrap();
+    assert!(h.contains("#define MOMENTLAB_PRECISE precise\n#endif"));
+    assert!(!h.contains("__VERSION__"));
+    let g = shader::glsl(&m).unwrap();
+    assert!(g.contains("#ifndef MOMENTLAB_PRECISE\n#if"), "{g}");
 }

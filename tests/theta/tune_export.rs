@@ -1,7 +1,8 @@
 //! The exported shader code of tuned settings: its reconstruction, run in the shader IR's f32
 //! interpreter (the same operations in the same order as the printed GLSL/HLSL), equals
 //! momentlab's own f32 implementation (`registry::build` at f32) to 1e-5 on 10 000 real filter
-//! windows, and the module compiles (glslangValidator + spirv-val, where installed).
+//! windows, and the module compiles (tests/common/shader.rs: WGSL through naga; GLSL and HLSL
+//! through glslangValidator + spirv-val, where installed), for every technique × storage.
 
 use crate::common::shader as shader_common;
 
@@ -146,24 +147,32 @@ fn exported_reconstructions_equal_the_f32_implementation_on_real_windows() {
                 );
             }
         }
-        if compile {
-            shader_common::compile_check(
-                &momentlab::artefact::safe_name(&s.family.label()),
-                &module,
-            )
-            .unwrap();
-        }
+        shader_common::check(
+            &momentlab::artefact::safe_name(&s.family.label()),
+            &module,
+            compile,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
     }
-    // every technique and storage `tune` searches has an export
+    // every technique and storage `tune` searches has an export; each technique × storage not
+    // compiled above compiles with its first own parameter
     for t in TechniqueKind::ALL {
         for st in t.storages() {
-            for own in t.own_params(*st) {
+            for (k, own) in t.own_params(*st).into_iter().enumerate() {
                 let s = setting(t, *st, own, t.alphas()[0]);
-                assert!(
-                    export::module(&s, vec![]).unwrap().is_some(),
-                    "{}",
-                    s.label()
-                );
+                let module = export::module(&s, export::header(&s)).unwrap();
+                assert!(module.is_some(), "{}", s.label());
+                let done = settings
+                    .iter()
+                    .any(|d| d.family.technique == t && d.family.storage == *st);
+                if k == 0 && !done {
+                    shader_common::check(
+                        &momentlab::artefact::safe_name(&s.family.label()),
+                        &module.unwrap(),
+                        compile,
+                    )
+                    .unwrap_or_else(|e| panic!("{e}"));
+                }
             }
         }
     }

@@ -3,8 +3,13 @@
 // tunedEncode(z): values a texel stores; filter them linearly; tunedShadow(filtered, zf).
 // Depth bias (caller): zf = z - (0e0 + 2 * (|dz/du| + |dz/dv|)), slopes per texel.
 // Moment bias alpha = 1e-6 (inside tunedShadow).
+// MOMENTLAB_PRECISE: `precise` (no fused a*b + c) in GLSL >= 4.00 and GLSL ES >= 3.20, empty in older GLSL; define it before this text to override.
 #ifndef MOMENTLAB_PRECISE
+#if (defined(GL_ES) && __VERSION__ >= 320) || (!defined(GL_ES) && __VERSION__ >= 400)
 #define MOMENTLAB_PRECISE precise
+#else
+#define MOMENTLAB_PRECISE
+#endif
 #endif
 
 void tunedEncode(float depth, out float stored[6])

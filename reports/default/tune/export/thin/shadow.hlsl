@@ -3,6 +3,7 @@
 // tunedEncode(z): values a texel stores; filter them linearly; tunedShadow(filtered, zf).
 // Depth bias (caller): zf = z - (5e-4 + 0 * (|dz/du| + |dz/dv|)), slopes per texel.
 // Moment bias alpha = 6e-6 (inside tunedShadow).
+// MOMENTLAB_PRECISE: `precise` (no fused a*b + c); define it before this text to override.
 #ifndef MOMENTLAB_PRECISE
 #define MOMENTLAB_PRECISE precise
 #endif
