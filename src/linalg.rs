@@ -120,6 +120,26 @@ impl Lu {
         }
     }
 
+    /// The factorisation of a square matrix given as rows; None when the rows are not square,
+    /// a pivot is exactly zero or not finite, or there are more than [`MAX_ROWS`] rows.
+    pub fn factor_rows(a: &[Vec<f64>]) -> Option<Lu> {
+        let n = a.len();
+        if a.iter().any(|row| row.len() != n) {
+            return None;
+        }
+        let flat: Vec<f64> = a.iter().flatten().copied().collect();
+        let mut lu = Lu::default();
+        lu.factor(&flat, n).then_some(lu)
+    }
+
+    /// A⁻¹ as rows.
+    pub fn inverse_rows(&self) -> Vec<Vec<f64>> {
+        let n = self.r;
+        let mut inv = vec![0.0; n * n];
+        self.inverse(&mut inv);
+        inv.chunks(n.max(1)).map(|r| r.to_vec()).collect()
+    }
+
     /// min |u_kk| over the pivots of the last factorisation (0 before any).
     pub fn min_pivot(&self) -> f64 {
         let r = self.r;
@@ -185,6 +205,47 @@ fn lu_solve_t<const R: usize>(r: usize, lu: &[f64], perm: &[usize], x: &mut [f64
     }
 }
 
+/// a·b = Σ a_i b_i over the common length, summed left to right.
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// 3-vectors `[x, y, z]`: the one implementation of their products for the renderer, the
+/// scene builder and the quantization hulls.
+pub mod v3 {
+    /// A 3-vector.
+    pub type V3 = [f64; 3];
+
+    /// a + b.
+    pub fn add(a: V3, b: V3) -> V3 {
+        [a[0] + b[0], a[1] + b[1], a[2] + b[2]]
+    }
+    /// a − b.
+    pub fn sub(a: V3, b: V3) -> V3 {
+        [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+    }
+    /// s·a.
+    pub fn scale(a: V3, s: f64) -> V3 {
+        [a[0] * s, a[1] * s, a[2] * s]
+    }
+    /// a·b = a_x b_x + a_y b_y + a_z b_z (in that order).
+    pub fn dot(a: V3, b: V3) -> f64 {
+        a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    }
+    /// a × b.
+    pub fn cross(a: V3, b: V3) -> V3 {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    }
+    /// ‖a‖₂ = √(a·a).
+    pub fn norm(a: V3) -> f64 {
+        dot(a, a).sqrt()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -233,5 +294,20 @@ mod tests {
         // The first pivot is the largest |a_i0| = 3.
         assert!(lu.min_pivot() > 0.0 && lu.min_pivot() <= 3.0);
         assert!(!lu.factor(&vec![1.0; 33 * 33], 33), "beyond MAX_ROWS");
+    }
+
+    /// The 3-vector products: a right-handed cross product orthogonal to both factors.
+    #[test]
+    fn three_vector_products() {
+        use super::v3::*;
+        let (a, b) = ([1.0, 2.0, 3.0], [-2.0, 0.5, 4.0]);
+        let c = cross(a, b);
+        assert_eq!(c, [6.5, -10.0, 4.5]);
+        assert_eq!((dot(c, a), dot(c, b)), (0.0, 0.0));
+        assert_eq!(cross([1.0, 0.0, 0.0], [0.0, 1.0, 0.0]), [0.0, 0.0, 1.0]);
+        assert_eq!(norm([3.0, 4.0, 12.0]), 13.0);
+        assert_eq!(add(a, scale(b, 2.0)), sub(a, scale(b, -2.0)));
+        assert_eq!(super::dot(&a, &b), dot(a, b));
+        assert_eq!(super::dot(&[1.0, 2.0], &[3.0]), 3.0, "common length");
     }
 }

@@ -161,9 +161,9 @@ pub fn theta_for(spec: &str) -> Option<Theta> {
     }
 }
 
-/// Inverse of a small matrix (LU of crate::quantize::linalg); None when singular.
+/// Inverse of a small matrix (the crate's LU, [`crate::linalg::Lu`]); None when singular.
 fn invert(m: &[Vec<f64>]) -> Option<Vec<Vec<f64>>> {
-    crate::quantize::linalg::Lu::new(m).map(|lu| lu.inverse())
+    crate::linalg::Lu::factor_rows(m).map(|lu| lu.inverse_rows())
 }
 
 /// Moments E_Z[b] of a Dirac mixture under a technique's basis.

@@ -4,14 +4,10 @@
 
 use super::dense::inv_pow2;
 use super::GridTable;
+pub(super) use crate::linalg::dot;
 
 /// Relative residual below which a basis function counts as dependent on the previous ones.
 pub(super) const TOL_RANK: f64 = 1e-10;
-
-/// a·b.
-pub(super) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
 
 /// ‖a‖₂.
 pub(super) fn norm(a: &[f64]) -> f64 {

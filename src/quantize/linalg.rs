@@ -12,13 +12,7 @@ impl Lu {
     /// Factorise `a` (n×n). Returns `None` if a pivot is exactly zero or not finite, or n is
     /// beyond [`crate::linalg::MAX_ROWS`].
     pub fn new(a: &[Vec<f64>]) -> Option<Lu> {
-        let n = a.len();
-        if a.iter().any(|row| row.len() != n) {
-            return None;
-        }
-        let flat: Vec<f64> = a.iter().flatten().copied().collect();
-        let mut lu = crate::linalg::Lu::default();
-        lu.factor(&flat, n).then_some(Lu { lu, n })
+        crate::linalg::Lu::factor_rows(a).map(|lu| Lu { lu, n: a.len() })
     }
 
     /// log₂|det A| and the sign of det A.
@@ -47,10 +41,7 @@ impl Lu {
 
     /// A⁻¹ (row-major).
     pub fn inverse(&self) -> Vec<Vec<f64>> {
-        let n = self.n;
-        let mut inv = vec![0.0; n * n];
-        self.lu.inverse(&mut inv);
-        inv.chunks(n.max(1)).map(|r| r.to_vec()).collect()
+        self.lu.inverse_rows()
     }
 }
 

@@ -18,6 +18,7 @@
 use super::curve::{row_min_max, Curve};
 use super::linalg::Lu;
 use super::theta::{normalize_rows, Theta};
+use crate::linalg::dot;
 use anyhow::{bail, Result};
 use good_lp::{microlp, variable, variables, Expression, Solution as _, SolverModel, Variable};
 use rand::{Rng, SeedableRng};
@@ -206,10 +207,6 @@ pub fn shifted_chebyshev(m: usize) -> (Vec<Vec<f64>>, Vec<f64>) {
 struct Row {
     a: Vec<f64>,
     pts: Vec<(f64, Vec<f64>)>,
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(p, q)| p * q).sum()
 }
 
 /// What the row LP optimises.

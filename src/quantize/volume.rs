@@ -5,6 +5,7 @@
 //! An affine θ multiplies volumes by |det θ|, so log₂ of the reciprocal bounds the gain of θ
 //! on a uniform distribution of moments.
 
+use crate::linalg::v3::{cross, dot as dot3, sub};
 use anyhow::{bail, Result};
 
 /// 1/volume as an exact integer, if it fits in u128 (m ≤ 8).
@@ -39,19 +40,6 @@ pub struct Hull {
     pub faces: Vec<[usize; 3]>,
 }
 
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
-}
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
 /// 6 × signed volume of the tetrahedron (a, b, c, d): > 0 if d is above face (a, b, c).
 fn orient(a: [f64; 3], b: [f64; 3], c: [f64; 3], d: [f64; 3]) -> f64 {
     dot3(cross(sub(b, a), sub(c, a)), sub(d, a))

@@ -24,10 +24,10 @@ use crate::stack::{DepthStack, StackMeta};
 pub type V3 = [f64; 3];
 /// A triangle (three world-space vertices).
 pub type Tri = [V3; 3];
+use crate::linalg::v3::{cross, dot, norm, scale, sub};
 use anyhow::{bail, Context, Result};
 use bvh::{Bvh, LTri};
 use rayon::prelude::*;
-use scene::{cross, dot, norm, scale, sub};
 use std::path::Path;
 
 pub use crate::stack::{DEDUP_EPS, MARGIN};

@@ -12,6 +12,7 @@
 //!   t = ((q_i)₃ q_iᵀd − d₃‖q_i‖²) / (d₃ q_iᵀd − (q_i)₃‖d‖²), d = q_j − q_i, when t ∈ [0,1], and
 //!   θ_min = 0 / θ_max = π when +z / −z lies in the frustum.
 
+use crate::linalg::v3::{cross, dot, sub};
 use std::f64::consts::{PI, TAU};
 
 /// The bounds. φ is the arc [phi_start, phi_start + phi_width] (radians, phi_start ∈ (−π, π],
@@ -43,20 +44,6 @@ pub fn rectified(q: [f64; 3]) -> (f64, f64, f64) {
     let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
     let theta = (q[2] / n).clamp(-1.0, 1.0).acos();
     (r, q[1].atan2(q[0]), theta)
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-fn sub(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
 }
 
 /// Whether direction `v` lies in the cone from the origin through the convex quad `q` (none of

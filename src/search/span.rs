@@ -16,6 +16,7 @@
 //! so each candidate costs a Gram–Schmidt in R^(N+1) instead of R^n.
 
 use super::FunctionTable;
+use crate::linalg::dot;
 
 /// Rank and span decisions for subsets of a [`FunctionTable`].
 #[derive(Clone, Debug)]
@@ -127,10 +128,6 @@ impl SpanAnalyzer {
             Flag::Ok
         }
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
 /// x minus its projection onto the orthonormal vectors q (Gram–Schmidt, twice for stability).
