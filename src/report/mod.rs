@@ -1,6 +1,7 @@
 //! Reports: plots (SVG via plotters), the speed/accuracy trade-off, and the HTML/Markdown report.
 
 pub mod chart;
+pub mod docs_figures;
 pub mod document;
 pub mod pareto;
 pub mod pictures;

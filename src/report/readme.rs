@@ -63,6 +63,12 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "theta" => theta(reports),
         "race-times" => race_times(reports),
         "race-orders" => race_orders(reports),
+        "stability" => super::docs_figures::stability(reports),
+        "theta-comparison" => super::docs_figures::theta_comparison(reports),
+        "theta-basis" => super::docs_figures::theta_basis(reports),
+        "quantize-alpha" => super::docs_figures::quantize_alpha(reports),
+        "quantize-usable" => super::docs_figures::quantize_usable(reports),
+        "theta-fig5" => super::docs_figures::theta_fig5(reports),
         _ => bail!("unknown README block '{name}'"),
     }
 }

@@ -7,6 +7,7 @@ mod common;
 
 mod artefact_hygiene;
 mod cli_bad_input;
+mod docs_figures;
 mod docs_hygiene;
 mod module_graph;
 mod readme_figures;

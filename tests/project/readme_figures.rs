@@ -166,34 +166,6 @@ fn one_changed_number_in_an_artefact_fails_the_check() {
     std::fs::remove_dir_all(&tmp).ok();
 }
 
-/// docs/search.md's generated block of the committed races' cost equals what reports/search
-/// renders (`MOMENTLAB_UPDATE_README=1` rewrites it).
-#[test]
-fn docs_search_race_times_equal_the_artefacts() {
-    let path = root().join("docs/search.md");
-    let text = std::fs::read_to_string(&path).unwrap();
-    let reports = root().join("reports");
-    if std::env::var("MOMENTLAB_UPDATE_README").as_deref() == Ok("1") {
-        let new = readme::splice(&text, |n| readme::render(n, &reports)).unwrap();
-        std::fs::write(&path, new).unwrap();
-        eprintln!("docs/search.md: generated blocks rewritten");
-        return;
-    }
-    let blocks = readme::blocks(&text).unwrap();
-    assert!(
-        blocks.iter().any(|b| b.0 == "race-times"),
-        "docs/search.md has no race-times block"
-    );
-    for (name, body) in &blocks {
-        assert_eq!(
-            body,
-            &readme::render(name, &reports).unwrap(),
-            "docs/search.md block '{name}' differs from what reports/ renders; run \
-             MOMENTLAB_UPDATE_README=1 cargo test --release --test project docs_search"
-        );
-    }
-}
-
 /// README outside generated blocks, fenced code, code spans and link targets.
 fn prose(readme_text: &str) -> String {
     let outside = readme::outside_blocks(readme_text);
