@@ -487,6 +487,7 @@ mod tests {
     use super::*;
     use crate::quantize::curve::MonomialCurve;
     use crate::quantize::theta::{published_theta4, published_theta6};
+    use crate::shader::Order;
     use rand::{Rng, SeedableRng};
 
     #[test]
@@ -518,15 +519,15 @@ mod tests {
                 .flatten()
                 .fold(0.0f64, |a, v| a.max(v.abs()));
             assert!(big < 1.0, "largest Chebyshev coefficient {big}");
-            // the f32 interpreter of the emitted encoder agrees with θ∘b
+            // the f32 interpreter of the emitted encoder agrees with θ∘b, in both orders
             let enc = encoder(&th, &EncoderForm::Chebyshev(rows), "e", Layout::Array);
             let mut b = vec![0.0; th.m()];
             let mut s = vec![0.0; th.m()];
-            for k in 0..=1000 {
+            for (k, order) in (0..=1000).flat_map(|k| [(k, Order::Unfused), (k, Order::Fused)]) {
                 let z = k as f64 / 1000.0;
                 c.eval(z, &mut b);
                 th.encode(&b, &mut s);
-                let got = enc.eval(&[z as f32]).unwrap();
+                let got = enc.eval_in(order, &[z as f32]).unwrap();
                 for (g, w) in got.iter().zip(&s) {
                     assert!(
                         (*g as f64 - w.clamp(0.0, 1.0)).abs() < 2e-6,

@@ -1,6 +1,7 @@
 //! The emitted θ shader code, run by the f32 interpreter of the shader representation (the same
-//! operations in the same order as the GLSL/HLSL): encode each depth, mix with the window's
-//! weights in f32, decode. On 10 000 windows of the embedded default stacks plus adversarial
+//! operations in the same order as the GLSL/HLSL/WGSL), in both of its orders (every operation
+//! rounded, as with `precise`; every a·b ± c fused, as a driver may without it): encode each
+//! depth, mix with the window's weights in f32, decode. On 10 000 windows of the embedded default stacks plus adversarial
 //! windows, for θ₂…θ₈ (ours; θ₅/θ₇ from a short seeded search), the published θ₂/θ₄/θ₆ and two
 //! catalog-basis θ:
 //! * f32 round trip ≤ 3e-6 against the exact f64 pipeline with the same inputs,
@@ -18,7 +19,7 @@ use momentlab::artefact::read_json;
 use momentlab::quantize::codegen::{self, ChannelOrder, EncoderForm, Layout};
 use momentlab::quantize::theta::{paper_order, published, Theta};
 use momentlab::quantize::{curve, optimize, Curve};
-use momentlab::shader::Func;
+use momentlab::shader::{Func, Order};
 use rand::{Rng, SeedableRng};
 use std::path::Path;
 use std::sync::OnceLock;
@@ -156,7 +157,7 @@ fn unorm16(s: f64) -> f64 {
 
 /// Max errors over all windows: (f32 round trip, max |f32 stored − exact θ∘b|, stored outside
 /// [0,1] count, f32 16-bit pipeline, exact 16-bit pipeline).
-fn measure(case: &Case, enc: &Func, dec: &Func, ws: &[Vec<(f32, f32)>]) -> [f64; 5] {
+fn measure(case: &Case, enc: &Func, dec: &Func, ws: &[Vec<(f32, f32)>], order: Order) -> [f64; 5] {
     let th = &case.theta;
     let m = th.m();
     let mut sc = Vec::new();
@@ -167,7 +168,7 @@ fn measure(case: &Case, enc: &Func, dec: &Func, ws: &[Vec<(f32, f32)>]) -> [f64;
         let (mut mix32, mut mix16_32) = (vec![0f32; m], vec![0f32; m]);
         let (mut mix64, mut mix16_64) = (vec![0f64; m], vec![0f64; m]);
         for &(z, wt) in w {
-            enc.eval_into(&[z], &mut sc, &mut s32).unwrap();
+            enc.eval_order_into(order, &[z], &mut sc, &mut s32).unwrap();
             case.curve.eval(z as f64, &mut bz);
             th.encode(&bz, &mut sz);
             for i in 0..m {
@@ -183,11 +184,13 @@ fn measure(case: &Case, enc: &Func, dec: &Func, ws: &[Vec<(f32, f32)>]) -> [f64;
         }
         let mut exact = vec![0f64; m];
         th.decode(&mix64, &mut exact);
-        dec.eval_into(&mix32, &mut sc, &mut b32).unwrap();
+        dec.eval_order_into(order, &mix32, &mut sc, &mut b32)
+            .unwrap();
         for i in 0..m {
             res[0] = res[0].max((b32[i] as f64 - exact[i]).abs());
         }
-        dec.eval_into(&mix16_32, &mut sc, &mut b32).unwrap();
+        dec.eval_order_into(order, &mix16_32, &mut sc, &mut b32)
+            .unwrap();
         let mut q64 = vec![0f64; m];
         th.decode(&mix16_64, &mut q64);
         for i in 0..m {
@@ -224,25 +227,31 @@ fn emitted_theta_round_trips_in_f32_on_real_and_adversarial_windows() {
             curve: case.curve,
             tag: case.tag.clone(),
         };
-        for (what, set) in [("real", &ws[..*real]), ("adversarial", &ws[*real..])] {
-            let [rt, enc_err, outside, q32, q64] = measure(&emitted, enc, dec, set);
-            eprintln!(
-                "{} ({what}, {} windows): f32 round trip {rt:.2e}, encode {enc_err:.2e}, 16-bit f32 {q32:.3e} vs exact {q64:.3e} ({:.3}x)",
-                case.label,
-                set.len(),
-                q32 / q64
-            );
-            assert!(rt <= 3e-6, "{} {what}: f32 round trip {rt:.3e}", case.label);
-            assert_eq!(
-                outside, 0.0,
-                "{} {what}: stored values outside [0,1]",
-                case.label
-            );
-            assert!(
-                q32 <= 1.5 * q64,
-                "{} {what}: 16-bit f32 pipeline {q32:.3e} vs {q64:.3e}",
-                case.label
-            );
+        for order in [Order::Unfused, Order::Fused] {
+            for (what, set) in [("real", &ws[..*real]), ("adversarial", &ws[*real..])] {
+                let [rt, enc_err, outside, q32, q64] = measure(&emitted, enc, dec, set, order);
+                eprintln!(
+                    "{} ({what}, {} windows, {order:?}): f32 round trip {rt:.2e}, encode {enc_err:.2e}, 16-bit f32 {q32:.3e} vs exact {q64:.3e} ({:.3}x)",
+                    case.label,
+                    set.len(),
+                    q32 / q64
+                );
+                assert!(
+                    rt <= 3e-6,
+                    "{} {what} {order:?}: f32 round trip {rt:.3e}",
+                    case.label
+                );
+                assert_eq!(
+                    outside, 0.0,
+                    "{} {what} {order:?}: stored values outside [0,1]",
+                    case.label
+                );
+                assert!(
+                    q32 <= 1.5 * q64,
+                    "{} {what} {order:?}: 16-bit f32 pipeline {q32:.3e} vs {q64:.3e}",
+                    case.label
+                );
+            }
         }
         // the same θ₈ in monomial form (z, z², … by products, then A·b + t) fails the bound:
         // the measurement can tell a well-conditioned encoder from an ill-conditioned one
@@ -256,9 +265,11 @@ fn emitted_theta_round_trips_in_f32_on_real_and_adversarial_windows() {
             }
             let s = codegen::encode_matrix_into(&mut f, &emitted.theta, &pw);
             f.output("s", momentlab::shader::Shape::Array(8), &s);
-            let [rt, ..] = measure(&emitted, &f, dec, &ws[..*real]);
-            eprintln!("θ8 in monomial form: f32 round trip {rt:.2e}");
-            assert!(rt > 1e-4, "monomial θ8 round trip {rt:.3e}");
+            for order in [Order::Unfused, Order::Fused] {
+                let [rt, ..] = measure(&emitted, &f, dec, &ws[..*real], order);
+                eprintln!("θ8 in monomial form ({order:?}): f32 round trip {rt:.2e}");
+                assert!(rt > 1e-4, "monomial θ8 round trip {rt:.3e} ({order:?})");
+            }
         }
     }
 }
@@ -281,14 +292,16 @@ fn vector_variants_equal_array_variants_bit_for_bit() {
             let f = |n: &str| module.func(n).unwrap();
             for _ in 0..500 {
                 let z: f32 = rng.gen();
-                let a = f(&ea).eval(&[z]).unwrap();
-                assert_eq!(a, f(&ev).eval(&[z]).unwrap(), "{}", case.label);
-                assert_eq!(
-                    f(&da).eval(&a).unwrap(),
-                    f(&dv).eval(&a).unwrap(),
-                    "{}",
-                    case.label
-                );
+                for order in [Order::Unfused, Order::Fused] {
+                    let a = f(&ea).eval_in(order, &[z]).unwrap();
+                    assert_eq!(a, f(&ev).eval_in(order, &[z]).unwrap(), "{}", case.label);
+                    assert_eq!(
+                        f(&da).eval_in(order, &a).unwrap(),
+                        f(&dv).eval_in(order, &a).unwrap(),
+                        "{} {order:?}",
+                        case.label
+                    );
+                }
             }
         }
     }
@@ -322,9 +335,9 @@ fn default_theta2_theta4_are_the_published_ones_in_paper_order() {
         if m == 4 {
             let (e, _) = codegen::names("4", Layout::Vectors, true);
             let enc = sn_paper(&ours).hlsl.func(&e).unwrap().clone();
-            for k in 0..=100 {
+            for (k, order) in (0..=100).flat_map(|k| [(k, Order::Unfused), (k, Order::Fused)]) {
                 let z = k as f32 / 100.0;
-                let s = enc.eval(&[z]).unwrap();
+                let s = enc.eval_in(order, &[z]).unwrap();
                 let mut d: Vec<f64> = s.iter().map(|&v| v as f64).collect();
                 d[0] -= 0.035955884801;
                 let b: Vec<f64> = p
