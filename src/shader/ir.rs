@@ -3,7 +3,7 @@
 //! constant trip count ([`Func::repeat`]) that carry a few variables from one iteration to the
 //! next. The printers ([`super::print`]) and the interpreter ([`super::eval`]) read the same
 //! nodes in the same order, so the interpreter computes what the shader computes (IEEE f32,
-//! no contraction).
+//! each operation rounded on its own, or every a·b ± c contracted: [`super::eval::Order`]).
 
 use anyhow::{bail, Result};
 
@@ -46,7 +46,8 @@ pub enum Cmp {
 }
 
 /// Operations. Arithmetic is IEEE f32 and printed as written: `a * b + c` is two operations
-/// (the shader marks every temporary `precise`, so compilers may not fuse it).
+/// (GLSL/HLSL temporaries are `precise` where the language has it, so compilers may not fuse
+/// it there; elsewhere they may, which the interpreter's fused order computes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Op {
     Add(V, V),
