@@ -11,7 +11,7 @@
 pub mod input;
 pub mod out;
 
-pub use input::{read_bytes, read_input, read_text, Limit};
+pub use input::{check_regular, read_bytes, read_input, read_text, Limit};
 pub use out::{check_name, safe_name, DirLock, OutDir, LOCK_FILE};
 
 use anyhow::{anyhow, Context, Result};

@@ -58,6 +58,37 @@ pub struct Bar {
     inner: Inner,
 }
 
+/// Set by [`silence`]: no progress is shown any more in this process.
+static SILENCED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// The terminal bars on screen, so that [`silence`] can clear them.
+static ON_SCREEN: Mutex<Vec<ProgressBar>> = Mutex::new(Vec::new());
+
+/// End all progress output of this process before its last line (an error, or the interrupt
+/// line): terminal bars are cleared and no further progress line is written, so the line that
+/// follows is the last one on stderr.
+pub fn silence() {
+    SILENCED.store(true, Ordering::SeqCst);
+    let bars = std::mem::take(&mut *ON_SCREEN.lock().unwrap_or_else(|e| e.into_inner()));
+    for b in bars {
+        b.finish_and_clear();
+    }
+}
+
+impl Drop for Bar {
+    /// A bar dropped without [`Bar::finish`] (an error left the command) is cleared, never
+    /// left on screen or redrawn after the error line.
+    fn drop(&mut self) {
+        if let Inner::Bar(b) = &self.inner {
+            b.finish_and_clear();
+            ON_SCREEN
+                .lock()
+                .unwrap_or_else(|e| e.into_inner())
+                .retain(|x| !x.is_finished());
+        }
+    }
+}
+
 enum Inner {
     Bar(ProgressBar),
     Lines(Box<Lines>),
@@ -93,8 +124,13 @@ impl Bar {
     /// A display in an explicit mode (lines go to stderr every [`interval_from_env`]).
     pub fn with_mode(mode: Mode, label: &str, total: u64) -> Bar {
         match mode {
+            _ if SILENCED.load(Ordering::SeqCst) => Bar::hidden(),
             Mode::Bar => {
                 let b = ProgressBar::new(total);
+                ON_SCREEN
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .push(b.clone());
                 if let Ok(style) = ProgressStyle::with_template(
                     "{msg} [{elapsed_precise}] {wide_bar} {human_pos}/{human_len} ({per_sec}, ETA {eta})",
                 ) {
@@ -256,6 +292,9 @@ impl Lines {
     /// Lines are formatted under the output lock, so their counts never go backwards.
     fn write_line(&self, closing: bool) {
         let mut out = self.out.lock().unwrap_or_else(|e| e.into_inner());
+        if SILENCED.load(Ordering::SeqCst) {
+            return;
+        }
         let text = {
             let mut p = self.lock_phase();
             if closing && p.finished {

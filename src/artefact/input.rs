@@ -113,6 +113,28 @@ pub fn open_regular(path: &Path) -> Result<(File, u64)> {
     Ok((f, md.len()))
 }
 
+/// Check, without opening it, that `path` names a regular file (a symbolic link is followed):
+/// "no such file" when nothing is there, "is a dangling symbolic link" for a link to nothing,
+/// and "is a character device, not a regular file" (FIFO, socket, directory, …) for anything
+/// else, also behind a link.
+pub fn check_regular(path: &Path) -> Result<()> {
+    match std::fs::metadata(path) {
+        Ok(md) if md.file_type().is_file() => Ok(()),
+        Ok(md) => bail!(
+            "{}: is {}, not a regular file",
+            path.display(),
+            kind(md.file_type())
+        ),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if std::fs::symlink_metadata(path).is_ok() {
+                bail!("{}: is a dangling symbolic link", path.display())
+            }
+            bail!("{}: no such file", path.display())
+        }
+        Err(e) => bail!("{}: cannot read: {e}", path.display()),
+    }
+}
+
 /// The bytes of `path`, at most `limit.bytes` of them (else an error naming the limit).
 pub fn read_bytes(path: &Path, limit: Limit) -> Result<Vec<u8>> {
     let (f, len) = open_regular(path)?;
@@ -216,6 +238,23 @@ mod tests {
         std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
         let e = format!("{:#}", read_text(&link, Limit::CONFIG).unwrap_err());
         assert!(e.contains("zero.json: is a character device"), "{e}");
+        // The same without opening, for the callers that check a path first.
+        let exr = d.join("zero.exr");
+        std::os::unix::fs::symlink("/dev/zero", &exr).unwrap();
+        let e = format!("{:#}", check_regular(&exr).unwrap_err());
+        assert!(
+            e.ends_with("zero.exr: is a character device, not a regular file"),
+            "{e}"
+        );
+        let e = format!("{:#}", check_regular(&d).unwrap_err());
+        assert!(e.ends_with("is a directory, not a regular file"), "{e}");
+        let dangling = d.join("gone.exr");
+        std::os::unix::fs::symlink(d.join("nowhere"), &dangling).unwrap();
+        let e = format!("{:#}", check_regular(&dangling).unwrap_err());
+        assert!(e.ends_with("gone.exr: is a dangling symbolic link"), "{e}");
+        let e = format!("{:#}", check_regular(&d.join("nope")).unwrap_err());
+        assert!(e.ends_with("nope: no such file"), "{e}");
+        check_regular(&p_regular(&d)).unwrap();
         // A FIFO with no writer: opening must not block.
         let fifo = d.join("pipe");
         let c = std::ffi::CString::new(fifo.as_os_str().as_encoded_bytes()).unwrap();
@@ -223,6 +262,12 @@ mod tests {
         let e = format!("{:#}", read_text(&fifo, Limit::CONFIG).unwrap_err());
         assert!(e.contains("pipe: is a FIFO"), "{e}");
         std::fs::remove_dir_all(&d).unwrap();
+    }
+
+    fn p_regular(d: &Path) -> std::path::PathBuf {
+        let p = d.join("plain.txt");
+        std::fs::write(&p, "x").unwrap();
+        p
     }
 
     #[test]

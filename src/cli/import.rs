@@ -79,9 +79,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             files.extend(found);
         } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
-            if !p.is_file() {
-                bail!("{}: no such file", p.display());
-            }
+            crate::artefact::check_regular(p)?;
             files.push(p.clone());
         } else {
             bail!(

@@ -117,7 +117,9 @@ pub fn main() -> i32 {
         }
         Err(e) if is_broken_pipe(&e) => 0,
         Err(e) => {
-            // One line, naming what went wrong and where (the error chain joined by ": ").
+            // One line, naming what went wrong and where (the error chain joined by ": "),
+            // and the last one: progress output ends before it.
+            crate::progress::silence();
             note_line(&format!("error: {}", one_line(&format!("{e:#}"))));
             1
         }

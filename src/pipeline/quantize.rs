@@ -222,7 +222,7 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
 /// verifier: θ(b([0,1])) ⊆ [0,1]^m up to 1e-6.
 fn load_theta(dir: &Path, m: usize) -> Result<Theta> {
     let p = dir.join(format!("theta{m}.json"));
-    if !p.is_file() {
+    if std::fs::symlink_metadata(&p).is_err() {
         bail!(
             "--theta-dir: {} not found (create it with `momentlab theta --m {m} --out {}`)",
             p.display(),

@@ -287,9 +287,10 @@ pub fn load_scenes(
         }
         return files.iter().map(|p| Scene::load(p)).collect();
     }
-    if !path.is_file() {
+    if std::fs::symlink_metadata(path).is_err() {
         bail!("{}: no such file or folder", path.display());
     }
+    crate::artefact::check_regular(path)?;
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())

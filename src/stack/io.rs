@@ -267,12 +267,13 @@ fn parse_channel(name: &str) -> Option<(usize, Quantity)> {
     Some((l, q))
 }
 
-/// The `.exr` files of `dir`, sorted by file name.
+/// The `.exr` entries of `dir` other than folders, sorted by file name (a link or device named
+/// `.exr` is listed, so that reading it says what it is rather than skipping it).
 pub fn exr_files(dir: &Path) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
     for entry in std::fs::read_dir(dir).with_context(|| format!("reading {}", dir.display()))? {
         let p = entry?.path();
-        if p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
+        if !p.is_dir() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
             files.push(p);
         }
     }

@@ -1050,6 +1050,41 @@ fn inputs_are_bounded_regular_files_and_names_are_plain() {
         1,
         &["is a character device"],
     );
+    // A depth stack or mesh that is a link to a device is named as such, never "no such file".
+    let zexr = s.path("zero.exr");
+    std::os::unix::fs::symlink("/dev/zero", &zexr).unwrap();
+    expect(
+        &["import", zexr.to_str().unwrap()],
+        1,
+        &["zero.exr: is a character device, not a regular file"],
+    );
+    let zdir = s.path("zstacks");
+    std::fs::create_dir_all(&zdir).unwrap();
+    std::os::unix::fs::symlink("/dev/zero", zdir.join("v.exr")).unwrap();
+    expect(
+        &[
+            "evaluate",
+            "--technique",
+            "vsm",
+            "--stacks",
+            zdir.to_str().unwrap(),
+        ],
+        1,
+        &["v.exr: is a character device, not a regular file"],
+    );
+    let zobj = s.path("zero.obj");
+    std::os::unix::fs::symlink("/dev/zero", &zobj).unwrap();
+    expect(
+        &[
+            "render",
+            "--scenes",
+            zobj.to_str().unwrap(),
+            "--out",
+            &s.p("zr"),
+        ],
+        1,
+        &["zero.obj: is a character device, not a regular file"],
+    );
     // Catalog names with a comma or a newline.
     for (tag, name, want) in [
         ("comma", "a,b", "contains a comma"),
@@ -1370,6 +1405,45 @@ fn stdout_write_errors_are_one_line_errors() {
             err.contains("stdout") && err.contains("No space left"),
             "{a:?}: {err}"
         );
+    }
+}
+
+/// An error after progress output is the last line of stderr, and the only error line: with
+/// progress lines due all the time, `evaluate > /dev/full` shows progress, then the error.
+#[test]
+fn an_error_after_progress_is_the_last_line() {
+    for mode in ["lines", "bar"] {
+        let full = std::fs::OpenOptions::new()
+            .write(true)
+            .open("/dev/full")
+            .unwrap();
+        let (code, err) = run_env(
+            &["evaluate", "--technique", "vsm", "--resolution", "24"],
+            &[
+                ("MOMENTLAB_PROGRESS", mode),
+                ("MOMENTLAB_PROGRESS_INTERVAL", "0"),
+            ],
+            Some(full),
+        );
+        assert_eq!(code, 1, "{err}");
+        let lines: Vec<&str> = err.lines().collect();
+        if mode == "lines" {
+            assert!(
+                lines.iter().any(|l| l.starts_with("evaluate vsm: ")),
+                "no progress shown: {err:?}"
+            );
+        }
+        let last = lines.last().unwrap();
+        assert!(
+            last.starts_with("error: writing stdout") && last.contains("No space left"),
+            "{mode}: the last line is not the error: {err:?}"
+        );
+        assert_eq!(
+            lines.iter().filter(|l| l.contains("error")).count(),
+            1,
+            "{mode}: {err:?}"
+        );
+        assert!(!err.contains('\r'), "{mode}: {err:?}");
     }
 }
 

@@ -490,3 +490,128 @@ fn unsupported_misnamed_and_corrupt_files_are_one_line_errors() {
         "{m}"
     );
 }
+
+/// The test mesh moved off the f32 grid: each coordinate plus a small irrational offset, in f64.
+fn mesh_f64() -> (Vec<[f64; 3]>, Vec<[u32; 3]>) {
+    let (v, f) = mesh();
+    let v = v
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            std::array::from_fn(|c| p[c] as f64 + 0.01 * ((3 * i + c) as f64).sin() / 3.0)
+        })
+        .collect();
+    (v, f)
+}
+
+/// PLY of `v` with vertex properties of type `ty` ("float" or "double"): ASCII with every f64
+/// digit (17 significant), or binary little endian rounded to the declared type.
+fn ply_typed(v: &[[f64; 3]], f: &[[u32; 3]], ty: &str, ascii: bool) -> Vec<u8> {
+    let fmt = if ascii {
+        "ascii"
+    } else {
+        "binary_little_endian"
+    };
+    let mut out = format!(
+        "ply\nformat {fmt} 1.0\nelement vertex {}\nproperty {ty} x\nproperty {ty} y\n\
+         property {ty} z\nelement face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        v.len(),
+        f.len()
+    )
+    .into_bytes();
+    for p in v {
+        for c in p {
+            match (ascii, ty) {
+                (true, _) => out.extend(format!("{c:.16e} ").bytes()),
+                (false, "float") => out.extend((*c as f32).to_le_bytes()),
+                (false, _) => out.extend(c.to_le_bytes()),
+            }
+        }
+        if ascii {
+            out.push(b'\n');
+        }
+    }
+    for t in f {
+        if ascii {
+            out.extend(format!("3 {} {} {}\n", t[0], t[1], t[2]).bytes());
+        } else {
+            out.push(3);
+            t.iter().for_each(|i| out.extend((*i as i32).to_le_bytes()));
+        }
+    }
+    out
+}
+
+/// ASCII STL of `v` with every f64 digit of each coordinate.
+fn stl_ascii_f64(v: &[[f64; 3]], f: &[[u32; 3]]) -> Vec<u8> {
+    let mut s = String::from("solid t\n");
+    for t in f {
+        s += "facet normal 0 0 0\nouter loop\n";
+        for i in t {
+            let p = v[*i as usize];
+            s += &format!("vertex {:.16e} {:.16e} {:.16e}\n", p[0], p[1], p[2]);
+        }
+        s += "endloop\nendfacet\n";
+    }
+    (s + "endsolid t\n").into_bytes()
+}
+
+/// Declared precision is honoured: ASCII PLY `property float` and ASCII STL coordinates are
+/// rounded to f32 like their binary encodings, so ASCII and binary files of the same mesh (off
+/// the f32 grid) load the same triangles and render identical stacks; `property double` stays
+/// f64 in both encodings.
+#[test]
+fn ascii_and_binary_ply_stl_of_one_mesh_render_identical_stacks() {
+    let (v, f) = mesh_f64();
+    let v32: Vec<V> = v.iter().map(|p| p.map(|c| c as f32)).collect();
+    let mut fs = HashMap::new();
+    fs.insert("a_float.ply".to_string(), ply_typed(&v, &f, "float", true));
+    fs.insert("b_float.ply".to_string(), ply_typed(&v, &f, "float", false));
+    fs.insert("a.stl".to_string(), stl_ascii_f64(&v, &f));
+    fs.insert("b.stl".to_string(), stl_binary(&v32, &f));
+    fs.insert(
+        "a_double.ply".to_string(),
+        ply_typed(&v, &f, "double", true),
+    );
+    fs.insert(
+        "b_double.ply".to_string(),
+        ply_typed(&v, &f, "double", false),
+    );
+    let as_f32: Vec<[[f64; 3]; 3]> = f
+        .iter()
+        .map(|t| t.map(|i| v32[i as usize].map(f64::from)))
+        .collect();
+    let as_f64: Vec<[[f64; 3]; 3]> = f.iter().map(|t| t.map(|i| v[i as usize])).collect();
+    assert_ne!(
+        as_f32, as_f64,
+        "the mesh is on the f32 grid: the test shows nothing"
+    );
+    for (name, want) in [
+        ("a_float.ply", &as_f32),
+        ("b_float.ply", &as_f32),
+        ("a.stl", &as_f32),
+        ("b.stl", &as_f32),
+        ("a_double.ply", &as_f64),
+        ("b_double.ply", &as_f64),
+    ] {
+        let tris = load_mesh(name, &fs[name], &reader(&fs)).unwrap();
+        assert_eq!(&tris, want, "{name}");
+    }
+    let stacks = |name: &str| {
+        let text = format!(
+            r#"{{"name":"m","lights":[{{"azimuth_deg":30,"elevation_deg":50}},{{"dir":[0.2,-1,0.1]}}],
+            "objects":[{{"type":"plane","size":[6,6]}},{{"type":"mesh","path":"{name}"}}]}}"#
+        );
+        let s = Scene::from_json(&text, &reader(&fs)).unwrap();
+        (0..2).map(|i| render_view(&s, i, 40)).collect::<Vec<_>>()
+    };
+    let want = stacks("b_float.ply");
+    assert!(want.iter().all(|s| s.meta.layers >= 3));
+    for name in ["a_float.ply", "a.stl", "b.stl"] {
+        assert!(
+            stacks(name) == want,
+            "{name}: stacks differ from the binary PLY"
+        );
+    }
+    assert!(stacks("a_double.ply") == stacks("b_double.ply"));
+}

@@ -94,7 +94,14 @@ impl Body<'_> {
     fn value(&mut self, ty: Ty) -> Result<f64> {
         if self.enc == Enc::Ascii {
             let t = self.token()?;
-            let v: f64 = t.parse().map_err(|_| anyhow!("bad number '{t}'"))?;
+            // A `float` property is an f32 in every encoding: its text is rounded to f32 as
+            // declared (once, from the text), so ASCII and binary give the same mesh.
+            let v: f64 = if ty == Ty::F32 {
+                t.parse::<f32>().map(f64::from)
+            } else {
+                t.parse()
+            }
+            .map_err(|_| anyhow!("bad number '{t}'"))?;
             if ty.is_int() && v.fract() != 0.0 {
                 bail!("'{t}' is not an integer");
             }

@@ -67,7 +67,9 @@ pub fn load_stl_bytes(b: &[u8]) -> Result<Vec<Tri>> {
                     let s = toks
                         .next()
                         .ok_or_else(|| anyhow!("ASCII STL facet {facet}: truncated vertex"))?;
-                    *c = s.parse::<f64>().map_err(|_| {
+                    // STL coordinates are f32 (as in the binary records): rounded once,
+                    // from the text.
+                    *c = s.parse::<f32>().map(f64::from).map_err(|_| {
                         anyhow!("ASCII STL facet {facet}: bad vertex coordinate '{s}'")
                     })?;
                 }

@@ -114,7 +114,7 @@ impl Scene {
         up_axis: Option<UpAxis>,
     ) -> Result<Scene> {
         let side = mesh_sidecar_path(path);
-        let mut sc: MeshSidecar = if side.is_file() {
+        let mut sc: MeshSidecar = if std::fs::symlink_metadata(&side).is_ok() {
             let text = crate::artefact::read_text(&side, crate::artefact::Limit::SCENE)?;
             serde_json::from_str(&text)
                 .with_context(|| format!("malformed light sidecar {}", side.display()))?
