@@ -33,7 +33,7 @@ fn theta2_json_and_snippets() {
     assert_eq!(v["m"], 2);
     assert!((v["gain_bits"].as_f64().unwrap() - 2.0).abs() < 1e-7);
     assert!(v["max_violation"].as_f64().unwrap() < 0.0);
-    for f in ["theta2.hlsl", "theta2.glsl"] {
+    for f in ["theta2.hlsl", "theta2.glsl", "theta2.wgsl"] {
         let s = std::fs::read_to_string(dir.join(f)).unwrap();
         assert!(s.contains("ncodeMoments2") && s.contains("ecodeMoments2"));
     }
@@ -46,6 +46,8 @@ fn theta2_json_and_snippets() {
     );
     std::fs::remove_file(dir.join("theta2.glsl")).unwrap();
     std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
+    let wgsl = std::fs::read_to_string(dir.join("theta2.wgsl")).unwrap();
+    std::fs::remove_file(dir.join("theta2.wgsl")).unwrap();
     let out = momentlab()
         .args(["theta", "--snippets"])
         .arg(&dir)
@@ -63,6 +65,14 @@ fn theta2_json_and_snippets() {
     assert!(std::fs::read_to_string(dir.join("theta2.hlsl"))
         .unwrap()
         .contains("float2 EncodeMoments2Vec(float z)"));
+    assert_eq!(
+        std::fs::read_to_string(dir.join("theta2.wgsl")).unwrap(),
+        wgsl
+    );
+    assert!(
+        wgsl.contains("fn encodeMoments2Vec(z: f32) -> vec2<f32>"),
+        "{wgsl}"
+    );
     // the JSON file is what was printed; both starts reach the single θ2 basin
     let file: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("theta2.json")).unwrap()).unwrap();
@@ -109,6 +119,8 @@ fn snippets_replace_existing_snippets_only_with_force() {
     // An edited theta2.glsl and a missing theta2.hlsl: refused before any snippet is written.
     std::fs::write(dir.join("theta2.glsl"), "mine").unwrap();
     std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
+    let wgsl = std::fs::read_to_string(dir.join("theta2.wgsl")).unwrap();
+    std::fs::remove_file(dir.join("theta2.wgsl")).unwrap();
     let out = momentlab()
         .args(["theta", "--snippets"])
         .arg(&dir)
