@@ -18,6 +18,7 @@
 //! * [`metrics`]: error of a technique against PCF over all fragments of all layers.
 //! * [`quantize`]: optimal affine quantization transforms θ.
 //! * [`search`]: the candidate sweep (racing, shards, resumable).
+//! * [`gpu`]: the shadow-map pipeline and the emitted shader code run by a GPU driver (wgpu).
 //! * [`shader`]: straight-line f32 shader functions printed as GLSL/HLSL and interpreted in f32.
 //! * [`stability`]: the stress harness — every technique on random and adversarial inputs,
 //!   exact and quantized, against the sharp bound of Algorithm 1.
@@ -32,6 +33,7 @@ pub mod artefact;
 pub mod basis;
 pub mod bench;
 pub mod cli;
+pub mod gpu;
 pub mod grid;
 pub mod kernel;
 pub mod linalg;

@@ -18,6 +18,7 @@ pub mod fig5;
 pub mod linalg;
 pub mod lpsmall;
 pub mod optimize;
+pub mod pipeline;
 pub mod poly;
 pub mod study;
 pub mod theta;

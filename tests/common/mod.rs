@@ -6,6 +6,7 @@
 #![allow(dead_code)]
 
 pub mod geom;
+pub mod gpu;
 pub mod kernel;
 pub mod lp;
 pub mod search;
