@@ -119,8 +119,6 @@ fn snippets_replace_existing_snippets_only_with_force() {
     // An edited theta2.glsl and a missing theta2.hlsl: refused before any snippet is written.
     std::fs::write(dir.join("theta2.glsl"), "mine").unwrap();
     std::fs::remove_file(dir.join("theta2.hlsl")).unwrap();
-    let wgsl = std::fs::read_to_string(dir.join("theta2.wgsl")).unwrap();
-    std::fs::remove_file(dir.join("theta2.wgsl")).unwrap();
     let out = momentlab()
         .args(["theta", "--snippets"])
         .arg(&dir)
