@@ -7,6 +7,7 @@ pub mod bench_shadow;
 pub mod candidates;
 pub mod common;
 pub mod evaluate;
+pub mod gpu;
 pub mod import;
 pub mod lp;
 pub mod merge;
@@ -91,6 +92,8 @@ pub enum Command {
     Tune(tune::Args),
     /// Reproduce the whole study on the default data and write the report.
     Reproduce(reproduce::Args),
+    /// The pipeline and shader code on this machine's GPU: `gpu check`, `gpu bench`.
+    Gpu(gpu::Args),
 }
 
 /// Entry point of the binary: parse, run, and map the outcome to an exit code — 0 on success
@@ -149,6 +152,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Recommend(a) => recommend::run(a),
         Command::Tune(a) => tune::run(a),
         Command::Reproduce(a) => reproduce::run(a),
+        Command::Gpu(a) => gpu::run(a),
     }
 }
 

@@ -7,6 +7,7 @@
 //! Without an adapter (no GPU, no driver, no Vulkan loader) [`Gpu::new`] fails with one line;
 //! the CPU study never needs one.
 
+pub mod bench;
 pub mod check;
 pub mod device;
 pub mod passes;

@@ -23,9 +23,11 @@ pub fn texture_format(storage: Storage) -> Result<wgpu::TextureFormat> {
 }
 
 /// What the pipeline runs: the module (with `tunedEncode` and `tunedShadow`), its storage and
-/// the 1-D filter weights.
+/// the 1-D filter weights. `wgsl`, when given, is the shader text run instead of the module's
+/// own printing (an export file as shipped); the module then only gives the channel count.
 pub struct Program<'a> {
     pub module: &'a Module,
+    pub wgsl: Option<&'a str>,
     pub storage: Storage,
     pub weights: &'a [f32],
 }
@@ -53,15 +55,19 @@ pub struct Output {
     pub times: Option<PassTimes>,
 }
 
-/// The module's functions as WGSL, and its channel count m.
-fn functions(module: &Module) -> Result<(String, usize)> {
-    let Some(enc) = module.func("tunedEncode") else {
+/// The program's functions as WGSL, and its channel count m.
+fn functions(p: &Program) -> Result<(String, usize)> {
+    let Some(enc) = p.module.func("tunedEncode") else {
         bail!("shader module has no tunedEncode");
     };
-    if module.func("tunedShadow").is_none() {
+    if p.module.func("tunedShadow").is_none() {
         bail!("shader module has no tunedShadow");
     }
-    Ok((crate::shader::wgsl(module)?, enc.n_outputs()))
+    let text = match p.wgsl {
+        Some(t) => t.to_string(),
+        None => crate::shader::wgsl(p.module)?,
+    };
+    Ok((text, enc.n_outputs()))
 }
 
 fn target(gpu: &Gpu, (w, h): (u32, u32), format: wgpu::TextureFormat) -> wgpu::Texture {
@@ -193,7 +199,7 @@ pub struct Compiled {
 impl Compiled {
     /// Validate (naga) and compile the four passes of `p`.
     pub fn new(gpu: &Gpu, p: &Program) -> Result<Compiled> {
-        let (funcs, m) = functions(p.module)?;
+        let (funcs, m) = functions(p)?;
         let k = passes::textures_for(m);
         let format = texture_format(p.storage)?;
         let encode = render_pipeline(gpu, "encode", &passes::encode(&funcs, m), k, format)?;

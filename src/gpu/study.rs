@@ -63,14 +63,22 @@ pub fn depth_map(stack: &DepthStack) -> Vec<f32> {
     (0..stack.texel_count()).map(|t| stack.front(t)).collect()
 }
 
-/// Check one setting on one stack (at most `max` receivers).
-pub fn check_setting(gpu: &Gpu, s: &Setting, stack: &DepthStack, max: usize) -> Result<Verdict> {
+/// Check one setting on one stack (at most `max` receivers); `wgsl` is the shipped shader text
+/// to run instead of the setting's own printing (an export's `shadow.wgsl`).
+pub fn check_setting(
+    gpu: &Gpu,
+    s: &Setting,
+    wgsl: Option<&str>,
+    stack: &DepthStack,
+    max: usize,
+) -> Result<Verdict> {
     let Some(module) = export::module(s, export::header(s))? else {
         bail!("{}: no shader reconstruction to check", s.label());
     };
     let weights = stored::weights_f32(&Gaussian::paper());
     let program = Program {
         module: &module,
+        wgsl,
         storage: s.family.storage.storage(),
         weights: &weights,
     };

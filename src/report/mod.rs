@@ -3,6 +3,7 @@
 pub mod chart;
 pub mod docs_figures;
 pub mod document;
+pub mod gpu;
 pub mod pareto;
 pub mod pictures;
 pub mod provenance;

@@ -1,0 +1,118 @@
+//! `momentlab gpu check` on the committed tune exports as shipped: they pass, a changed
+//! constant fails with one line naming the setting and the worst texel, and a machine without
+//! an adapter gets one line.
+
+use crate::common::gpu::gpu_or_skip;
+use std::path::Path;
+use std::process::Command;
+
+fn momentlab(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_momentlab"))
+        .args(args)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .expect("run momentlab")
+}
+
+fn last_line(b: &[u8]) -> String {
+    String::from_utf8_lossy(b)
+        .lines()
+        .last()
+        .unwrap_or("")
+        .to_string()
+}
+
+const EXPORTS: &str = "reports/default/tune/export";
+
+#[test]
+fn committed_exports_pass_and_a_changed_constant_fails() {
+    if gpu_or_skip("committed_exports_pass_and_a_changed_constant_fails").is_none() {
+        return;
+    }
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dirs: Vec<String> = ["city", "stairs"]
+        .iter()
+        .map(|s| root.join(EXPORTS).join(s).display().to_string())
+        .collect();
+    let mut args = vec!["gpu", "check", "--resolution", "48", "--receivers", "1500"];
+    for d in &dirs {
+        args.extend(["--export", d.as_str()]);
+    }
+    let ok = momentlab(&args);
+    assert!(
+        ok.status.success(),
+        "{}",
+        String::from_utf8_lossy(&ok.stderr)
+    );
+    let out = String::from_utf8_lossy(&ok.stdout);
+    assert_eq!(
+        out.lines().filter(|l| l.starts_with("ok ")).count(),
+        2 * 12,
+        "{out}"
+    );
+
+    // α of the city export (1e-6) changed to 1e-5 in the shipped WGSL only
+    let tmp = std::env::temp_dir().join(format!("momentlab-gpu-tamper-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let src = root.join(EXPORTS).join("city");
+    std::fs::copy(src.join("setting.json"), tmp.join("setting.json")).unwrap();
+    let wgsl = std::fs::read_to_string(src.join("shadow.wgsl")).unwrap();
+    let alpha = "9.999999974752427e-7f";
+    assert!(wgsl.contains(alpha), "the city export's α literal moved");
+    std::fs::write(
+        tmp.join("shadow.wgsl"),
+        wgsl.replace(alpha, "9.999999747378752e-6f"),
+    )
+    .unwrap();
+    let t = tmp.display().to_string();
+    let bad = momentlab(&[
+        "gpu",
+        "check",
+        "--resolution",
+        "48",
+        "--receivers",
+        "1500",
+        "--export",
+        &t,
+    ]);
+    let _ = std::fs::remove_dir_all(&tmp);
+    assert_eq!(bad.status.code(), Some(1));
+    let err = last_line(&bad.stderr);
+    assert!(
+        err.starts_with("error: gpu check:")
+            && err.contains("hamburger6 unorm16")
+            && err.contains("texel"),
+        "{err}"
+    );
+}
+
+#[test]
+fn without_an_adapter_the_error_is_one_line() {
+    let out = Command::new(env!("CARGO_BIN_EXE_momentlab"))
+        .args(["gpu", "check", "--resolution", "16"])
+        .env("VK_ICD_FILENAMES", "/nonexistent/icd.json")
+        .env("VK_DRIVER_FILES", "/nonexistent/icd.json")
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(1));
+    let err = String::from_utf8_lossy(&out.stderr);
+    let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert!(lines[0].contains("no GPU adapter"), "{err}");
+    assert_eq!(last_line(&out.stderr), lines[0]);
+}
+
+#[test]
+fn bad_lists_are_refused_before_any_gpu_work() {
+    let out = momentlab(&["gpu", "check", "--storage", "f64"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(last_line(&out.stderr).contains("--storage: unknown 'f64'"));
+    let out = momentlab(&["gpu", "bench", "--filters", "4"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        last_line(&out.stderr).contains("odd"),
+        "{}",
+        last_line(&out.stderr)
+    );
+}
