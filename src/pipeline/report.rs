@@ -613,6 +613,24 @@ fn pp(p: &crate::tune::Paired) -> String {
 /// The tuned settings per scene (`momentlab tune`, docs/tune.md): the chosen setting with its
 /// bits, error split and speed, and its gain over the published defaults on the same fragments.
 fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
+    // What the exports hold: the chosen technique of every exported target, once each.
+    let mut exported: Vec<String> = Vec::new();
+    for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
+        let name = target.chosen.setting.family.technique.name().to_string();
+        if !exported.contains(&name) {
+            exported.push(name);
+        }
+    }
+    let shaders: Vec<&str> = crate::tune::export::SHADER_FILES
+        .iter()
+        .filter_map(|f| f.rsplit('.').next())
+        .map(|ext| match ext {
+            "glsl" => "GLSL",
+            "hlsl" => "HLSL",
+            "wgsl" => "WGSL",
+            e => e,
+        })
+        .collect();
     d.paragraph(format!(
         "Per scene, `momentlab tune` searches technique × storage (32-bit float, 16-bit UNORM \
          with θ, 16-bit UNORM canonical, 16-bit half float for ESM/EVSM) × moment bias α × \
@@ -622,13 +640,15 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
          best: fewest bits per texel, then fewest ns per fragment. Error = mean |G − PCF|, split \
          into light leaking (G < PCF) and over-darkening (G > PCF). Differences are paired on the \
          same fragments with 95 % intervals (docs/tune.md). `tune/export/<scene>/` holds each \
-         chosen setting as JSON and as GLSL/HLSL (encode, decode, reconstruction with the tuned \
-         constants; VSM, ESM, EVSM and Hamburger 4MSM).",
+         chosen setting as JSON and as {} (encode, decode, reconstruction with the tuned \
+         constants; here {}; docs/engine.md shows how to put one into an engine).",
         t.settings_screened,
         t.screen_per_scene,
         t.settings_confirmed,
         t.fragments_per_scene,
-        pct(t.tolerance)
+        pct(t.tolerance),
+        shaders.join(", "),
+        exported.join(", "),
     ));
     let targets: Vec<&crate::tune::Target> =
         t.scenes.iter().chain(std::iter::once(&t.overall)).collect();

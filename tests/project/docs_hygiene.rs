@@ -159,3 +159,213 @@ fn the_scanner_finds_planted_run_logs_and_passes_plain_text() {
         );
     }
 }
+
+/// Phrases of a lab notebook: A/B logs, tried-and-dropped lists, superseded runs, before/after
+/// figures. Their place is CHANGELOG.md.
+const NOTEBOOK: [&str; 9] = [
+    "tried and dropped",
+    "a/b",
+    "before →",
+    "before ->",
+    "superseded",
+    "alternating runs",
+    "alternated twice",
+    "earlier versions of",
+    "was tried and",
+];
+
+fn notebook_findings(line: &str) -> Vec<&'static str> {
+    let lower = line.to_lowercase();
+    // A phrase counts as words: not inside a longer word or path ("basis/b…" is not "A/B").
+    let whole = |p: &str| {
+        lower.match_indices(p).any(|(i, _)| {
+            let before = lower[..i].chars().next_back();
+            let after = lower[i + p.len()..].chars().next();
+            !before.is_some_and(|c| c.is_alphanumeric() || c == '/')
+                && !after.is_some_and(|c| c.is_alphanumeric() || c == '/')
+        })
+    };
+    NOTEBOOK.iter().copied().filter(|p| whole(p)).collect()
+}
+
+fn doc_files() -> Vec<PathBuf> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let mut files = vec![root.join("README.md")];
+    for e in std::fs::read_dir(root.join("docs")).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "md") {
+            files.push(p);
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn readme_and_docs_hold_no_lab_notebook() {
+    let mut bad = Vec::new();
+    for f in doc_files() {
+        for (n, line) in std::fs::read_to_string(&f).unwrap().lines().enumerate() {
+            let found = notebook_findings(line);
+            if !found.is_empty() {
+                bad.push(format!("{}:{}: {found:?} — {line}", f.display(), n + 1));
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "lab-notebook text in README/docs (history goes to CHANGELOG.md):\n{}",
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn the_notebook_scanner_finds_planted_logs() {
+    for planted in [
+        "Tried and dropped: a composite phase 1",
+        "two A/B pairs gave 55.8 µs",
+        "flat n = 4096 mean before → after",
+        "figures that were superseded",
+        "three alternating runs of the command",
+    ] {
+        assert!(!notebook_findings(planted).is_empty(), "missed: {planted}");
+    }
+    for plain in [
+        "the band solve restricts the LP",
+        "a before/after picture",
+        "θ of reports/theta/basis, the f32",
+    ] {
+        assert!(notebook_findings(plain).is_empty(), "false alarm: {plain}");
+    }
+}
+
+/// Every `momentlab …` command of README and docs/: inline code spans, and lines of fenced code
+/// blocks (with `\` continuations, shell comments and pipes cut). Usage synopses with
+/// `[optional]` parts are not command lines and are skipped.
+fn documented_commands(text: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut fenced = false;
+    let mut pending = String::new();
+    for line in text.lines() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+            pending.clear();
+            continue;
+        }
+        if fenced {
+            let l = line.trim();
+            let l = if pending.is_empty() {
+                l.strip_prefix("cargo run --release -- ")
+                    .map(|x| format!("momentlab {x}"))
+                    .unwrap_or_else(|| l.to_string())
+            } else {
+                l.to_string()
+            };
+            if pending.is_empty() && !l.starts_with("momentlab ") {
+                continue;
+            }
+            // A shell comment starts at " #".
+            let l = l.split(" #").next().unwrap().trim_end().to_string();
+            if let Some(cont) = l.strip_suffix('\\') {
+                pending.push_str(cont);
+                pending.push(' ');
+                continue;
+            }
+            pending.push_str(&l);
+            out.push(std::mem::take(&mut pending));
+            continue;
+        }
+        let mut rest = line;
+        while let Some(i) = rest.find("`momentlab ") {
+            let after = &rest[i + 1..];
+            let Some(e) = after.find('`') else { break };
+            out.push(after[..e].to_string());
+            rest = &after[e + 1..];
+        }
+    }
+    out.into_iter()
+        .map(|c| {
+            let c = c.split(" | ").next().unwrap();
+            let c = c.split(" && ").next().unwrap();
+            let c = c.split(" > ").next().unwrap();
+            c.trim().to_string()
+        })
+        // Synopses with [optional] parts, and bare command names in prose, are not command lines.
+        .filter(|c| !c.contains('[') && c.split_whitespace().count() > 2)
+        .collect()
+}
+
+/// The arguments of a documented command, placeholders (`DIR`, `M`, `FILES…`, `$s`) replaced
+/// by a value every argument accepts at parse time.
+fn command_args(cmd: &str) -> Vec<String> {
+    crate::docs_figures::shell_words(cmd)
+        .into_iter()
+        .filter(|w| w != "…")
+        .map(|w| {
+            let placeholder = w.starts_with('$')
+                || (w.chars().any(|c| c.is_ascii_uppercase())
+                    && w.chars()
+                        .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || "_…".contains(c)));
+            if placeholder {
+                "1".to_string()
+            } else {
+                w
+            }
+        })
+        .collect()
+}
+
+/// Parse a documented command with today's CLI; `--help` and `--version` count as parsed.
+fn parse(cmd: &str) -> Result<(), clap::Error> {
+    use clap::Parser;
+    match momentlab::cli::Cli::try_parse_from(command_args(cmd)) {
+        Ok(_) => Ok(()),
+        Err(e)
+            if matches!(
+                e.kind(),
+                clap::error::ErrorKind::DisplayHelp | clap::error::ErrorKind::DisplayVersion
+            ) =>
+        {
+            Ok(())
+        }
+        Err(e) => Err(e),
+    }
+}
+
+#[test]
+fn every_documented_command_parses_with_todays_cli() {
+    let mut bad = Vec::new();
+    let mut count = 0;
+    for f in doc_files() {
+        for cmd in documented_commands(&std::fs::read_to_string(&f).unwrap()) {
+            count += 1;
+            if let Err(e) = parse(&cmd) {
+                let first = e.to_string();
+                let first = first.lines().next().unwrap_or("").to_string();
+                bad.push(format!("{}: `{cmd}`: {first}", f.display()));
+            }
+        }
+    }
+    assert!(count >= 40, "only {count} documented commands found");
+    assert!(
+        bad.is_empty(),
+        "documented commands that today's CLI rejects:\n{}",
+        bad.join("\n")
+    );
+}
+
+#[test]
+fn an_invalid_flag_in_a_documented_command_is_found() {
+    let text = "Run `momentlab evaluate --pictures DIR` and\n```sh\nmomentlab theta --m 6 \\\n  --restarts 200   # θ₆\n```\n";
+    let cmds = documented_commands(text);
+    assert_eq!(
+        cmds,
+        vec![
+            "momentlab evaluate --pictures DIR".to_string(),
+            "momentlab theta --m 6  --restarts 200".to_string()
+        ]
+    );
+    assert!(parse(&cmds[0]).is_err());
+    assert!(parse(&cmds[1]).is_ok());
+    assert!(parse("momentlab shadow --help").is_ok());
+}
