@@ -19,6 +19,11 @@ pub enum Block {
     /// Markdown text (a sub-report), rendered as HTML; its headings sit two levels below the
     /// report's (`#` becomes `<h3>`).
     Markdown(String),
+    /// The table of contents: a link to every heading of the document.
+    Toc,
+    /// A figure of side-by-side panels: the file, one label per panel (left to right), the
+    /// caption.
+    Panels(String, Vec<String>, String),
 }
 
 /// A report: a title and a flat list of blocks.
@@ -33,6 +38,56 @@ fn esc(s: &str) -> String {
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+}
+
+/// Escaped text with `code spans` as `<code>` (the report's prose is Markdown-flavoured).
+fn inline(s: &str) -> String {
+    let e = esc(s);
+    let parts: Vec<&str> = e.split('`').collect();
+    if parts.len() < 3 || parts.len().is_multiple_of(2) {
+        return e;
+    }
+    let mut out = String::new();
+    for (k, p) in parts.iter().enumerate() {
+        if k % 2 == 1 {
+            let _ = write!(out, "<code>{p}</code>");
+        } else {
+            out.push_str(p);
+        }
+    }
+    out
+}
+
+/// Every `<img …>` after the first one with the same `src` replaced by a link to it: each image
+/// is embedded once.
+fn embed_images_once(html: &str) -> String {
+    let mut seen: Vec<String> = Vec::new();
+    let mut out = String::new();
+    let mut rest = html;
+    while let Some(p) = rest.find("<img ") {
+        out.push_str(&rest[..p]);
+        let tag_end = rest[p..].find('>').map_or(rest.len(), |e| p + e + 1);
+        let tag = &rest[p..tag_end];
+        let src = tag
+            .split_once("src=\"")
+            .and_then(|x| x.1.split_once('"'))
+            .map(|x| x.0.to_string())
+            .unwrap_or_default();
+        if seen.contains(&src) {
+            let _ = write!(out, "<a href=\"{src}\">{src} (shown above)</a>");
+        } else {
+            seen.push(src);
+            out.push_str(tag);
+        }
+        rest = &rest[tag_end..];
+    }
+    out.push_str(rest);
+    out
+}
+
+/// The anchor of the k-th heading.
+fn anchor(k: usize) -> String {
+    format!("s{k}")
 }
 
 fn md_cell(s: &str) -> String {
@@ -64,6 +119,16 @@ impl Document {
     pub fn code(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Code(s.into()));
     }
+    pub fn toc(&mut self) {
+        self.blocks.push(Block::Toc);
+    }
+    pub fn panels(&mut self, file: impl Into<String>, labels: &[&str], caption: impl Into<String>) {
+        self.blocks.push(Block::Panels(
+            file.into(),
+            labels.iter().map(|l| l.to_string()).collect(),
+            caption.into(),
+        ));
+    }
     pub fn markdown(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Markdown(s.into()));
     }
@@ -73,7 +138,7 @@ impl Document {
         self.blocks
             .iter()
             .filter_map(|b| match b {
-                Block::Figure(f, _) => Some(f.as_str()),
+                Block::Figure(f, _) | Block::Panels(f, _, _) => Some(f.as_str()),
                 _ => None,
             })
             .collect()
@@ -88,17 +153,50 @@ impl Document {
              table{{border-collapse:collapse;margin:1em 0}}td,th{{border:1px solid #bbb;padding:3px 8px;text-align:right}}\
              th{{background:#eee}}td:first-child{{text-align:left}}img{{max-width:100%;border:1px solid #ddd}}\
              figure{{margin:1.5em 0}}figcaption{{color:#333;font-size:.95em;margin-top:.3em}}\
-             .provenance td{{text-align:left}}pre{{background:#f4f4f4;padding:.6em;overflow-x:auto}}</style></head><body>\n<h1>{}</h1>\n",
+             .provenance td{{text-align:left}}pre{{background:#f4f4f4;padding:.6em;overflow-x:auto}}\
+             .panel-labels{{display:flex;max-width:100%}}.panel-labels span{{flex:1;text-align:center;font-weight:bold}}\
+             nav.toc ol{{columns:2}}</style></head><body>\n<h1>{}</h1>\n",
             esc(&self.title),
             esc(&self.title)
         );
+        let headings: Vec<&String> = self
+            .blocks
+            .iter()
+            .filter_map(|b| match b {
+                Block::Heading(s) => Some(s),
+                _ => None,
+            })
+            .collect();
+        let mut k = 0;
         for b in &self.blocks {
             match b {
                 Block::Heading(s) => {
-                    let _ = writeln!(h, "<h2>{}</h2>", esc(s));
+                    let _ = writeln!(h, "<h2 id=\"{}\">{}</h2>", anchor(k), inline(s));
+                    k += 1;
+                }
+                Block::Toc => {
+                    h.push_str("<nav class=\"toc\"><h2>Contents</h2><ol>\n");
+                    for (j, s) in headings.iter().enumerate() {
+                        let _ =
+                            writeln!(h, "<li><a href=\"#{}\">{}</a></li>", anchor(j), inline(s));
+                    }
+                    h.push_str("</ol></nav>\n");
+                }
+                Block::Panels(f, labels, c) => {
+                    let _ = write!(h, "<figure><div class=\"panel-labels\">");
+                    for l in labels {
+                        let _ = write!(h, "<span>{}</span>", esc(l));
+                    }
+                    let _ = writeln!(
+                        h,
+                        "</div><a href=\"{f}\"><img src=\"{f}\" alt=\"{a}\"></a><figcaption>{c}</figcaption></figure>",
+                        f = esc(f),
+                        a = esc(&c.replace('`', "")),
+                        c = inline(c)
+                    );
                 }
                 Block::Paragraph(s) => {
-                    let _ = writeln!(h, "<p>{}</p>", esc(s));
+                    let _ = writeln!(h, "<p>{}</p>", inline(s));
                 }
                 Block::Code(s) => {
                     let _ = writeln!(h, "<pre>{}</pre>", esc(s));
@@ -107,21 +205,22 @@ impl Document {
                 Block::Figure(f, c) => {
                     let _ = writeln!(
                         h,
-                        "<figure><a href=\"{f}\"><img src=\"{f}\" alt=\"{c}\"></a><figcaption>{c}</figcaption></figure>",
+                        "<figure><a href=\"{f}\"><img src=\"{f}\" alt=\"{a}\"></a><figcaption>{c}</figcaption></figure>",
                         f = esc(f),
-                        c = esc(c)
+                        a = esc(&c.replace('`', "")),
+                        c = inline(c)
                     );
                 }
                 Block::Table(head, rows) => {
                     h.push_str("<table><tr>");
                     for c in head {
-                        let _ = write!(h, "<th>{}</th>", esc(c));
+                        let _ = write!(h, "<th>{}</th>", inline(c));
                     }
                     h.push_str("</tr>\n");
                     for r in rows {
                         h.push_str("<tr>");
                         for c in r {
-                            let _ = write!(h, "<td>{}</td>", esc(c));
+                            let _ = write!(h, "<td>{}</td>", inline(c));
                         }
                         h.push_str("</tr>\n");
                     }
@@ -130,7 +229,7 @@ impl Document {
             }
         }
         h.push_str("</body></html>\n");
-        h
+        embed_images_once(&h)
     }
 
     pub fn to_markdown(&self) -> String {
@@ -151,6 +250,23 @@ impl Document {
                 }
                 Block::Figure(f, c) => {
                     let _ = writeln!(m, "![{}]({f})\n\n*{c}*\n", md_cell(c));
+                }
+                Block::Panels(f, labels, c) => {
+                    let _ = writeln!(
+                        m,
+                        "![{}]({f})\n\n*Panels, left to right: {}. {c}*\n",
+                        md_cell(c),
+                        labels.join(" | ")
+                    );
+                }
+                Block::Toc => {
+                    m.push_str("Contents:\n\n");
+                    for b in &self.blocks {
+                        if let Block::Heading(s) = b {
+                            let _ = writeln!(m, "- {s}");
+                        }
+                    }
+                    m.push('\n');
                 }
                 Block::Table(head, rows) => {
                     let _ = writeln!(
@@ -300,6 +416,34 @@ mod tests {
         assert!(m.contains("| a | b\\|c |"));
         assert!(m.contains("![caption](fig.svg)"));
         assert_eq!(d.figures(), vec!["fig.svg"]);
+    }
+
+    #[test]
+    fn toc_panels_code_spans_and_each_image_once() {
+        let mut d = Document::new("r");
+        d.paragraph("run `momentlab tune`");
+        d.toc();
+        d.heading("First");
+        d.figure("a.svg", "one");
+        d.heading("Second");
+        d.figure("a.svg", "again");
+        d.panels(
+            "eye/x.png",
+            &["PCF", "vsm", "|vsm − PCF|"],
+            "look for `leaks`",
+        );
+        let h = d.to_html();
+        assert!(
+            h.contains("<code>momentlab tune</code>") && !h.contains('`'),
+            "{h}"
+        );
+        assert!(h.contains("<a href=\"#s0\">First</a>") && h.contains("<h2 id=\"s1\">Second</h2>"));
+        assert_eq!(h.matches("<img src=\"a.svg\"").count(), 1, "{h}");
+        assert!(h.contains("a.svg (shown above)"));
+        assert!(h.contains("<span>PCF</span><span>vsm</span>"));
+        assert_eq!(d.figures(), vec!["a.svg", "a.svg", "eye/x.png"]);
+        let m = d.to_markdown();
+        assert!(m.contains("- First\n- Second") && m.contains("Panels, left to right: PCF | vsm"));
     }
 
     #[test]

@@ -76,12 +76,41 @@ window.__momentlabErrors = [];
         eye.push({ src: src, pixels: n, variance: n ? s2 / n - mean * mean : 0 });
       } catch (err) { eye.push({ src: src, error: String(err) }); }
     }
+    // The answers first: the Summary heading and the table of contents before the first figure.
+    var firstFig = document.querySelector('figure');
+    var h2s = document.querySelectorAll('h2'), summary = null;
+    for (var h = 0; h < h2s.length; h++) if (h2s[h].textContent.trim() === 'Summary') { summary = h2s[h]; break; }
+    var toc = document.querySelector('nav.toc');
+    var before = function (a, b) { return !!a && (!b || (a.compareDocumentPosition(b) & 4) !== 0); };
+    var tocLinks = toc ? toc.querySelectorAll("a[href^='#']") : [], deadLinks = 0;
+    for (var t = 0; t < tocLinks.length; t++) if (!document.getElementById(tocLinks[t].getAttribute('href').slice(1))) deadLinks++;
+    // Each image embedded once; eye views with a label per panel.
+    var seenSrc = {}, twice = [], unlabelled = [];
+    for (var d = 0; d < imgs.length; d++) {
+      var s0 = imgs[d].getAttribute('src') || '';
+      if (seenSrc[s0]) twice.push(s0); seenSrc[s0] = 1;
+      if (/(^|\/)eye\//.test(s0)) {
+        var fg = imgs[d].closest('figure');
+        var labels = fg ? fg.querySelectorAll('.panel-labels span') : [];
+        var named = 0;
+        for (var q2 = 0; q2 < labels.length; q2++) if (labels[q2].textContent.trim()) named++;
+        if (named !== 3) unlabelled.push(s0);
+      }
+    }
+    // Markdown rendered: no literal backticks outside code.
+    var bodyCopy = document.body.cloneNode(true);
+    var codeEls = bodyCopy.querySelectorAll('pre, code, script');
+    for (var c2 = 0; c2 < codeEls.length; c2++) codeEls[c2].remove();
+    var backticks = (bodyCopy.textContent.match(/`/g) || []).length;
+    var order = { summary_before_figure: before(summary, firstFig), toc_before_figure: before(toc, firstFig),
+      toc_links: tocLinks.length, toc_dead_links: deadLinks, embedded_twice: twice,
+      eye_unlabelled: unlabelled, backticks: backticks };
     var text = document.body.innerText;
     var provenance = ['git commit', 'command', 'CPU', 'threads', 'date (UTC)'].filter(function (w) { return text.indexOf(w) < 0; });
     var r = document.createElement('pre');
     r.id = 'momentlab-check';
     r.textContent = JSON.stringify({ images: imgs.length, broken: broken, errors: errs,
-      uncaptioned: uncaptioned, markdown_pre: mdpre, provenance_missing: provenance, eye: eye });
+      uncaptioned: uncaptioned, markdown_pre: mdpre, provenance_missing: provenance, eye: eye, order: order });
     document.body.appendChild(r);
   });
 })();
@@ -212,10 +241,20 @@ fn report_loads_in_headless_chromium() {
         });
         assert!(hit, "no eye view of {t}: {v}");
     }
+    // The answers first: a summary and a table of contents before the first figure; every
+    // image embedded once, eye-view panels labelled, no literal Markdown backticks.
+    let o = &v["order"];
+    assert_eq!(o["summary_before_figure"], serde_json::json!(true), "{o}");
+    assert_eq!(o["toc_before_figure"], serde_json::json!(true), "{o}");
+    assert!(o["toc_links"].as_u64().unwrap_or(0) >= 5, "{o}");
+    assert_eq!(o["toc_dead_links"], serde_json::json!(0), "{o}");
+    assert_eq!(o["embedded_twice"], serde_json::json!([]), "{o}");
+    assert_eq!(o["eye_unlabelled"], serde_json::json!([]), "{o}");
+    assert_eq!(o["backticks"], serde_json::json!(0), "{o}");
     // Provenance on the first screen: before the first figure and the first section.
     let prov = html.find("git commit").expect("no provenance");
     assert!(prov < html.find("<figure").unwrap_or(usize::MAX));
-    assert!(prov < html.find("<h2>").unwrap_or(usize::MAX));
+    assert!(prov < html.find("<h2").unwrap_or(usize::MAX));
     // Sub-reports are HTML: their tables are <table>s, not Markdown text.
     assert!(!html.contains("|---"), "Markdown table text in the HTML");
 
@@ -235,6 +274,8 @@ fn report_loads_in_headless_chromium() {
             &html,
             "<img src=\"no-such-figure.svg\"><pre>| a | b |\n|---|---|\n| 1 | 2 |</pre>\
              <figure><img src=\"eye/blank_eye.png\"><figcaption>blank</figcaption></figure>\
+             <figure><img src=\"eye/blank_eye.png\"><figcaption>blank again</figcaption></figure>\
+             <p>a `literal` span</p>\
              <script>console.error('planted')</script>",
         ),
     )
@@ -251,6 +292,18 @@ fn report_loads_in_headless_chromium() {
         "{c}"
     );
     assert_eq!(c["markdown_pre"], serde_json::json!(1), "{c}");
+    assert_eq!(
+        c["order"]["embedded_twice"],
+        serde_json::json!(["eye/blank_eye.png"]),
+        "{c}"
+    );
+    assert!(
+        c["order"]["eye_unlabelled"]
+            .to_string()
+            .contains("eye/blank_eye.png"),
+        "{c}"
+    );
+    assert_eq!(c["order"]["backticks"], serde_json::json!(2), "{c}");
     let planted = c["eye"]
         .as_array()
         .unwrap()
@@ -286,4 +339,45 @@ fn report_loads_in_headless_chromium() {
     println!("screenshot: {}", shot.display());
     eprintln!("screenshot: {}", shot.display());
     std::fs::remove_dir_all(&root).ok();
+}
+
+/// The pictures of docs/ (docs/img/, generated from the pipeline's artefacts) load in the
+/// browser, as the pages show them.
+#[test]
+fn docs_pictures_load_in_headless_chromium() {
+    let Some(bin) = browser() else {
+        if std::env::var("MOMENTLAB_REQUIRE_BROWSER").as_deref() == Ok("1") {
+            panic!("MOMENTLAB_REQUIRE_BROWSER=1 but no chromium on PATH");
+        }
+        eprintln!("SKIPPED docs_pictures_load_in_headless_chromium: chromium not installed");
+        return;
+    };
+    let docs = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("docs");
+    let mut body = String::new();
+    let mut n = 0;
+    for (file, _) in momentlab::report::docs_figures::IMAGES {
+        body.push_str(&format!(
+            "<figure><img src=\"{file}\"><figcaption>the picture docs/{file} as a page of docs/ shows it</figcaption></figure>"
+        ));
+        n += 1;
+    }
+    let html = format!("<!DOCTYPE html><html><head></head><body>{body}</body></html>");
+    let root = crate::common::tmp_path("browser-docs");
+    std::fs::create_dir_all(&root).unwrap();
+    // A copy of docs/img/ next to the page, so that the relative links are the pages' own.
+    std::fs::create_dir_all(root.join("img")).unwrap();
+    for (file, _) in momentlab::report::docs_figures::IMAGES {
+        std::fs::copy(docs.join(file), root.join(file)).unwrap();
+    }
+    let page = root.join("docs.check.html");
+    std::fs::write(&page, with_checker(&html, "")).unwrap();
+    let v = check_page(&bin, &root.join("profile"), &page);
+    assert!(n >= 6, "only {n} pictures in docs/");
+    assert_eq!(v["images"].as_u64(), Some(n as u64), "{v}");
+    assert_eq!(
+        v["broken"],
+        serde_json::json!([]),
+        "broken pictures in docs/: {v}"
+    );
+    assert_eq!(v["errors"], serde_json::json!([]), "{v}");
 }
