@@ -9,6 +9,7 @@
 //!   last line dropped.
 
 pub mod input;
+pub mod interrupt;
 pub mod out;
 
 pub use input::{check_regular, read_bytes, read_input, read_text, Limit};

@@ -398,6 +398,7 @@ fn put_atomically(
     replace: bool,
     fill: impl FnOnce(&mut File) -> Result<()>,
 ) -> Result<PathBuf> {
+    let _writing = super::interrupt::begin_write();
     let target = dir.join(file);
     let (tmp, mut f) = loop {
         let n = TMP_COUNTER.fetch_add(1, Ordering::Relaxed);
@@ -472,6 +473,7 @@ fn put_atomically(
 
 /// Append rows as JSON lines to `path` (created if missing) without following a link.
 pub(crate) fn append_jsonl_nofollow<T: Serialize>(path: &Path, rows: &[T]) -> Result<()> {
+    let _writing = super::interrupt::begin_write();
     let mut buf = Vec::new();
     for r in rows {
         serde_json::to_writer(&mut buf, r)?;

@@ -136,6 +136,20 @@ fn note_line(s: &str) {
 }
 
 fn dispatch(cli: Cli) -> Result<()> {
+    // Long commands stop cleanly on SIGINT/SIGTERM (exit 130, one line; crate::artefact::interrupt).
+    let long = match &cli.command {
+        Command::Theta(_) => Some(("theta", false)),
+        Command::Stability(_) => Some(("stability", false)),
+        Command::Evaluate(_) => Some(("evaluate", false)),
+        Command::Tune(_) => Some(("tune", false)),
+        Command::Quantize(_) => Some(("quantize", false)),
+        Command::Search(_) => Some(("search", true)),
+        Command::Reproduce(_) => Some(("reproduce", true)),
+        _ => None,
+    };
+    if let Some((name, resumes)) = long {
+        crate::artefact::interrupt::install(name, resumes);
+    }
     match cli.command {
         Command::Lp(a) => lp::run(a),
         Command::Candidates(a) => candidates::run(a),

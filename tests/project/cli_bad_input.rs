@@ -1718,3 +1718,58 @@ fn checks_come_before_the_work() {
         &["--report-only"],
     );
 }
+
+/// SIGINT or SIGTERM during a long command: exit status 130 and exactly one stderr line saying
+/// so (progress output ends first), and the output folder holds no half-written file.
+#[test]
+fn interrupts_exit_130_with_one_line() {
+    let s = Scratch::new("interrupt");
+    for (sig, name, args) in [
+        (
+            libc::SIGINT,
+            "SIGINT",
+            vec!["theta", "--m", "4", "--restarts", "64", "--out", "theta"],
+        ),
+        (
+            libc::SIGTERM,
+            "SIGTERM",
+            vec!["stability", "--samples", "200000", "--out", "stab"],
+        ),
+    ] {
+        let mut args: Vec<String> = args.iter().map(|a| a.to_string()).collect();
+        let last = args.len() - 1;
+        args[last] = s.p(&args[last]);
+        let child = Command::new(bin())
+            .args(&args)
+            .env("MOMENTLAB_PROGRESS", "lines")
+            .env("MOMENTLAB_PROGRESS_INTERVAL", "0.1")
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(std::time::Duration::from_millis(1500));
+        assert_eq!(unsafe { libc::kill(child.id() as i32, sig) }, 0);
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "{args:?}: {err}");
+        let lines: Vec<&str> = err.lines().collect();
+        let last = lines.last().unwrap();
+        assert!(
+            last.starts_with(&format!("error: {}: interrupted by {name}", args[0])),
+            "{err}"
+        );
+        assert_eq!(
+            lines.iter().filter(|l| l.contains("error")).count(),
+            1,
+            "{err}"
+        );
+        // Whatever was written is whole: no temporary file of the writer left behind.
+        if let Ok(d) = std::fs::read_dir(&args[args.len() - 1]) {
+            for e in d {
+                let n = e.unwrap().file_name().to_string_lossy().into_owned();
+                assert!(!n.ends_with(".tmp"), "{n} left in the output folder");
+            }
+        }
+    }
+}

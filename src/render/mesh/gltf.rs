@@ -274,11 +274,49 @@ fn visit(
     Ok(())
 }
 
+/// Refuse a primitive whose attribute, morph target or index accessor is out of range before
+/// the glTF crate validates the document (its validation indexes the POSITION accessor
+/// unchecked and would panic). Anything that is not JSON is left to the crate's own errors.
+fn check_accessor_indices(bytes: &[u8]) -> Result<()> {
+    let Ok(g) = gltf::Gltf::from_slice_without_validation(bytes) else {
+        return Ok(());
+    };
+    let root = g.document.as_json();
+    let n = root.accessors.len();
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            let mut refs: Vec<(String, usize)> = p
+                .attributes
+                .iter()
+                .map(|(k, v)| (format!("attribute {k:?}"), v.value()))
+                .collect();
+            for t in p.targets.iter().flatten() {
+                for (name, a) in [
+                    ("POSITION", t.positions),
+                    ("NORMAL", t.normals),
+                    ("TANGENT", t.tangents),
+                ] {
+                    refs.extend(a.map(|a| (format!("morph target {name}"), a.value())));
+                }
+            }
+            refs.extend(p.indices.map(|a| ("indices".to_string(), a.value())));
+            if let Some((what, i)) = refs.into_iter().find(|r| r.1 >= n) {
+                bail!(
+                    "glTF: mesh {mi} primitive {pi}: {what} refers to accessor {i}, but the \
+                     file has {n}"
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Triangles of a glTF 2.0 file (`.gltf` or `.glb` bytes); `resolve` reads external buffers.
 pub fn load_gltf_bytes(
     bytes: &[u8],
     resolve: &dyn Fn(&str) -> Result<Vec<u8>>,
 ) -> Result<Vec<Tri>> {
+    check_accessor_indices(bytes)?;
     let g = gltf::Gltf::from_slice(bytes).map_err(|e| anyhow!("glTF: {e}"))?;
     let buffers = load_buffers(&g, resolve)?;
     let scene = g
