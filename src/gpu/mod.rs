@@ -8,6 +8,7 @@
 //! the CPU study never needs one.
 
 pub mod bench;
+pub mod call;
 pub mod check;
 pub mod device;
 pub mod passes;
