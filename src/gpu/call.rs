@@ -130,7 +130,7 @@ pub fn call(gpu: &Gpu, module: &Module, name: &str, inputs: &[f32]) -> Result<Ve
     let (n_in, n_out) = (f.n_inputs(), f.n_outputs());
     let n = if n_in == 0 {
         bail!("GPU call: {name} takes no inputs; nothing says how many calls to make")
-    } else if inputs.len() % n_in != 0 {
+    } else if !inputs.len().is_multiple_of(n_in) {
         bail!(
             "GPU call: {} input values for {name} are not rows of {n_in}",
             inputs.len()
@@ -176,10 +176,13 @@ pub fn call(gpu: &Gpu, module: &Module, name: &str, inputs: &[f32]) -> Result<Ve
     })?;
     // rows per chunk: both buffers within the binding and buffer limits
     let limits = dev.limits();
-    let max_bytes = (limits.max_storage_buffer_binding_size as u64).min(limits.max_buffer_size);
+    let max_bytes = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
     let per_row = 4 * n_in.max(n_out) as u64;
-    let chunk = ((max_bytes / per_row) as usize)
-        .min((ROW as usize) * (GROUP as usize) * (limits.max_compute_workgroups_per_dimension as usize));
+    let chunk = ((max_bytes / per_row) as usize).min(
+        (ROW as usize) * (GROUP as usize) * (limits.max_compute_workgroups_per_dimension as usize),
+    );
     if chunk == 0 {
         bail!("GPU call: one row of {name} exceeds the device's storage-buffer limit");
     }
@@ -287,7 +290,12 @@ mod tests {
             s.contains("let call_p1: array<f32, 3> = array<f32, 3>(call_in[call_a + 1u], call_in[call_a + 2u], call_in[call_a + 3u]);"),
             "{s}"
         );
-        assert!(s.contains("let call_p2: vec2<f32> = vec2<f32>(call_in[call_a + 4u], call_in[call_a + 5u]);"), "{s}");
+        assert!(
+            s.contains(
+                "let call_p2: vec2<f32> = vec2<f32>(call_in[call_a + 4u], call_in[call_a + 5u]);"
+            ),
+            "{s}"
+        );
         assert!(s.contains("let call_r: vec2<f32> = k(call_p0, call_p1, call_p2, &call_o0, &call_o1, &call_o2);"), "{s}");
         // return value first, then the out parameters in order: 2 + 3 + 1 + 2 outputs
         assert!(s.contains("call_out[call_b + 1u] = call_r.y;"), "{s}");
