@@ -7,21 +7,37 @@
 //! Two solvers behind [`MomentSolver`]: [`ReferenceSolver`] (good_lp + microlp, the LP exactly
 //! as stated) and [`FastSolver`] (certified; its answers carry a checked certificate, with an
 //! exact simplex as the last resort). The public API is this file: the grid table, the solvers
-//! and their trait, the answer and its status.
+//! ([`SolverKind`], [`make_solver`]) and their trait, the answer and its status, [`Error`].
+//!
+//! # The fast solver's chain
+//!
+//! A problem goes down this chain until an answer is certified; each step is a folder or file:
+//!
+//! 1. `fast/`: a revised primal simplex on the whole grid in orthonormalised coordinates
+//!    (`fast/simplex.rs`, its starts `fast/starts.rs` and `fast/recognise.rs`, the SIMD pricing
+//!    kernels `fast/pricing/`);
+//! 2. `fast/escalate/band.rs`: the same simplex on a window of the grid in the window's own
+//!    coordinates;
+//! 3. accurate pivots in the certifier's coordinates (`certify/improve.rs`);
+//! 4. `fast/escalate/scaled/`: a revised simplex in double-double arithmetic on the LP scaled
+//!    per problem;
+//! 5. `fast/escalate/exact/`: an exact rational simplex.
+//!
+//! `certify/` judges every answer in the original coordinates (weights, the weak-duality bound
+//! in `certify/bound.rs`, Farkas rays; its blocked row kernels in `certify/row_kernels/`).
+//! What no step certifies is [`Status::Failed`] with the reasons. Shared numerics: `dense.rs`
+//! (small LUs, double-double), `ortho.rs` (Gram–Schmidt of the table), `ratio.rs` (Harris'
+//! ratio test), `cpu.rs` (CPU features). docs/lp.md maps every file.
 
 #![warn(missing_docs)]
 
 mod certify;
 mod cpu;
 mod dense;
-mod exact;
 mod fast;
 mod ortho;
-mod pricing;
 mod ratio;
 mod reference;
-mod row_kernels;
-mod scaled;
 
 pub use fast::{FastSolver, FastStats};
 pub use reference::ReferenceSolver;
@@ -32,7 +48,7 @@ use anyhow::{bail, Result};
 /// The pricing kernel the fast solver uses on this CPU ("avx512", "avx2" or "scalar"; the
 /// environment variable `MOMENTLAB_PRICING` selects a supported one).
 pub fn pricing_kernel() -> &'static str {
-    pricing::Kernel::detect().name()
+    fast::pricing::Kernel::detect().name()
 }
 
 /// The values b(z_i) of a basis on a grid: the constraint columns of Algorithm 1.

@@ -14,8 +14,8 @@
 //!   dependency, as a Farkas ray over every row, certifies it (`inconsistency_ray`).
 //! * **Simplex.** An explicit (m+1)×(m+1) basis inverse, Dantzig pricing (partial: a coarse
 //!   subgrid, the neighbours of z_f and of the support, the fine window around the best) with
-//!   the blocked SIMD kernels of [`super::pricing`] (greatest improvement on the coarse
-//!   subgrid when the column found has a reduced cost below −1, see [`super::pricing::greatest`]), a
+//!   the blocked SIMD kernels of [`pricing`] (greatest improvement on the coarse
+//!   subgrid when the column found has a reduced cost below −1, see [`pricing::greatest`]), a
 //!   Harris-style ratio test, Bland's rule
 //!   after repeated degenerate pivots, a refactorisation every 16 pivots. When partial pricing
 //!   finds no entering column in phase 2, the certificate ([`super::certify`]) prices every
@@ -53,28 +53,29 @@
 //!   (exp(40z) spans 10^17), the LP restricted to a band of the grid around the window is solved
 //!   in the band's own coordinates and its basis certified on the whole grid.
 //! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), then the
-//!   scaled double-double simplex ([`super::scaled`]) and the exact simplex ([`super::exact`]);
+//!   scaled double-double simplex ([`escalate::scaled`]) and the exact simplex ([`escalate::exact`]);
 //!   what none of them certifies is `Failed` with the reason. Never an endless loop.
 
 #![allow(clippy::needless_range_loop)] // index-heavy dense linear algebra on r ≤ 9
 
-mod band;
+mod escalate;
 mod linalg;
 mod ortho;
 mod price;
+pub(super) mod pricing;
 mod recognise;
 mod refine;
 mod simplex;
 mod starts;
 
 use super::certify::{Certified, Certifier};
-use super::exact::{ExactAnswer, ExactSimplex};
-use super::pricing::ColumnTable;
-use super::scaled::{Found, ScaledSimplex};
 use super::{GridTable, MomentSolver, Solution, Status};
 use anyhow::{bail, Result};
+use escalate::band;
+use escalate::scaled::ScaledSimplex;
 use linalg::max_volume_rows;
 use ortho::{orthonormalise, Ortho};
+use pricing::ColumnTable;
 
 /// Primal feasibility tolerance on weights (which sum to 1).
 const TOL_P: f64 = 1e-10;
@@ -125,12 +126,12 @@ pub struct FastStats {
     pub loose: u64,
     /// Cold restarts after an iteration cap, a singular basis or a failed verification.
     pub restarts: u64,
-    /// Problems escalated to the scaled simplex ([`super::scaled`]): the fast answer was not
+    /// Problems escalated to the scaled simplex ([`escalate::scaled`]): the fast answer was not
     /// certified, or the fast runs did not converge, or phase 1 called them infeasible.
     pub escalations: u64,
     /// Problems returned as `Failed` (nothing certified either verdict).
     pub failed: u64,
-    /// Problems handed to the exact simplex ([`super::exact`]) after the scaled simplex.
+    /// Problems handed to the exact simplex ([`escalate::exact`]) after the scaled simplex.
     pub exact: u64,
     /// Fast optima that certified only after accurate pivots ([`Certifier::improve`]).
     pub improved: u64,
@@ -364,7 +365,7 @@ impl FastSolver {
     }
 
     /// The exactly optimal basis (grid indices, one per row 0..=m) when the last answer came
-    /// from the exact simplex ([`super::exact`]); None otherwise. For independent checks.
+    /// from the exact simplex ([`escalate::exact`]); None otherwise. For independent checks.
     pub fn last_exact_basis(&self) -> Option<&[usize]> {
         self.last_exact.as_deref()
     }
@@ -522,7 +523,8 @@ enum Legacy {
     /// An optimal basis that did not certify, and why.
     Answer(Vec<usize>, String),
     Infeasible,
-    Reference,
+    /// The simplex did not converge from any start.
+    NoConvergence,
 }
 
 impl Legacy {
@@ -533,7 +535,7 @@ impl Legacy {
             Legacy::Infeasible => {
                 "phase 1 found no feasible point, but no Farkas ray certifies it".into()
             }
-            Legacy::Reference => "the simplex did not converge".into(),
+            Legacy::NoConvergence => "the simplex did not converge".into(),
         }
     }
 }
@@ -699,7 +701,7 @@ impl FastSolver {
                 }
             }
             Verdict::Infeasible => Legacy::Infeasible,
-            Verdict::Failed => Legacy::Reference,
+            Verdict::Failed => Legacy::NoConvergence,
         };
         // The same LP on a band of the grid around the window (steep functions), certified on
         // the whole grid, with accurate pivots from it where columns outside the band enter.
@@ -728,142 +730,6 @@ impl FastSolver {
         }
         Err(legacy)
     }
-
-    /// The scaled simplex on the problem, from `start` if given; its answer certified. What
-    /// that leaves unsettled goes to the exact simplex ([`super::exact`]) from the last basis
-    /// tried.
-    fn escalate(
-        &mut self,
-        moments: &[f64],
-        kf: usize,
-        start: Option<&[usize]>,
-        dist: Option<&[(u32, f64)]>,
-    ) -> Solution {
-        self.stats.escalations += 1;
-        self.warm.last_c.iter_mut().for_each(|v| *v = f64::NAN);
-        self.cert.set_moments(moments);
-        let pivots = self.scaled.pivots;
-        let found = self.scaled.solve(&self.cert, kf, start);
-        self.stats.pivots += self.scaled.pivots - pivots;
-        let (sol, last) = match found {
-            Found::Optimal(mut basis) => {
-                match self
-                    .cert
-                    .improve(moments, kf, &mut basis, FINAL_IMPROVE_STEPS)
-                {
-                    Ok(c) => (certified(c), None),
-                    Err(e) => (
-                        Solution::failed(format!("scaled simplex optimum not certified: {e}")),
-                        Some(basis),
-                    ),
-                }
-            }
-            Found::Infeasible(y) => match self.cert.infeasible(moments, &y) {
-                Ok(_) => (Solution::infeasible(), None),
-                Err(e) => (
-                    Solution::failed(format!("phase 1 infeasible, but {e}")),
-                    None,
-                ),
-            },
-            Found::Failed(e) => (Solution::failed(e), None),
-        };
-        let sol = if sol.status == Status::Failed {
-            match self.exact(moments, kf, [last, start.map(<[usize]>::to_vec)], dist) {
-                Some(ex) if ex.status == Status::Failed => Solution::failed(format!(
-                    "{}; {}",
-                    sol.reason.unwrap_or_default(),
-                    ex.reason.unwrap_or_default()
-                )),
-                Some(ex) => ex,
-                None => sol,
-            }
-        } else {
-            sol
-        };
-        if sol.status == Status::Infeasible {
-            self.stats.infeasible += 1;
-        }
-        sol
-    }
-
-    /// The exact simplex on the exact moments of `dist` when given (else on `moments`). Its
-    /// starts: the last basis the escalation tried (usually exactly optimal already, or a few
-    /// dual pivots away), the distribution's atoms completed by that basis's columns (feasible,
-    /// with duals close to that basis's), the distribution's support, the fast solver's basis,
-    /// evenly spaced grid points. None when the exact LP does not apply (dependent rows).
-    fn exact(
-        &mut self,
-        moments: &[f64],
-        kf: usize,
-        [last, fast]: [Option<Vec<usize>>; 2],
-        dist: Option<&[(u32, f64)]>,
-    ) -> Option<Solution> {
-        let (n, r) = (self.table.n(), self.table.m() + 1);
-        let mixed = dist
-            .zip(last.as_deref())
-            .and_then(|(h, l)| mixed_basis(h, l));
-        let support = dist.and_then(|h| self.support_basis(h));
-        let spread = Some((0..r).map(|t| t * (n - 1) / (r - 1).max(1)).collect());
-        let from: Vec<Vec<usize>> = [last, mixed, support, fast, spread]
-            .into_iter()
-            .flatten()
-            .collect();
-        let from: Vec<&[usize]> = from.iter().map(Vec::as_slice).collect();
-        self.cert.set_moments(moments);
-        let mut ex = ExactSimplex::new(&self.cert, kf, dist)?;
-        self.stats.exact += 1;
-        let answer = ex.solve(&from);
-        self.stats.pivots += ex.pivots as u64;
-        let z = self.table.grid().points();
-        match answer {
-            ExactAnswer::Optimal { g, weights, basis } => {
-                let support = weights.iter().map(|&(i, w)| (z[i], w)).collect();
-                self.last_exact = Some(basis);
-                Some(Solution {
-                    status: Status::Optimal,
-                    g: g.clamp(0.0, 1.0),
-                    support,
-                    reason: None,
-                })
-            }
-            // The exact ray proves that no distribution has exactly these moments; the answer
-            // `infeasible` also promises that none reproduces them to the tolerance
-            // ([`super::certify`]), which the same ray must show.
-            ExactAnswer::Infeasible(y) => {
-                let y: Vec<f64> = y.iter().map(|v| -v).collect();
-                Some(match self.cert.infeasible(moments, &y) {
-                    Ok(_) => Solution::infeasible(),
-                    Err(_) => Solution::failed(
-                        "ill-posed at f64 resolution: exactly outside the moment space \
-                         (Farkas ray), but within 1e-9 of it; solve from the distribution \
-                         for the exact answer",
-                    ),
-                })
-            }
-            ExactAnswer::Failed(e) => Some(Solution::failed(e)),
-        }
-    }
-}
-
-/// The atoms of `dist` (at most |last| of them) completed by columns of `last`: a basis
-/// (if nonsingular) whose basic solution is the distribution itself.
-fn mixed_basis(dist: &[(u32, f64)], last: &[usize]) -> Option<Vec<usize>> {
-    let mut basis: Vec<usize> = Vec::with_capacity(last.len());
-    for &(i, w) in dist {
-        let i = i as usize;
-        if w > 0.0 && !basis.contains(&i) {
-            if basis.len() == last.len() {
-                return None;
-            }
-            basis.push(i);
-        }
-    }
-    for &i in last {
-        if basis.len() < last.len() && !basis.contains(&i) {
-            basis.push(i);
-        }
-    }
-    Some(basis)
 }
 
 /// The solution of a certified answer.
@@ -877,133 +743,4 @@ fn certified(c: Certified) -> Solution {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::Grid;
-
-    fn solver(n: usize, m: usize, f: impl FnMut(f64, &mut [f64])) -> FastSolver {
-        FastSolver::new(GridTable::from_fn(&Grid::uniform(n).unwrap(), m, f).unwrap())
-    }
-
-    /// (z, z²) on {0, 1/4, 1/2, 3/4, 1}, b = (1/2, 5/16): G(z_f = 0.6) = 1/2 with support
-    /// ½δ(1/4) + ½δ(3/4), from the moments and from a distribution with those moments
-    /// (⅛δ(0) + ¾δ(1/2) + ⅛δ(1), mass ⅞ below z_f: the crossover must improve on it).
-    #[test]
-    fn known_optimum_from_moments_and_from_a_distribution() {
-        let mut s = solver(5, 2, |z, o| (o[0], o[1]) = (z, z * z));
-        let sol = s.solve(&[0.5, 0.3125], 0.6).unwrap();
-        assert_eq!(sol.status, Status::Optimal);
-        assert_eq!(sol.g, 0.5);
-        assert_eq!(sol.support, vec![(0.25, 0.5), (0.75, 0.5)]);
-        let d = s
-            .solve_distribution(&[(0, 1.0), (2, 6.0), (4, 1.0)], 0.6)
-            .unwrap();
-        assert_eq!((d.status, d.g), (Status::Optimal, 0.5));
-        assert_eq!(s.stats().hinted, 1);
-        // Below every grid point, and above: G = 0 and G = 1.
-        assert_eq!(s.solve(&[0.5, 0.3125], 0.0).unwrap().g, 0.0);
-        assert_eq!(s.solve(&[0.5, 0.3125], 1.5).unwrap().g, 1.0);
-    }
-
-    /// The orthonormalised coordinates on {0, 1/2, 1} with (z, z²): orthonormal rows
-    /// (Σ_i a_i a_iᵀ = n I), and c = transform(b̄) = Σ_i w_i a_i for the distribution
-    /// w = (1/4, 1/2, 1/4) whose moments are b = (1/2, 3/8).
-    #[test]
-    fn orthonormal_coordinates_and_transformed_moments() {
-        let s = solver(3, 2, |z, o| (o[0], o[1]) = (z, z * z));
-        let o = &s.ortho;
-        assert_eq!((o.r, o.kept.clone()), (3, vec![Some(0), Some(1), Some(2)]));
-        for k in 0..3 {
-            for l in 0..3 {
-                let g: f64 = (0..3).map(|i| o.rows[i * 3 + k] * o.rows[i * 3 + l]).sum();
-                assert!(
-                    (g - if k == l { 3.0 } else { 0.0 }).abs() < 1e-14,
-                    "{k} {l}: {g}"
-                );
-            }
-        }
-        let (mut u, mut c) = ([0.0; 3], [0.0; 3]);
-        assert!(o.transform(&[0.5, 0.375], &mut u, &mut c));
-        let w = [0.25, 0.5, 0.25];
-        for k in 0..3 {
-            let want: f64 = (0..3).map(|i| w[i] * o.rows[i * 3 + k]).sum();
-            assert!((c[k] - want).abs() < 1e-14, "{c:?}");
-        }
-        assert!(o.inconsistency_ray(&[0.5, 0.375]).is_none());
-        assert!(o.condition >= 1.0 && o.condition.is_finite());
-        // max_i ‖a_i‖: a_i = √n Q_i, and Σ_i ‖a_i‖² = n·r.
-        let norms: Vec<f64> = (0..3)
-            .map(|i| {
-                (0..3)
-                    .map(|k| o.rows[i * 3 + k].powi(2))
-                    .sum::<f64>()
-                    .sqrt()
-            })
-            .collect();
-        assert_eq!(o.amax, norms.iter().cloned().fold(0.0, f64::max));
-        assert!((norms.iter().map(|v| v * v).sum::<f64>() - 9.0).abs() < 1e-13);
-    }
-
-    /// (z, 2z) has rank 2 with the constant: the second moment is checked for consistency
-    /// (b₂ = 2b₁) instead of being a row of the LP.
-    #[test]
-    fn dependent_function_is_a_consistency_check() {
-        let mut s = solver(9, 2, |z, o| (o[0], o[1]) = (z, 2.0 * z));
-        assert_eq!(s.rank(), 2);
-        // A single moment z̄ = 3/8 on a grid with z ≤ 1: G(z_f = 1/2) = 1/4 — the least mass
-        // below 1/2 with mean 3/8 puts 3/4 at 1/2 and 1/4 at 0 (1/2 is not below z_f).
-        let sol = s.solve(&[0.375, 0.75], 0.5).unwrap();
-        assert_eq!((sol.status, sol.g), (Status::Optimal, 0.25));
-        // Inconsistent (b₂ ≠ 2b₁): no distribution has these moments. The dependency
-        // y = ±(e₂ − 2e₁) is the Farkas ray: y·ā_i = 0 on every grid point, y·b̄ = ∓0.05.
-        let infeasible = s.stats().infeasible;
-        let bad = s.solve(&[0.375, 0.7], 0.5).unwrap();
-        assert_eq!(bad.status, Status::Infeasible);
-        assert!(bad.g.is_nan() && bad.support.is_empty());
-        assert_eq!(s.stats().infeasible, infeasible + 1);
-        let y = s.ortho.inconsistency_ray(&[0.375, 0.7]).unwrap();
-        for (got, want) in y.iter().zip([0.0, -2.0, 1.0]) {
-            assert!((got - want).abs() < 1e-14, "{y:?}");
-        }
-        // Consistent to the tolerance: no ray, and the LP is solved on the kept rows.
-        assert!(s.ortho.inconsistency_ray(&[0.375, 0.75 + 1e-12]).is_none());
-        // An inconsistency far below the certificate's tolerance-widened moment space but
-        // above the consistency check's: `failed` or `infeasible`, never an optimum.
-        let near = s.solve(&[0.375, 0.75 + 3e-8], 0.5).unwrap();
-        assert_ne!(near.status, Status::Optimal);
-    }
-
-    /// Another z_f for the same moments starts from the last optimal basis (primal feasible):
-    /// no phase 1; a reset solver answers bit for bit as a new one.
-    #[test]
-    fn same_moments_reuse_the_basis_and_reset_forgets_it() {
-        let mut s = solver(257, 4, |z, o| {
-            for (k, v) in o.iter_mut().enumerate() {
-                *v = z.powi(k as i32 + 1);
-            }
-        });
-        // 0.3δ(1/4) + 0.3δ(1/2) + 0.4δ(3/4), atoms on grid points.
-        let b: Vec<f64> = (1..=4)
-            .map(|k| 0.3 * 0.25f64.powi(k) + 0.3 * 0.5f64.powi(k) + 0.4 * 0.75f64.powi(k))
-            .collect();
-        let first = s.solve(&b, 0.6).unwrap();
-        let phase1 = s.stats().phase1;
-        let again = s.solve(&b, 0.2).unwrap();
-        assert_eq!(
-            s.stats().phase1,
-            phase1,
-            "the warm basis is primal feasible"
-        );
-        // The mixture itself has mass 0.6 below 0.6: an upper bound on G. Below every atom of
-        // the first answer's support the bound is 0.
-        assert!(first.g > 0.0 && first.g <= 0.6, "{first:?}");
-        assert_eq!(again.g, 0.0, "{again:?}");
-        s.reset();
-        let mut fresh = solver(257, 4, |z, o| {
-            for (k, v) in o.iter_mut().enumerate() {
-                *v = z.powi(k as i32 + 1);
-            }
-        });
-        assert_eq!(s.solve(&b, 0.5).unwrap(), fresh.solve(&b, 0.5).unwrap());
-    }
-}
+mod tests;

@@ -303,7 +303,7 @@ impl Ortho {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::lp::exact::tests::solve_q;
+    use crate::lp::fast::escalate::exact::tests::solve_q;
     use crate::Grid;
     use num_rational::BigRational;
     use num_traits::ToPrimitive;

@@ -1,11 +1,11 @@
 //! Pricing: the entering column of a simplex step. Partial pricing (coarse subgrid, the
 //! neighbours of z_f and of the support, the fine window around the best), the full pass that
-//! proves optimality and Bland's rule; the kernels are in [`crate::lp::pricing`].
+//! proves optimality and Bland's rule; the kernels are in [`crate::lp::fast::pricing`].
 
 use super::{FastSolver, ART, TOL_D, TOL_PIV};
-use crate::lp::pricing::dantzig::price;
-use crate::lp::pricing::greatest as gi_pricing;
-use crate::lp::pricing::{ColumnTable, LANES};
+use crate::lp::fast::pricing::dantzig::price;
+use crate::lp::fast::pricing::greatest as gi_pricing;
+use crate::lp::fast::pricing::{ColumnTable, LANES};
 
 /// A reduced cost below this (costs are 0 or 1, columns have RMS 1) triggers greatest-
 /// improvement pricing on the coarse subgrid ([`gi_pricing`]): stacks corpus at n = 1024,
@@ -191,7 +191,7 @@ pub(super) fn price_bland(
 #[cfg(test)]
 mod tests {
     use super::{price, price_bland, TOL_D};
-    use crate::lp::pricing::ColumnTable;
+    use crate::lp::fast::pricing::ColumnTable;
     use rand::{Rng, SeedableRng};
 
     /// Bland's rule as defined: Dantzig's pass for s = y·a_i (basic columns at reduced cost 0),

@@ -9,7 +9,7 @@
 use super::linalg::norm;
 use super::FastSolver;
 use crate::linalg::Lu;
-use crate::lp::pricing::ColumnTable;
+use crate::lp::fast::pricing::ColumnTable;
 use crate::lp::GridTable;
 
 /// Relative distance ‖c − Σ w_k a_k‖/‖c‖ up to which transformed moments c are taken as those

@@ -8,7 +8,7 @@ use super::{
     FastSolver, Outcome, ART, DEGENERATE_LIMIT, MAX_COND, REFACTOR_EVERY, TOL_D, TOL_INF, TOL_P,
     TOL_PIV, TOL_P_LOOSE,
 };
-use crate::lp::pricing::dantzig::price;
+use crate::lp::fast::pricing::dantzig::price;
 use crate::lp::ratio::harris;
 
 /// Phase-2 cost (mass below z_f) taken as zero: the run ends there.

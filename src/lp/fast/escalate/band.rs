@@ -23,13 +23,13 @@
 //! agree to 12 digits under z, …, z⁴, bases of them are beyond cond 1e12 in the orthonormalised
 //! coordinates, and the whole-grid run escalated one such window in nine (n = 4096). The band
 //! is solved in coordinates local to it, each column computed in double-double
-//! ([`super::ortho::local_coordinates`]), where those bases are well conditioned; moments that
+//! ([`crate::lp::fast::ortho::local_coordinates`]), where those bases are well conditioned; moments that
 //! miss the band's moment space by rounding are moved [`INWARD`] for the band's run only. The
 //! basis found is certified on the whole grid as any other.
 
-use super::ortho::local_coordinates;
-use super::{FastSolver, Verdict, IMPROVE_STEPS};
 use crate::lp::certify::Certified;
+use crate::lp::fast::ortho::local_coordinates;
+use crate::lp::fast::{FastSolver, Verdict, IMPROVE_STEPS};
 use crate::lp::GridTable;
 use crate::Grid;
 
@@ -43,11 +43,11 @@ const PAD: usize = 2;
 /// A band sub-solver: grid points s..s + len of the table, plus the grid's end points where
 /// no function is much larger there than in the band ([`end_points`] at growth
 /// [`END_GROWTH`]`[tier]`).
-pub(super) struct Band {
+pub(in crate::lp::fast) struct Band {
     s: usize,
     len: usize,
     tier: usize,
-    /// In coordinates local to the band ([`super::ortho::local_coordinates`]), for moments
+    /// In coordinates local to the band ([`crate::lp::fast::ortho::local_coordinates`]), for moments
     /// given alone; else orthonormalised, for distributions.
     local: bool,
     /// The points are those of the tier before.
@@ -60,17 +60,17 @@ pub(super) struct Band {
 
 /// The band sub-solvers of a table, built on first use.
 #[derive(Default)]
-pub(super) struct Bands {
-    pub(super) solvers: Vec<Band>,
+pub(in crate::lp::fast) struct Bands {
+    pub(in crate::lp::fast) solvers: Vec<Band>,
     /// Bands are used (off in the band solvers themselves).
-    pub(super) on: bool,
+    pub(in crate::lp::fast) on: bool,
     /// The table has a steep function ([`is_steep`]): distribution starts go to the band
     /// first.
-    pub(super) first: bool,
+    pub(in crate::lp::fast) first: bool,
     /// The band of the current problem was tried already.
-    pub(super) tried: bool,
+    pub(in crate::lp::fast) tried: bool,
     /// The first band basis of the current problem that did not certify.
-    pub(super) failed: Option<Vec<usize>>,
+    pub(in crate::lp::fast) failed: Option<Vec<usize>>,
 }
 
 /// The band a cluster given as moments is solved on ([`FastSolver::cluster_certified`]) holds
@@ -82,7 +82,7 @@ const CLUSTER_BAND_DIV: usize = 64;
 const CLUSTER_BAND_MIN: usize = 16;
 /// Relative distance ‖c − a_j‖/‖c‖ of the transformed moments to the nearest column up to
 /// which the moments count as a cluster around that grid point.
-pub(super) const CLUSTER_GAP: f64 = 3e-3;
+pub(in crate::lp::fast) const CLUSTER_GAP: f64 = 3e-3;
 
 /// End-point tiers ([`END_GROWTH`]) tried for a cluster: the widest tier never certified one
 /// that the others had not (flat-receiver windows, n = 4096).
@@ -97,7 +97,7 @@ const STEEP: f64 = 1e6;
 
 /// Whether some function of `table` is steep: its largest magnitude on one half of the grid is
 /// below 1/[`STEEP`] of its largest on the whole grid (exp(40z): e^−20; z^12: 2^−12 is not).
-pub(super) fn is_steep(table: &GridTable) -> bool {
+pub(in crate::lp::fast) fn is_steep(table: &GridTable) -> bool {
     let n = table.n();
     (0..table.m()).any(|j| {
         let half =
@@ -109,7 +109,7 @@ pub(super) fn is_steep(table: &GridTable) -> bool {
 
 impl Bands {
     /// Forget every band solver's warm start (see [`FastSolver::reset`]).
-    pub(super) fn reset(&mut self) {
+    pub(in crate::lp::fast) fn reset(&mut self) {
         for b in self.solvers.iter_mut().filter_map(|b| b.solver.as_mut()) {
             b.reset();
         }
@@ -238,7 +238,7 @@ impl FastSolver {
     /// Otherwise (after the whole-grid run) every tier, then accurate pivots (columns outside
     /// the band entering) from the first band basis that did not certify, now or in the band
     /// tried first for this problem.
-    pub(super) fn band_certified(
+    pub(in crate::lp::fast) fn band_certified(
         &mut self,
         moments: &[f64],
         kf: usize,
@@ -406,7 +406,7 @@ impl FastSolver {
     /// band ([`local_coordinates`], double-double), where its bases are well conditioned, and
     /// certified on the whole grid (with accurate pivots from the first basis that does not
     /// certify). None when nothing certifies.
-    pub(super) fn cluster_certified(
+    pub(in crate::lp::fast) fn cluster_certified(
         &mut self,
         moments: &[f64],
         kf: usize,
@@ -446,7 +446,7 @@ impl FastSolver {
 mod tests {
     use super::{end_points, pick_band};
     use crate::bench::corpus::{problem, Kind};
-    use crate::lp::exact::{ExactAnswer, ExactSimplex};
+    use crate::lp::fast::escalate::exact::{ExactAnswer, ExactSimplex};
     use crate::lp::{distribution_moments, FastSolver, GridTable, MomentSolver, Status};
     use crate::Grid;
     use rand::{Rng, SeedableRng};

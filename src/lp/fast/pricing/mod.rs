@@ -41,9 +41,9 @@ impl Kernel {
         match self {
             Kernel::Scalar => true,
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx2 => super::cpu::has_avx2_fma(),
+            Kernel::Avx2 => crate::lp::cpu::has_avx2_fma(),
             #[cfg(target_arch = "x86_64")]
-            Kernel::Avx512 => super::cpu::has_avx512() && super::cpu::has_fma(),
+            Kernel::Avx512 => crate::lp::cpu::has_avx512() && crate::lp::cpu::has_fma(),
         }
     }
 
