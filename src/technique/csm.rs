@@ -8,7 +8,7 @@
 //! and, because of Gibbs ringing, not a guaranteed lower bound.
 
 use super::linalg::{bias, Precision, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, Technique};
 
 /// Default number of Fourier terms M (m = 2M = 8 stored values).
 pub const DEFAULT_TERMS: usize = 4;
@@ -80,7 +80,5 @@ impl Technique for Csm {
             out[2 * k + 1] = (c * z).sin();
         }
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
 }

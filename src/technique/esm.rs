@@ -4,7 +4,7 @@
 //! at z → −∞), but not for a bounded I. Default c = 80 (e^{80} ≈ 5.5·10³⁴ still fits f32).
 
 use super::linalg::{bias, Precision, Real};
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// Markov's bound for b = E[e^{cZ}], unclamped below 1 (≤ 1 always; may be negative).
 #[inline(always)]
@@ -51,9 +51,7 @@ impl Technique for Esm {
     fn basis(&self, z: f64, out: &mut [f64]) {
         out[0] = (self.c * z).exp();
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

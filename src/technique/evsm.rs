@@ -7,7 +7,7 @@
 
 use super::linalg::{bias, Precision, Real};
 use super::vsm::vsm;
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// Default positive exponent c₊.
 pub const DEFAULT_C_POS: f64 = 40.0;
@@ -80,9 +80,7 @@ impl Technique for Evsm {
         out[2] = -n;
         out[3] = n * n;
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

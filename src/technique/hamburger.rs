@@ -9,8 +9,9 @@
 //! interpolation polynomial p with p(z_i) = [z_i < z_f]. m = 2 is VSM (Cantelli's bound).
 
 use super::hamburger4::power_basis;
-use super::linalg::{bias, ldlt_solve, pivot_tol, real_roots, weight_sum, Precision, Real};
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::linalg::{bias, ldlt_solve, pivot_tol, weight_sum, Precision, Real};
+use super::roots::real_roots;
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// Algorithm 2 for already biased moments b' (length m, even), unclamped G and the support
 /// (z_f first, then the roots ascending).
@@ -128,9 +129,7 @@ impl Technique for Hamburger {
     fn basis(&self, z: f64, out: &mut [f64]) {
         power_basis(z, out);
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

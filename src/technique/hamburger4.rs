@@ -6,8 +6,9 @@
 //! G = 0 if z_f ≤ z₂, w₂ = (z_f z₃ − b'₁(z_f + z₃) + b'₂) / ((z₃ − z₂)(z_f − z₂)) if z_f ≤ z₃,
 //! else 1 − w₁ = 1 − (z₂ z₃ − b'₁(z₂ + z₃) + b'₂) / ((z_f − z₂)(z_f − z₃)).
 
-use super::linalg::{above, bias, pivot_tol, quadratic_roots, Precision, Real};
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::linalg::{above, bias, pivot_tol, Precision, Real};
+use super::roots::quadratic_roots;
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// Relative floor of the last LDLᵀ pivot D33, in units of ε² of the arithmetic type:
 /// singular B (two Diracs, Proposition 4) then yields a huge but finite c whose direction is
@@ -153,9 +154,7 @@ impl Technique for Hamburger4 {
     fn basis(&self, z: f64, out: &mut [f64]) {
         power_basis(z, out);
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

@@ -8,8 +8,9 @@
 
 use super::hamburger::msm_hamburger;
 use super::hamburger4::power_basis;
-use super::linalg::{bias, cubic_roots, ldlt_solve, pivot_tol, weight_sum, Precision, Real};
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::linalg::{bias, ldlt_solve, pivot_tol, weight_sum, Precision, Real};
+use super::roots::cubic_roots;
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// b* = (½, …, ½): Z* = ½(δ₀ + δ₁).
 pub const B_STAR_STANDARD: [f64; 6] = [0.5; 6];
@@ -103,9 +104,7 @@ impl Technique for Hamburger6 {
     fn basis(&self, z: f64, out: &mut [f64]) {
         power_basis(z, out);
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

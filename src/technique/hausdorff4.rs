@@ -10,7 +10,7 @@
 
 use super::hamburger4::{biased4, msm4_hamburger, power_basis};
 use super::linalg::{weight_sum, Precision, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, Technique};
 
 /// Hausdorff 4MSM for already biased moments `b`, unclamped.
 pub fn msm4_hausdorff<T: Real>(b: [T; 4], zf: T) -> T {
@@ -83,7 +83,5 @@ impl Technique for Hausdorff4 {
     fn basis(&self, z: f64, out: &mut [f64]) {
         power_basis(z, out);
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
 }

@@ -89,6 +89,16 @@ impl<T: ClosedForm + ?Sized> Evaluator for Stateless<'_, T> {
     }
 }
 
+/// The [`Technique::evaluator`] of a [`ClosedForm`] technique, written inside its
+/// `impl Technique`: a [`Stateless`] wrapper around `self`.
+macro_rules! stateless_evaluator {
+    () => {
+        fn evaluator(&self) -> Box<dyn $crate::technique::Evaluator + '_> {
+            Box::new($crate::technique::Stateless(self))
+        }
+    };
+}
+
 pub mod csm;
 pub mod esm;
 pub mod evsm;
@@ -99,6 +109,7 @@ pub mod hausdorff4;
 pub mod linalg;
 pub mod lp_candidate;
 pub mod registry;
+pub mod roots;
 pub mod vsm;
 pub use registry::by_name;
 pub mod sparse;

@@ -4,7 +4,7 @@
 //! μ = b₁, σ² = max(b₂ − b₁², σ²_min), G = (z_f − μ)² / (σ² + (z_f − μ)²) if z_f > μ, else 0.
 
 use super::linalg::{bias, Precision, Real};
-use super::{ClosedForm, DepthDomain, Evaluator, Stateless, Technique};
+use super::{ClosedForm, DepthDomain, Technique};
 
 /// Cantelli's lower bound for mean `mu`, variance `var` (already floored) at depth `zf`.
 #[inline(always)]
@@ -63,9 +63,7 @@ impl Technique for Vsm {
         out[0] = z;
         out[1] = z * z;
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
     fn depth_domain(&self) -> DepthDomain {
         DepthDomain::Real
     }

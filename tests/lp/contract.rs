@@ -1,4 +1,4 @@
-//! The correctness contract of Algorithm 1 (src/lp/certify.rs): no answer labelled optimal
+//! The correctness contract of Algorithm 1 (src/lp/certify/): no answer labelled optimal
 //! without its certificate. Checked against the one-function closed form for monotone f and on
 //! the adversarial corpus (src/bench/corpus.rs), independently of the solver's own checks.
 

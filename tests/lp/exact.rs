@@ -284,7 +284,7 @@ fn fast_bases_are_exactly_optimal_on_kernel_problems_from_moments() {
     eprintln!("reference: {off} of {total} off the exact G by > 1e-6 (worst {worst:e})");
 }
 
-/// The answers of the exact simplex (src/lp/exact.rs, the last resort after the scaled
+/// The answers of the exact simplex (src/lp/fast/escalate/exact/, the last resort after the scaled
 /// simplex) on the adversarial corpus, checked here by independent rational arithmetic: its
 /// basis is exactly optimal for the distribution's exact moments Σ w_i ā_i / Σ w_i, and the G
 /// it returns is that basis's exact G rounded.

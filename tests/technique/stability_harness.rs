@@ -113,7 +113,7 @@ fn certified_oracle_settles_stress_inputs_and_matches_unique_distributions() {
             f64_row.oracle_failures
         );
         // Bases of neighbouring points with duals of 1e9–1e22 that no floating-point
-        // certificate settles go to the exact simplex (src/lp/exact.rs; before it, up to 1.4 %
+        // certificate settles go to the exact simplex (src/lp/fast/escalate/exact/; before it, up to 1.4 %
         // of these inputs ended `failed`, and the reference oracle failed or was wrong on
         // 0.8–9.5 %).
         assert_eq!(f64_row.oracle_failures, 0, "{name}: oracle failures");

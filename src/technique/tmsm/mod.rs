@@ -21,7 +21,7 @@
 //! reported support. [`sharp_bound`] allocates nothing.
 
 use super::linalg::{bias, Real};
-use super::{ClosedForm, Evaluator, Stateless, Technique};
+use super::{ClosedForm, Technique};
 use std::ops::{Add, Div, Mul, Neg, Sub};
 
 mod certified;
@@ -795,9 +795,7 @@ impl Technique for Tmsm {
     fn basis(&self, z: f64, out: &mut [f64]) {
         basis(z, out)
     }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(Stateless(self))
-    }
+    stateless_evaluator!();
 }
 #[cfg(test)]
 mod tests {
