@@ -7,7 +7,7 @@
 //! Two solvers behind [`MomentSolver`]: [`ReferenceSolver`] (good_lp + microlp, the LP exactly
 //! as stated) and [`FastSolver`] (certified; its answers carry a checked certificate, with an
 //! exact simplex as the last resort). The public API is this file: the grid table, the solvers
-//! ([`SolverKind`], [`make_solver`]) and their trait, the answer and its status, [`Error`].
+//! ([`make_solver`]) and their trait, the answer and its status.
 //!
 //! # The fast solver's chain
 //!

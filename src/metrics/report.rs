@@ -1,0 +1,136 @@
+//! The reports of an evaluation: per view and over all views (error, leak, throughput).
+
+use super::*;
+
+/// Result for one view.
+#[derive(Clone, Debug, Serialize)]
+pub struct ViewReport {
+    pub scene: String,
+    pub view: String,
+    pub width: usize,
+    pub height: usize,
+    pub layers: usize,
+    /// All fragments of the view.
+    pub fragments_total: usize,
+    /// Evaluated fragments (after subsampling).
+    pub fragments: usize,
+    /// Evaluated fragments with F_Z(z_f − ε′) = 0 (after grid snapping for LP candidates).
+    pub trivial: usize,
+    /// Fragments for which the technique was called (not skipped as trivial).
+    pub solved: usize,
+    /// Fragments with non-finite G (excluded from the mean, reported here).
+    pub non_finite: usize,
+    /// Fragments whose LP was unsettled: scored as the trivial bound G = 0 (included in the
+    /// mean; `lp::UNSETTLED_G`).
+    pub unsettled: usize,
+    /// Fragments with finite G outside [0,1] (more than 1e-9; included in the mean as is).
+    pub out_of_range: usize,
+    /// Σ |G − PCF| over the finite fragments.
+    pub sum_abs_error: f64,
+    /// Mean |G − PCF| over the finite fragments (0 without fragments, NaN when every output
+    /// was non-finite).
+    pub error: f64,
+    /// Σ |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`].
+    pub sum_abs_error_scaled: [f64; 2],
+    /// Mean |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`] (reference sensitivity).
+    pub error_scaled: [f64; 2],
+    /// Σ max(0, PCF − G): light leaked (G below the reference).
+    pub sum_leak: f64,
+    /// Mean max(0, PCF − G) over the finite fragments: the light-leaking part of `error`.
+    pub leak: f64,
+    /// Wall time of the view (fragments, moment maps, shading), seconds.
+    pub seconds: f64,
+    /// Wall time of the shading loop alone, seconds.
+    pub shade_seconds: f64,
+    #[serde(skip)]
+    pub values: Option<Vec<FragmentValue>>,
+}
+
+/// Result over all views.
+#[derive(Clone, Debug, Serialize)]
+pub struct EvalReport {
+    pub technique: String,
+    pub bias: Bias,
+    pub subsample: Subsample,
+    pub fragments_total: usize,
+    pub fragments: usize,
+    pub trivial: usize,
+    pub solved: usize,
+    pub non_finite: usize,
+    /// LP answers scored as the trivial bound because the solver settled neither verdict.
+    pub unsettled: usize,
+    pub out_of_range: usize,
+    /// Mean |G − PCF| over all finite evaluated fragments of all views.
+    pub error: f64,
+    /// `error` with PCF's constant ε scaled by [`EPSILON_FACTORS`] (ε/3, 3ε): how much of the
+    /// error depends on the reference's constant.
+    pub error_scaled: [f64; 2],
+    /// Mean max(0, PCF − G): the light-leaking part of `error` (the rest, mean
+    /// max(0, G − PCF), is over-darkening).
+    pub leak: f64,
+    pub seconds: f64,
+    /// Technique calls per second of shading time (throughput over real, non-trivial fragments
+    /// when trivial ones are skipped).
+    pub solves_per_second: f64,
+    /// Evaluated fragments per second of total wall time.
+    pub fragments_per_second: f64,
+    pub views: Vec<ViewReport>,
+}
+
+/// Mean of a sum over the `finite` of `fragments` fragments: 0 for no fragments, NaN when
+/// every output was non-finite (no error is known, and none is reported as perfect).
+pub(super) fn finite_mean(sum: f64, finite: usize, fragments: usize) -> f64 {
+    match (finite, fragments) {
+        (_, 0) => 0.0,
+        (0, _) => f64::NAN,
+        _ => sum / finite as f64,
+    }
+}
+
+/// The report over all `views` of one subject (`picked`: seconds spent choosing fragments).
+pub(super) fn report_of(
+    technique: String,
+    views: Vec<ViewReport>,
+    opts: &EvalOptions,
+    picked: f64,
+) -> EvalReport {
+    let seconds = picked + views.iter().map(|v| v.seconds).sum::<f64>();
+    let sum = |f: fn(&ViewReport) -> usize| views.iter().map(f).sum::<usize>();
+    let fragments = sum(|v| v.fragments);
+    let non_finite = sum(|v| v.non_finite);
+    let solved = sum(|v| v.solved);
+    let sum_abs: f64 = views.iter().map(|v| v.sum_abs_error).sum();
+    let sum_scaled: [f64; 2] =
+        std::array::from_fn(|k| views.iter().map(|v| v.sum_abs_error_scaled[k]).sum());
+    let sum_leak: f64 = views.iter().map(|v| v.sum_leak).sum();
+    let finite = fragments - non_finite;
+    let mean = |x: f64| finite_mean(x, finite, fragments);
+    let shade: f64 = views.iter().map(|v| v.shade_seconds).sum();
+    EvalReport {
+        technique,
+        bias: opts.bias,
+        subsample: opts.subsample,
+        fragments_total: sum(|v| v.fragments_total),
+        fragments,
+        trivial: sum(|v| v.trivial),
+        solved,
+        non_finite,
+        unsettled: sum(|v| v.unsettled),
+        out_of_range: sum(|v| v.out_of_range),
+        error: mean(sum_abs),
+        error_scaled: sum_scaled.map(mean),
+        leak: mean(sum_leak),
+        seconds,
+        solves_per_second: if shade > 0.0 {
+            solved as f64 / shade
+        } else {
+            0.0
+        },
+        fragments_per_second: if seconds > 0.0 {
+            fragments as f64 / seconds
+        } else {
+            0.0
+        },
+        views,
+    }
+}
