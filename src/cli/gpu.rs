@@ -25,43 +25,26 @@ pub enum What {
     Bench(BenchArgs),
 }
 
-fn odd_list(s: &str) -> std::result::Result<Vec<usize>, String> {
-    let v = size_list(s)?;
-    match v.iter().find(|&&t| t.is_multiple_of(2) || t > 31) {
-        Some(t) => Err(format!("filter taps must be odd and at most 31, got {t}")),
-        None => Ok(v),
-    }
-}
-
-fn size_list(s: &str) -> std::result::Result<Vec<usize>, String> {
-    let v: Vec<usize> = s
-        .split(',')
-        .map(|x| {
-            x.trim()
-                .parse::<usize>()
-                .map_err(|_| format!("'{x}' is not a count"))
-        })
-        .collect::<std::result::Result<_, _>>()?;
-    match v.iter().find(|&&x| x == 0 || x > 16384) {
-        Some(x) => Err(format!("{x} is outside 1..=16384")),
-        None if v.is_empty() => Err("empty list".into()),
-        None => Ok(v),
+fn odd_taps(s: &str) -> std::result::Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(t) if t % 2 == 1 && t <= 31 => Ok(t),
+        _ => Err(format!("filter taps must be odd and at most 31, got '{s}'")),
     }
 }
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// Shadow-map sizes (texels per edge, comma list) of the size axis.
-    #[arg(long, default_value = "256,512,1024,2048", value_parser = size_list)]
+    #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048", value_parser = usize_in(1, 16384))]
     pub sizes: Vec<usize>,
     /// Filter taps per axis (odd, comma list) of the filter axis.
-    #[arg(long, default_value = "3,9,15", value_parser = odd_list)]
+    #[arg(long, value_delimiter = ',', default_value = "3,9,15", value_parser = odd_taps)]
     pub filters: Vec<usize>,
     /// Output resolutions (pixels per edge = lookups per edge, comma list) of the output axis.
-    #[arg(long, default_value = "128,256,512", value_parser = size_list)]
+    #[arg(long, value_delimiter = ',', default_value = "128,256,512", value_parser = usize_in(1, 16384))]
     pub outputs: Vec<usize>,
     /// The base point the axes vary around: size, taps, output.
-    #[arg(long, default_value = "512,9,256", value_parser = size_list)]
+    #[arg(long, value_delimiter = ',', default_value = "512,9,256", value_parser = usize_in(1, 16384))]
     pub base: Vec<usize>,
     /// Timed runs per point (after one warm-up; 1..=100).
     #[arg(long, default_value_t = 3, value_parser = usize_in(1, 100))]

@@ -23,6 +23,7 @@
 //! with `reports`. `momentlab reproduce` is a thin caller of [`run`].
 
 pub mod config;
+pub mod gpu;
 pub mod grid;
 pub mod progress;
 pub mod quantize;
@@ -87,8 +88,9 @@ fn mark(cfg: &Config, plan: &Plan) -> serde_json::Value {
 }
 
 /// The entries of a report folder that a run writes (the top level of `<reports>/<run>`).
-pub const REPORT_ENTRIES: [&str; 17] = [
+pub const REPORT_ENTRIES: [&str; 18] = [
     IN_PROGRESS,
+    "gpu",
     "grid_refinement.json",
     "grid_refinement.svg",
     "evaluate",
@@ -229,7 +231,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     }
     refuse_linked_entries(out, &locks[1])?;
     out.write_json(IN_PROGRESS, &mark(cfg, &plan))?;
-    let mut step = Steps::new(9);
+    let mut step = Steps::new(10);
 
     step.start(&format!(
         "render the default dataset at {0}×{0}",
@@ -293,12 +295,15 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     step.start("stability where methods fail");
     stability::run(&plan, &p.out.join("stability"))?;
 
+    step.start("the pipeline on a GPU (check and bench), where there is one");
+    let gpu_outcome = gpu::run(&stacks, &p.out.join("gpu"))?;
+
     step.start("speed against accuracy, recommendations");
     let (entries, recs) = recommend::run(&all, cfg.tolerance, &p.out)?;
     let tuning = recommend::tuning(&stacks, &plan, cfg.tolerance, &p.out)?;
 
     step.start("report");
-    let doc = report::build(report::ReportInputs {
+    let mut doc = report::build(report::ReportInputs {
         plan: &plan,
         config: cfg,
         stacks: &stacks,
@@ -316,6 +321,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         eye: &eye,
         seconds: step.elapsed(),
     })?;
+    gpu::section(&mut doc, &gpu_outcome);
     doc.write(out, ".")?;
 
     let seconds = step.elapsed();

@@ -41,3 +41,65 @@ pub fn gpu_charts(r: &Report) -> Result<Vec<(String, String)>> {
     }
     Ok(out)
 }
+
+/// README's GPU block: per bench artefact under `reports/gpu/` (one adapter each, software and
+/// hardware never in one table), the pass times at the base point per technique × storage, and
+/// the three charts.
+pub fn readme_block(reports: &std::path::Path) -> Result<String> {
+    let dir = reports.join("gpu");
+    let mut files: Vec<std::path::PathBuf> = std::fs::read_dir(&dir)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", dir.display()))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect();
+    files.sort();
+    let mut s = String::new();
+    for f in files {
+        let r: Report = crate::artefact::read_json(&f)?;
+        let stem = f.file_stem().and_then(|x| x.to_str()).unwrap_or("").to_string();
+        let (size, taps, output) = r.plan.base;
+        s += &format!(
+            "The paper's Figure 7 analogue on **{}** ({}, {}, {} timer; `reports/gpu/{stem}.json`): \
+             ns per lookup at a {size}² shadow map, {taps}×{taps} filter, {output}² lookups \
+             (median of {} runs; encode and filter times, mean and max in the artefact).\n\n",
+            r.adapter.name,
+            r.adapter.backend,
+            if r.adapter.software { "software: CPU times" } else { "hardware" },
+            r.timer,
+            r.plan.repeats
+        );
+        let base = |p: &crate::gpu::bench::Point| {
+            p.axis == "size" && p.size == size && p.filter == taps && p.output == output
+        };
+        let storages = ["f32", "f16", "unorm16", "unorm16-theta"];
+        s += "| ns per lookup | f32 | f16 | unorm16 | unorm16-theta |\n| --- | ---: | ---: | ---: | ---: |\n";
+        let mut techniques: Vec<&str> = Vec::new();
+        for p in &r.points {
+            if !techniques.contains(&p.technique.as_str()) {
+                techniques.push(&p.technique);
+            }
+        }
+        for t in techniques {
+            let cells: Vec<String> = storages
+                .iter()
+                .map(|st| {
+                    r.points
+                        .iter()
+                        .find(|p| base(p) && p.technique == t && p.storage == *st)
+                        .map_or("".into(), |p| {
+                            format!("{:.1}", p.lookup_ms.median * 1e6 / (output * output) as f64)
+                        })
+                })
+                .collect();
+            s += &format!("| {t} | {} |\n", cells.join(" | "));
+        }
+        s += &format!(
+            "\n![time against shadow-map size, {}](reports/gpu/{stem}_size.svg)\n\n",
+            r.adapter.name
+        );
+    }
+    if s.is_empty() {
+        anyhow::bail!("{}: no bench artefact", dir.display());
+    }
+    Ok(s.trim_end().to_string() + "\n")
+}
