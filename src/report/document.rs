@@ -366,7 +366,10 @@ pub fn html_references(html: &str) -> Vec<String> {
         while let Some(p) = rest.find(key) {
             rest = &rest[p + key.len()..];
             if let Some(e) = rest.find('"') {
-                out.push(rest[..e].replace("&amp;", "&"));
+                // in-page anchors (the table of contents) are not files
+                if !rest.starts_with('#') {
+                    out.push(rest[..e].replace("&amp;", "&"));
+                }
                 rest = &rest[e..];
             }
         }

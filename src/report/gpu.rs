@@ -56,7 +56,11 @@ pub fn readme_block(reports: &std::path::Path) -> Result<String> {
     let mut s = String::new();
     for f in files {
         let r: Report = crate::artefact::read_json(&f)?;
-        let stem = f.file_stem().and_then(|x| x.to_str()).unwrap_or("").to_string();
+        let stem = f
+            .file_stem()
+            .and_then(|x| x.to_str())
+            .unwrap_or("")
+            .to_string();
         let (size, taps, output) = r.plan.base;
         s += &format!(
             "The paper's Figure 7 analogue on **{}** ({}, {}, {} timer; `reports/gpu/{stem}.json`): \
@@ -94,7 +98,7 @@ pub fn readme_block(reports: &std::path::Path) -> Result<String> {
             s += &format!("| {t} | {} |\n", cells.join(" | "));
         }
         s += &format!(
-            "\n![time against shadow-map size, {}](reports/gpu/{stem}_size.svg)\n\n",
+            "\n![time against shadow-map size, {}](../reports/gpu/{stem}_size.svg)\n\n",
             r.adapter.name
         );
     }

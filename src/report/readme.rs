@@ -15,14 +15,13 @@ const OPEN: &str = "<!-- generated:";
 const CLOSE: &str = "<!-- end -->";
 
 /// The names of the blocks [`render`] knows, in README order.
-pub const NAMES: [&str; 7] = [
+pub const NAMES: [&str; 6] = [
     "quickstart",
     "techniques",
     "paper",
     "sweeps",
     "tune",
     "theta",
-    "gpu",
 ];
 
 /// Nanoseconds at a sensible precision: integers from 100 ns, three significant digits below.

@@ -1728,7 +1728,15 @@ fn interrupts_exit_130_with_one_line() {
         (
             libc::SIGINT,
             "SIGINT",
-            vec!["theta", "--m", "4", "--restarts", "64", "--out", "theta"],
+            vec![
+                "theta",
+                "--m",
+                "4",
+                "--restarts",
+                "100000",
+                "--out",
+                "theta",
+            ],
         ),
         (
             libc::SIGTERM,

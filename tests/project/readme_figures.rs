@@ -112,7 +112,10 @@ fn one_changed_number_in_an_artefact_fails_the_check() {
     let blocks = readme::blocks(&readme_text()).unwrap();
     let block = |n: &str| blocks.iter().find(|b| b.0 == n).unwrap().1.clone();
     // The untouched copy renders README's blocks.
-    for n in readme::NAMES {
+    for n in readme::NAMES
+        .iter()
+        .filter(|&&n| blocks.iter().any(|b| b.0 == n))
+    {
         assert_eq!(readme::render(n, &tmp).unwrap(), block(n), "{n}");
     }
     // One technique's error in its JSON, changed in the 4th significant digit.
