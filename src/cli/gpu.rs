@@ -49,15 +49,15 @@ pub struct BenchArgs {
     /// Timed runs per point (after one warm-up; 1..=100).
     #[arg(long, default_value_t = 3, value_parser = usize_in(1, 100))]
     pub repeats: usize,
-    /// Techniques (comma lists).
+    /// Techniques (repeatable, comma lists).
     #[arg(
         long,
         default_value = "vsm,esm,evsm,hamburger4,hausdorff4,hamburger6,tmsm"
     )]
-    pub technique: String,
-    /// Storages (comma lists).
+    pub technique: Vec<String>,
+    /// Storages (repeatable, comma lists).
     #[arg(long, default_value = "f32,unorm16-theta,unorm16,f16")]
-    pub storage: String,
+    pub storage: Vec<String>,
     /// Output folder: <out>/<adapter>.json and <out>/<adapter>_{size,filter,output}.svg.
     #[arg(long, default_value = "results/gpu")]
     pub out: PathBuf,
@@ -74,15 +74,15 @@ pub struct CheckArgs {
     /// Resolution when rendering the embedded scenes (16..=4096).
     #[arg(long, default_value_t = 64, value_parser = resolution())]
     pub resolution: usize,
-    /// Techniques (comma lists): vsm, esm, evsm, hamburger4, hausdorff4, hamburger6, tmsm.
+    /// Techniques (repeatable, comma lists): vsm, esm, evsm, hamburger4, hausdorff4, hamburger6, tmsm.
     #[arg(
         long,
         default_value = "vsm,esm,evsm,hamburger4,hausdorff4,hamburger6,tmsm"
     )]
-    pub technique: String,
-    /// Storages (comma lists): f32, unorm16-theta, unorm16, f16.
+    pub technique: Vec<String>,
+    /// Storages (repeatable, comma lists): f32, unorm16-theta, unorm16, f16.
     #[arg(long, default_value = "f32,unorm16-theta,unorm16,f16")]
-    pub storage: String,
+    pub storage: Vec<String>,
     /// Check these tune exports instead (folders with setting.json and shadow.wgsl, as
     /// written by `momentlab tune`); the shipped shader text is what runs. Repeatable.
     #[arg(long)]
@@ -118,16 +118,17 @@ fn export_setting(dir: &Path) -> Result<(Setting, String)> {
 }
 
 /// The settings of `--technique` × `--storage` (an error names a bad item or an empty space).
-fn settings(technique: &str, storage: &str) -> Result<Vec<Setting>> {
+fn settings(technique: &[String], storage: &[String]) -> Result<Vec<Setting>> {
+    let (technique, storage) = (technique.join(","), storage.join(","));
     let techniques = parse_list(
         "--technique",
-        technique,
+        &technique,
         TechniqueKind::parse,
         &TechniqueKind::ALL.map(|t| t.name()),
     )?;
     let storages = parse_list(
         "--storage",
-        storage,
+        &storage,
         StorageKind::parse,
         &StorageKind::ALL.map(|s| s.name()),
     )?;

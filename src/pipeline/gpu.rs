@@ -41,7 +41,6 @@ pub fn run(stacks: &[DepthStack], dir: &Path) -> Result<Outcome> {
         }
     };
     eprintln!("  {}", gpu.adapter.label());
-    std::fs::create_dir_all(dir)?;
     let mut verdicts = Vec::new();
     for (i, s) in study::settings().iter().enumerate() {
         let stack = &stacks[(3 * i) % stacks.len()];
