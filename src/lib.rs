@@ -27,12 +27,14 @@
 //!   `momentlab reproduce`.
 //! * [`artefact`]: JSON files written atomically, JSON lines appended (one helper for all).
 //! * [`progress`]: progress bars on a terminal, periodic lines in batch logs.
-//! * [`cli`]: the thin command-line layer.
+//! * [`batch`]: the JSON batches of `momentlab lp` and `momentlab shadow`.
+//!
+//! The command line (src/cli, one file per subcommand) belongs to the binary, not the library.
 
 pub mod artefact;
 pub mod basis;
+pub mod batch;
 pub mod bench;
-pub mod cli;
 pub mod gpu;
 pub mod grid;
 pub mod kernel;

@@ -1,13 +1,13 @@
 //! `momentlab bench lp`: median µs per LP of the reference and fast solvers on realistic
 //! moment vectors (9×9 Gaussian kernels over depth maps with 1–3 clusters), their ratio measured
-//! in the same run. The timing loop lives in [`crate::lp::bench`].
+//! in the same run. The timing loop lives in [`momentlab::lp::bench`].
 
 use super::common::{resolution, usize_in};
-use crate::bench::corpus::{self, Group};
-use crate::bench::kernels::{run_one, BenchConfig, BenchRow};
-use crate::bench::timing::{self, CorpusRow, Start};
-use crate::progress::Bar;
 use anyhow::{bail, Result};
+use momentlab::bench::corpus::{self, Group};
+use momentlab::bench::kernels::{run_one, BenchConfig, BenchRow};
+use momentlab::bench::timing::{self, CorpusRow, Start};
+use momentlab::progress::Bar;
 use std::path::PathBuf;
 
 /// Where the benchmark problems come from.
@@ -114,7 +114,7 @@ pub fn run(args: Args) -> Result<()> {
         cfg.m,
         cfg.problems,
         cfg.reference_problems,
-        crate::lp::pricing_kernel()
+        momentlab::lp::pricing_kernel()
     );
     println!(
         "{:>6} | {:>12} | {:>9} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>9} {:>9} {:>9} | {:>8} {:>8} {:>8} | {:>9}",
@@ -178,15 +178,15 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         return corpus::adversarial(6, args.large, args.seed);
     }
     let basis: Vec<String> = match &args.basis {
-        Some(list) => crate::basis::split_list(list),
+        Some(list) => momentlab::basis::split_list(list),
         None => (1..=args.m).map(|k| format!("z^{k}")).collect(),
     };
-    let catalog = crate::basis::Catalog::embedded();
+    let catalog = momentlab::basis::Catalog::embedded();
     let table = |n: usize| {
-        let grid = crate::Grid::uniform(n)?;
+        let grid = momentlab::Grid::uniform(n)?;
         match &args.basis {
             Some(_) => corpus::table_for(&catalog, &grid, &basis),
-            None => crate::bench::instances::power_table(&grid, args.m),
+            None => momentlab::bench::instances::power_table(&grid, args.m),
         }
     };
     if args.corpus == CorpusKind::Moments {
@@ -203,10 +203,10 @@ fn groups(args: &Args) -> Result<Vec<Group>> {
         return Ok(out);
     }
     let stacks = match &args.stacks {
-        Some(d) => crate::stack::load_dir(d)?,
-        None => crate::render::default_dataset(args.resolution)?,
+        Some(d) => momentlab::stack::load_dir(d)?,
+        None => momentlab::render::default_dataset(args.resolution)?,
     };
-    let windows = crate::metrics::windows::stacks_corpus(&stacks, args.inputs, args.seed)?;
+    let windows = momentlab::metrics::windows::stacks_corpus(&stacks, args.inputs, args.seed)?;
     args.n
         .iter()
         .map(|&n| {
@@ -353,7 +353,7 @@ fn run_corpus(args: &Args) -> Result<()> {
     println!(
         "Algorithm 1, fast solver given {given} (one solver per table, warm), µs per LP: per-problem minimum of {} passes; reference = good_lp + microlp on a prefix, same run; pricing kernel {}",
         args.repeats,
-        crate::lp::pricing_kernel()
+        momentlab::lp::pricing_kernel()
     );
     println!(
         "{:<18} {:>7} | {:>8} {:>8} {:>8} {:>8} {:>9} | {:>7} {:>6} {:>6} {:>5} | {:>5} {:>10} {:>10} {:>8} {:>8}",

@@ -8,10 +8,10 @@
 //! accumulated and passed through `black_box`.
 
 use super::common::{resolution, technique_list, usize_in, MAX_INPUTS};
-use crate::metrics::windows::stacks_corpus;
-use crate::technique::registry::{build, canonical_name, Params, Precision};
-use crate::technique::timing::{self, Corpus, Speed};
 use anyhow::{bail, Result};
+use momentlab::metrics::windows::stacks_corpus;
+use momentlab::technique::registry::{build, canonical_name, Params, Precision};
+use momentlab::technique::timing::{self, Corpus, Speed};
 use std::io::Write;
 use std::path::PathBuf;
 
@@ -85,8 +85,8 @@ fn corpus(args: &Args) -> Result<Corpus> {
         CorpusKind::Random => timing::random_corpus(args.inputs, 2015),
         CorpusKind::Stacks => {
             let stacks = match &args.stacks {
-                Some(d) => crate::stack::load_dir(d)?,
-                None => crate::render::default_dataset(args.resolution)?,
+                Some(d) => momentlab::stack::load_dir(d)?,
+                None => momentlab::render::default_dataset(args.resolution)?,
             };
             stacks_corpus(&stacks, args.inputs, 2015)?
         }

@@ -11,13 +11,13 @@
 //! `--grid` "degenerate", "sigma_ratio", "span_key"); `--catalog FILE` uses a user catalog.
 
 use super::common::{usize_in, MAX_GRID};
-use crate::basis::candidates::MAX_M;
-use crate::basis::candidates::{
+use anyhow::{bail, Context, Result};
+use momentlab::basis::candidates::MAX_M;
+use momentlab::basis::candidates::{
     analyze, check_m, checked_count, index_to_subset, next_subset, subset_to_index, DEFAULT_M,
 };
-use crate::basis::{split_list, Catalog, Function};
-use crate::Grid;
-use anyhow::{bail, Context, Result};
+use momentlab::basis::{split_list, Catalog, Function};
+use momentlab::Grid;
 use std::io::Write;
 use std::path::PathBuf;
 

@@ -3,8 +3,8 @@
 //! keep `lp:` specs whole, value parsers that check a flag's documented range before any work,
 //! and the limits that bound memory before anything is allocated.
 
-use crate::stack::DepthStack;
 use anyhow::{Context, Result};
+use momentlab::stack::DepthStack;
 use std::path::Path;
 
 /// Largest shadow-map resolution accepted by any command (12 views × layers × res² fragments).
@@ -12,16 +12,14 @@ pub const MAX_RESOLUTION: u64 = 4096;
 /// Smallest shadow-map resolution accepted by any command (a view wider than the 9×9 filter).
 pub const MIN_RESOLUTION: u64 = 16;
 /// Largest LP grid size n accepted by any command (the tables hold n·m values per solver).
-pub const MAX_GRID: u64 = crate::grid::MAX_POINTS as u64;
+pub const MAX_GRID: u64 = momentlab::grid::MAX_POINTS as u64;
 /// Largest number of random inputs of a speed measurement or stress test.
 pub const MAX_INPUTS: u64 = 10_000_000;
-/// Largest input file read into memory (JSON batches), bytes.
-pub const MAX_INPUT_BYTES: u64 = crate::artefact::Limit::BATCH.bytes;
 
 /// Text of a FILE argument: `None` or `-` reads stdin. Returns (text, name for errors). The
-/// bounded reader of [`crate::artefact::input`] with the batch limit (regular files only).
+/// bounded reader of [`momentlab::artefact::input`] with the batch limit (regular files only).
 pub fn read_input(file: Option<&Path>) -> Result<(String, String)> {
-    crate::artefact::read_input(file, crate::artefact::Limit::BATCH)
+    momentlab::artefact::read_input(file, momentlab::artefact::Limit::BATCH)
 }
 
 /// The depth stacks of `--stacks DIR`, or — when it is missing — the embedded default dataset
@@ -34,14 +32,14 @@ pub fn stacks_or_default(
 ) -> Result<Vec<DepthStack>> {
     let stacks = match dir {
         Some(d) => {
-            crate::stack::load_dir(d).with_context(|| format!("--stacks {}", d.display()))?
+            momentlab::stack::load_dir(d).with_context(|| format!("--stacks {}", d.display()))?
         }
         None => {
             eprintln!(
                 "{cmd}: no --stacks given: rendering the embedded default dataset at {resolution}×{resolution} \
                  (pass --stacks DIR for your own depth stacks)"
             );
-            crate::render::default_dataset(resolution)?
+            momentlab::render::default_dataset(resolution)?
         }
     };
     require_fragments(&stacks, dir)?;
@@ -50,7 +48,7 @@ pub fn stacks_or_default(
 
 /// Error when the stacks hold no fragment (every texel of every view empty), naming the folder.
 pub fn require_fragments(stacks: &[DepthStack], dir: Option<&Path>) -> Result<()> {
-    crate::metrics::require_fragments(stacks).with_context(|| {
+    momentlab::metrics::require_fragments(stacks).with_context(|| {
         dir.map_or("the rendered stacks".to_string(), |d| {
             d.display().to_string()
         })
@@ -62,12 +60,12 @@ pub fn require_fragments(stacks: &[DepthStack], dir: Option<&Path>) -> Result<()
 /// `vsm`). Commas inside parentheses never split. Empty items are dropped.
 pub fn split_techniques(list: &str) -> Vec<String> {
     let known = |s: &str| {
-        crate::technique::registry::is_closed_form_name(s)
+        momentlab::technique::registry::is_closed_form_name(s)
             || matches!(s, "pcf" | "cdf")
             || s.starts_with("lp:")
     };
     let mut out: Vec<String> = Vec::new();
-    for item in crate::basis::split_list(list) {
+    for item in momentlab::basis::split_list(list) {
         if item.is_empty() {
             continue;
         }
@@ -117,25 +115,11 @@ fn number(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
-/// A finite number (value parser).
-pub fn finite(s: &str) -> Result<f64, String> {
-    number(s)
-}
-
 /// A finite number ≥ 0 (value parser).
 pub fn non_negative(s: &str) -> Result<f64, String> {
     let v = number(s)?;
     if v < 0.0 {
         return Err(format!("{v} is negative; need a finite number ≥ 0"));
-    }
-    Ok(v)
-}
-
-/// A finite number > 0 (value parser).
-pub fn positive(s: &str) -> Result<f64, String> {
-    let v = number(s)?;
-    if v <= 0.0 {
-        return Err(format!("{v} is not > 0"));
     }
     Ok(v)
 }
@@ -178,10 +162,9 @@ mod tests {
         assert_eq!(non_negative("0"), Ok(0.0));
         assert!(non_negative("-1").is_err());
         assert!(non_negative("nan").is_err());
-        assert!(positive("0").is_err());
         assert!(fraction("1.5").is_err());
         assert_eq!(fraction("1"), Ok(1.0));
-        assert!(finite("inf").is_err());
-        assert!(finite("x").is_err());
+        assert!(non_negative("inf").is_err());
+        assert!(non_negative("x").is_err());
     }
 }

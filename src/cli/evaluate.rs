@@ -5,13 +5,14 @@ use super::common::{
     fraction, non_negative, require_fragments, resolution, stacks_or_default, technique_list,
     usize_in,
 };
-use crate::artefact::OutDir;
-use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
-use crate::progress::Bar;
-use crate::render::{self, eye, Scene};
-use crate::report::pictures;
-use crate::stack::DepthStack;
 use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::metrics::eye;
+use momentlab::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
+use momentlab::progress::Bar;
+use momentlab::render::{self, Scene};
+use momentlab::report::pictures;
+use momentlab::stack::DepthStack;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -108,11 +109,11 @@ pub fn run(args: Args) -> Result<()> {
         bail!("--technique: no technique named");
     }
     // Every name before any work.
-    let techniques: Vec<Option<Box<dyn crate::technique::Technique>>> = names
+    let techniques: Vec<Option<Box<dyn momentlab::technique::Technique>>> = names
         .iter()
         .map(|spec| match spec.as_str() {
             "pcf" | "cdf" => Ok(None),
-            spec => crate::technique::by_name(spec)
+            spec => momentlab::technique::by_name(spec)
                 .map(Some)
                 .with_context(|| format!("--technique {spec}")),
         })

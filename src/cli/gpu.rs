@@ -2,11 +2,11 @@
 //! shader code run by the machine's GPU driver (src/gpu).
 
 use super::common::{resolution, stacks_or_default, usize_in};
-use crate::artefact::{read_text, Limit};
-use crate::gpu::{bench, study, Gpu};
-use crate::tune::space::{parse_list, Setting, StorageKind, TechniqueKind};
 use anyhow::{bail, Context, Result};
 use clap::Subcommand;
+use momentlab::artefact::{read_text, Limit};
+use momentlab::gpu::{bench, study, Gpu};
+use momentlab::tune::space::{parse_list, Setting, StorageKind, TechniqueKind};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -159,7 +159,7 @@ fn bench_cmd(args: BenchArgs) -> Result<()> {
         base: (args.base[0], args.base[1], args.base[2]),
         repeats: args.repeats,
     };
-    let out = crate::artefact::OutDir::new(&args.out, args.force).context("--out")?;
+    let out = momentlab::artefact::OutDir::new(&args.out, args.force).context("--out")?;
     let gpu = Gpu::new()?;
     let stem = gpu.adapter.file_stem();
     let files: Vec<String> = std::iter::once(format!("{stem}.json"))
@@ -167,19 +167,19 @@ fn bench_cmd(args: BenchArgs) -> Result<()> {
         .collect();
     out.reserve(&files)?;
     eprintln!("gpu bench: {}", gpu.adapter.label());
-    let src = crate::render::default_dataset(128)?;
+    let src = momentlab::render::default_dataset(128)?;
     let view = src
         .iter()
         .max_by_key(|s| s.fragment_count())
         .expect("the default dataset has views");
-    let bar = crate::progress::Bar::new(
+    let bar = momentlab::progress::Bar::new(
         "gpu bench",
         (settings.len() * (plan.sizes.len() + plan.filters.len() + plan.outputs.len())) as u64,
     );
     let report = bench::run(&gpu, &plan, &settings, view, |_| bar.inc(1))?;
     bar.finish();
     out.write_json(&files[0], &report)?;
-    for (axis, svg) in crate::report::gpu::gpu_charts(&report)? {
+    for (axis, svg) in momentlab::report::gpu::gpu_charts(&report)? {
         out.write_text(&format!("{stem}_{axis}.svg"), &svg)?;
     }
     println!(

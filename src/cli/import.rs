@@ -2,9 +2,9 @@
 //! docs/stacks.md), or convert deep OpenEXR images (detected by their version bits) to stacks,
 //! and, with `--out`, write them there in canonical form.
 
-use crate::artefact::OutDir;
-use crate::stack;
 use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::stack;
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]
@@ -79,7 +79,7 @@ pub fn run(args: Args) -> Result<()> {
             }
             files.extend(found);
         } else if p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr")) {
-            crate::artefact::check_regular(p)?;
+            momentlab::artefact::check_regular(p)?;
             files.push(p.clone());
         } else {
             bail!(

@@ -1,6 +1,6 @@
 //! `momentlab merge`: combine the results directories of a sharded `momentlab search`. Every
 //! shard is verified first (completion marker, row count, no torn or duplicated rows, one
-//! configuration); see [`crate::search::merge::verify_results`].
+//! configuration); see [`momentlab::search::merge::verify_results`].
 
 use anyhow::Result;
 use std::path::PathBuf;
@@ -26,7 +26,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let m = crate::search::merge_dirs(&args.dirs, &args.out, args.allow_partial, args.force)?;
+    let m = momentlab::search::merge_dirs(&args.dirs, &args.out, args.allow_partial, args.force)?;
     if args.json {
         let mut v = serde_json::json!({
             "rows": m.rows,

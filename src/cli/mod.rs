@@ -122,7 +122,7 @@ pub fn main() -> i32 {
         Err(e) => {
             // One line, naming what went wrong and where (the error chain joined by ": "),
             // and the last one: progress output ends before it.
-            crate::progress::silence();
+            momentlab::progress::silence();
             note_line(&format!("error: {}", one_line(&format!("{e:#}"))));
             1
         }
@@ -136,7 +136,7 @@ fn note_line(s: &str) {
 }
 
 fn dispatch(cli: Cli) -> Result<()> {
-    // Long commands stop cleanly on SIGINT/SIGTERM (exit 130, one line; crate::artefact::interrupt).
+    // Long commands stop cleanly on SIGINT/SIGTERM (exit 130, one line; momentlab::artefact::interrupt).
     let long = match &cli.command {
         Command::Theta(_) => Some(("theta", false)),
         Command::Stability(_) => Some(("stability", false)),
@@ -148,7 +148,7 @@ fn dispatch(cli: Cli) -> Result<()> {
         _ => None,
     };
     if let Some((name, resumes)) = long {
-        crate::artefact::interrupt::install(name, resumes);
+        momentlab::artefact::interrupt::install(name, resumes);
     }
     match cli.command {
         Command::Lp(a) => lp::run(a),
@@ -484,10 +484,15 @@ mod tests {
             assert!(help.contains("Example:"), "{name}");
         }
         let (input, output) = help_example(lp::SCHEMA_HELP);
-        let got = lp::solve_batch(&input, &crate::basis::Catalog::embedded(), false).unwrap();
+        let got = momentlab::batch::lp::solve_batch(
+            &input,
+            &momentlab::basis::Catalog::embedded(),
+            false,
+        )
+        .unwrap();
         assert_eq!(got, output);
         let (input, output) = help_example(shadow::SCHEMA_HELP);
-        let got = shadow::evaluate_batch(&input, "example").unwrap();
+        let got = momentlab::batch::shadow::evaluate_batch(&input, "example").unwrap();
         assert_eq!(serde_json::to_string(&got).unwrap(), output);
     }
 

@@ -1,8 +1,8 @@
 //! The output of `momentlab search --plan`: what the sweep will cost, to size a Slurm job array
 //! (`--array`, `--cpus-per-task`, `--time`) before submitting (docs/search.md).
 
-use crate::search::plan::{Plan, Schedule};
-use crate::search::SweepOptions;
+use momentlab::search::plan::{Plan, Schedule};
+use momentlab::search::SweepOptions;
 
 /// Calibration sample: candidates (stratified by family) × fragments, solved on all threads
 /// (≈ 1 s).
@@ -172,7 +172,7 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             "plan: wall times include the dataset ({}) and the references after the race ({}: the winner and {} LP references on every kept fragment, and the closed forms)",
             duration(setup),
             duration(plan.references_seconds),
-            crate::search::reference::LP_REFERENCES
+            momentlab::search::reference::LP_REFERENCES
         );
     }
     let time = TIME_MARGIN * (setup + plan.references_seconds + hours * 3600.0 / threads as f64);

@@ -2,13 +2,13 @@
 //! over the bias α for canonical / optimized (θ) storage at 8 and 16 bits and 32-bit float,
 //! for VSM (θ₂), Hamburger 4MSM (θ₄), 6MSM (θ₆) and 8 moments (θ₈): ours from --theta-dir,
 //! the published θ₂/θ₄/θ₆ beside them. Parses the flags and calls
-//! [`crate::pipeline::quantize`].
+//! [`momentlab::pipeline::quantize`].
 
 use super::common::resolution;
-use crate::artefact::OutDir;
-use crate::pipeline::quantize::{self, Study, FILES};
-use crate::quantize::study::{Tech, DEFAULT_ALPHAS};
 use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::pipeline::quantize::{self, Study, FILES};
+use momentlab::quantize::study::{Tech, DEFAULT_ALPHAS};
 use std::path::{Path, PathBuf};
 
 #[derive(clap::Args, Debug)]

@@ -5,10 +5,10 @@
 use super::common::{
     non_negative, resolution, stacks_or_default, technique_list, usize_in, MAX_INPUTS,
 };
-use crate::report::recommend::{recommendations, Measured};
-use crate::technique::linalg::Precision;
-use crate::technique::registry::{build, Params};
 use anyhow::{bail, Context, Result};
+use momentlab::report::recommend::{recommendations, Measured};
+use momentlab::technique::linalg::Precision;
+use momentlab::technique::registry::{build, Params};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -63,7 +63,7 @@ pub fn run(args: Args) -> Result<()> {
     let stacks = stacks_or_default(args.stacks.as_deref(), args.resolution, "recommend")?;
     let mut all: Vec<Measured> = Vec::new();
     for (name, prec, t) in &jobs {
-        all.push(crate::pipeline::techniques::measured(
+        all.push(momentlab::pipeline::techniques::measured(
             &stacks,
             t.as_ref(),
             name,

@@ -2,12 +2,12 @@
 //! `--scenes FOLDER|FILE`) and write one `<scene>_<view>.exr` + `.json` per view.
 
 use super::common::resolution;
-use crate::artefact::OutDir;
-use crate::progress::Bar;
-use crate::render::scene::{LightDesc, UpAxis};
-use crate::render::{self, Scene};
-use crate::stack;
 use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::progress::Bar;
+use momentlab::render::scene::{LightDesc, UpAxis};
+use momentlab::render::{self, Scene};
+use momentlab::stack;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -101,10 +101,10 @@ pub fn run(args: Args) -> Result<()> {
             let dt = t0.elapsed().as_secs_f64();
             let path = stack::write_to(&out, &st.file_stem(), &st)?;
             if args.preview {
-                crate::report::pictures::write_png_to(
+                momentlab::report::pictures::write_png_to(
                     &out,
                     &format!("{}.preview.png", st.file_stem()),
-                    &crate::report::pictures::preview_picture(&st),
+                    &momentlab::report::pictures::preview_picture(&st),
                 )?;
             }
             let frags = st.fragment_count();

@@ -1,10 +1,10 @@
 //! `momentlab reproduce`: the whole study on the embedded default data, from a fresh clone —
-//! a thin caller of [`crate::pipeline::run`] (steps, artefacts and resuming are described
+//! a thin caller of [`momentlab::pipeline::run`] (steps, artefacts and resuming are described
 //! there).
 
 use super::common::{non_negative, resolution};
-use crate::pipeline::{self, Config, Preset};
 use anyhow::Result;
+use momentlab::pipeline::{self, Config, Preset};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]

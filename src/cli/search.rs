@@ -1,19 +1,19 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
 use super::common::{fraction, resolution, stacks_or_default, usize_in, MAX_GRID};
-use crate::artefact::OutDir;
-use crate::basis::candidates::MAX_M;
-use crate::metrics::Bias;
-use crate::report::sweep::{self as sweep_report, ReportOptions};
-use crate::search::reference::{self, Summary};
-use crate::search::run::{load_table, ranking_lines, references_for, sweep_line};
-use crate::search::{
+use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::basis::candidates::MAX_M;
+use momentlab::metrics::Bias;
+use momentlab::report::sweep::{self as sweep_report, ReportOptions};
+use momentlab::search::reference::{self, Summary};
+use momentlab::search::run::{load_table, ranking_lines, references_for, sweep_line};
+use momentlab::search::{
     read_rows, sweep_dataset, Dataset, FunctionTable, Progress, SamplePlan, SweepOptions,
     SweepResult,
 };
-use crate::stack::DepthStack;
-use crate::Grid;
-use anyhow::{bail, Context, Result};
+use momentlab::stack::DepthStack;
+use momentlab::Grid;
 use std::path::PathBuf;
 
 /// Boxed so the subcommand enum stays small.
@@ -42,7 +42,7 @@ pub struct Opts {
     #[arg(long, default_value_t = 512, value_parser = resolution())]
     pub resolution: usize,
     /// Keep at most this many non-trivial fragments (stratified by view and layer; 0 = all).
-    #[arg(long, default_value_t = crate::search::DEFAULT_MAX_FRAGMENTS)]
+    #[arg(long, default_value_t = momentlab::search::DEFAULT_MAX_FRAGMENTS)]
     pub max_fragments: usize,
     /// Synthetic dataset with this many texels per view (tests and demos, no stacks needed;
     /// 1..=1000000).
@@ -79,7 +79,7 @@ pub struct Opts {
     #[arg(long, default_value = "fast")]
     pub solver: String,
     /// Fragments in racing stage 0 (each next stage: × growth; ≥ 1).
-    #[arg(long, default_value_t = crate::search::config::DEFAULT_FIRST_SAMPLE, value_parser = usize_in(1, u32::MAX as u64))]
+    #[arg(long, default_value_t = momentlab::search::config::DEFAULT_FIRST_SAMPLE, value_parser = usize_in(1, u32::MAX as u64))]
     pub first_sample: usize,
     /// Factor by which each racing stage's fragment block grows (2..=64).
     #[arg(long, default_value_t = 4, value_parser = usize_in(2, 64))]
@@ -87,7 +87,7 @@ pub struct Opts {
     /// Early look: a stage block whose halves hold at least this many fragments is first
     /// tested on its first half, by confidence only, and the survivors on the whole block
     /// (0 = never).
-    #[arg(long, default_value_t = crate::search::config::DEFAULT_EARLY_LOOK)]
+    #[arg(long, default_value_t = momentlab::search::config::DEFAULT_EARLY_LOOK)]
     pub early_look: usize,
     /// Budget cap per stage: of the candidates not eliminated by confidence, at most
     /// max(⌈keep·|C|⌉, top) stay, C the candidates at the stage's last look (by their mean over
@@ -143,7 +143,7 @@ pub struct Opts {
     pub plan: bool,
     /// With --plan: the proxy race runs on 1/S of the fragments (0: no proxy race, only the
     /// upper bound of the racing schedule).
-    #[arg(long, default_value_t = crate::search::plan::PROXY_SHARE, requires = "plan", value_parser = usize_in(0, 1024))]
+    #[arg(long, default_value_t = momentlab::search::plan::PROXY_SHARE, requires = "plan", value_parser = usize_in(0, 1024))]
     pub plan_proxy: usize,
     /// Other results directories (e.g. the m = 2 and m = 3 sweeps) for the side-by-side plot.
     #[arg(long, value_delimiter = ',')]
@@ -215,7 +215,7 @@ fn load_data(
 
 /// Check the flags that the sweep's parameters do not cover before any expensive work.
 fn check_flags(args: &Opts) -> Result<()> {
-    crate::search::race::Bound::parse(&args.bound).context("--bound")?;
+    momentlab::search::race::Bound::parse(&args.bound).context("--bound")?;
     if args.report_only && args.no_report {
         bail!("--report-only and --no-report contradict each other");
     }
@@ -224,9 +224,9 @@ fn check_flags(args: &Opts) -> Result<()> {
             bail!("--validate {}: no results.jsonl there", v.display());
         }
     }
-    crate::lp::check_solver(&args.solver).context("--solver")?;
+    momentlab::lp::check_solver(&args.solver).context("--solver")?;
     for c in &args.compare {
-        crate::search::merge::verify_results(c, false)
+        momentlab::search::merge::verify_results(c, false)
             .with_context(|| format!("--compare {}", c.display()))?;
     }
     Ok(())
@@ -240,7 +240,7 @@ fn validate(args: &Opts, exhaustive: &std::path::Path) -> Result<()> {
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
     let rows = read_rows(&results)
         .with_context(|| format!("--validate: reading the race in {}", results.display()))?;
-    let v = crate::search::tieset::validate(&rows, &read_rows(exhaustive)?)?;
+    let v = momentlab::search::tieset::validate(&rows, &read_rows(exhaustive)?)?;
     for l in v.lines() {
         println!("validate: {l}");
     }
@@ -259,8 +259,8 @@ pub fn run(args: Args) -> Result<()> {
     // Before any rendering or sampling: m, the candidate selection, the sweep's parameters, the
     // results folder (a folder, not in use by another run), for --report-only results that are
     // whole, and the report's files (refused if they exist, unless --force).
-    crate::basis::candidates::check_m(table.len(), args.m)?;
-    crate::search::run::resolve_candidates(
+    momentlab::basis::candidates::check_m(table.len(), args.m)?;
+    momentlab::search::run::resolve_candidates(
         &table,
         args.m,
         args.candidates.as_deref(),
@@ -290,7 +290,7 @@ pub fn run(args: Args) -> Result<()> {
         early_look: args.early_look,
         keep: args.keep,
         confidence: args.confidence,
-        bound: crate::search::race::Bound::parse(&args.bound).context("--bound")?,
+        bound: momentlab::search::race::Bound::parse(&args.bound).context("--bound")?,
         race_seed: args.race_seed,
         pilot: args.pilot,
         batch: args.batch,
@@ -314,8 +314,10 @@ pub fn run(args: Args) -> Result<()> {
     if args.report_only {
         // A partial merge (`partial.json`, no completion marker) is reported as partial.
         let partial =
-            std::fs::symlink_metadata(results.join(crate::search::results::PARTIAL_FILE)).is_ok();
-        let v = crate::search::merge::verify_results(&results, partial).context("--report-only")?;
+            std::fs::symlink_metadata(results.join(momentlab::search::results::PARTIAL_FILE))
+                .is_ok();
+        let v =
+            momentlab::search::merge::verify_results(&results, partial).context("--report-only")?;
         let [i, n] = v.config.shard;
         if n > 1 {
             bail!(
@@ -352,7 +354,7 @@ pub fn run(args: Args) -> Result<()> {
     );
     if args.plan {
         let setup = t_data.elapsed().as_secs_f64();
-        let plan = crate::search::run::plan_dataset(
+        let plan = momentlab::search::run::plan_dataset(
             &data,
             &table,
             stacks.as_deref(),
@@ -372,7 +374,7 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("report: written to {}", report_dir.display());
         return Ok(());
     }
-    let bar = crate::progress::Bar::new("search", 0);
+    let bar = momentlab::progress::Bar::new("search", 0);
     let progress = |p: Progress| match p {
         Progress::Phase { name, units } => bar.phase(&format!("search {name}"), units),
         Progress::Advance(u) => bar.inc(u),
@@ -391,10 +393,10 @@ pub fn run(args: Args) -> Result<()> {
     }
     if r.summary.is_some() {
         // Where the time went (stage files of a racing run; none for --exhaustive).
-        let times = crate::search::timing::stage_family_times(&results, &table, opts.m)?;
+        let times = momentlab::search::timing::stage_family_times(&results, &table, opts.m)?;
         if !times.is_empty() {
             eprintln!("search: LP time per stage and candidate family (CPU seconds in the LPs)");
-            eprint!("{}", crate::search::timing::render(&times));
+            eprint!("{}", momentlab::search::timing::render(&times));
         }
     }
     if shard[1] > 1 {
@@ -418,7 +420,7 @@ pub fn run(args: Args) -> Result<()> {
 fn print_ranking(
     s: &Summary,
     json: bool,
-    partial: Option<&crate::search::merge::Partial>,
+    partial: Option<&momentlab::search::merge::Partial>,
 ) -> Result<()> {
     if let Some(p) = partial {
         eprintln!("search: {}", p.line());

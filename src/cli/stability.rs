@@ -1,14 +1,14 @@
 //! `momentlab stability`: stress-test every technique where it fails (the study in
-//! [`crate::report::stability`], documented in docs/stability.md); writes a Markdown table,
+//! [`momentlab::report::stability`], documented in docs/stability.md); writes a Markdown table,
 //! JSON and SVG heat maps to the output directory.
 
 use super::common::{technique_list, usize_in};
-use crate::progress::Bar;
-use crate::report::stability::{self, Options};
 use anyhow::Result;
+use momentlab::progress::Bar;
+use momentlab::report::stability::{self, Options};
 use std::path::PathBuf;
 
-use crate::report::stability::DEFAULT_TECHNIQUES;
+use momentlab::report::stability::DEFAULT_TECHNIQUES;
 
 #[derive(clap::Args, Debug)]
 pub struct Args {

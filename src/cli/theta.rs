@@ -1,12 +1,12 @@
 //! `momentlab theta`: optimal affine quantization transform θ for a basis (Section 4.3 of the
 //! 2015 paper). theta{m}.json and HLSL/GLSL/WGSL snippets into --out DIR
 //! (default a run directory under results/; never overwrites without --force). Parses the flags
-//! and calls [`crate::pipeline::theta`].
+//! and calls [`momentlab::pipeline::theta`].
 
-use crate::artefact::OutDir;
-use crate::pipeline::theta;
-use crate::quantize::{codegen, curve, optimize, Curve};
 use anyhow::{bail, Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::pipeline::theta;
+use momentlab::quantize::{codegen, curve, optimize, Curve};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]

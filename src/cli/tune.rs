@@ -1,12 +1,12 @@
 //! `momentlab tune`: per scene and over all scenes, the cheapest technique × storage × bias
-//! setting within `--tolerance` of the best (library: `crate::tune`).
+//! setting within `--tolerance` of the best (library: `momentlab::tune`).
 
 use super::common::{non_negative, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION};
-use crate::artefact::OutDir;
-use crate::progress::Bar;
-use crate::tune::space::{parse_list, StorageKind, TechniqueKind};
-use crate::tune::{self, Options, Scored, Tuning};
 use anyhow::{Context, Result};
+use momentlab::artefact::OutDir;
+use momentlab::progress::Bar;
+use momentlab::tune::space::{parse_list, StorageKind, TechniqueKind};
+use momentlab::tune::{self, table::table, Options};
 use std::path::PathBuf;
 
 #[derive(clap::Args, Debug)]
@@ -104,7 +104,7 @@ pub fn run(args: Args) -> Result<()> {
     };
     if args.stacks.is_none() {
         let mut scenes: Vec<String> = Vec::new();
-        for (scene, _) in crate::render::default_dataset_views()? {
+        for (scene, _) in momentlab::render::default_dataset_views()? {
             if !scenes.contains(&scene) {
                 scenes.push(scene);
             }
@@ -128,68 +128,4 @@ pub fn run(args: Args) -> Result<()> {
     }
     print!("{}", table(&t));
     Ok(())
-}
-
-fn pct(x: f64) -> String {
-    format!("{:.3}%", 100.0 * x)
-}
-
-fn row(scene: &str, s: &Scored) -> String {
-    format!(
-        "{:<8} {:<48} {:>5} {:>8.1} {:>8} {:>8} {:>8}",
-        scene,
-        s.label,
-        s.bits_per_texel,
-        s.ns_per_fragment,
-        pct(s.error),
-        pct(s.leak),
-        pct(s.darkening)
-    )
-}
-
-/// The text table of a tuning: per target the chosen setting, the best, the runner-up and the
-/// gain over the published defaults.
-pub fn table(t: &Tuning) -> String {
-    let mut out = format!(
-        "{:<8} {:<48} {:>5} {:>8} {:>8} {:>8} {:>8}\n",
-        "scene", "setting", "bits", "ns/frag", "error", "leak", "darken"
-    );
-    for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
-        out += &row(&target.scene, &target.chosen);
-        out += "   ← chosen\n";
-        out += &row("", &target.best);
-        out += &format!(
-            "   best (chosen − best {:+.3} ± {:.3} pp)\n",
-            100.0 * target.chosen_minus_best.mean,
-            100.0 * target.chosen_minus_best.half_width
-        );
-        if let (Some(r), Some(p)) = (&target.runner_up, &target.chosen_minus_runner_up) {
-            out += &row("", r);
-            out += &format!(
-                "   runner-up (chosen − it {:+.3} ± {:.3} pp)\n",
-                100.0 * p.mean,
-                100.0 * p.half_width
-            );
-        }
-        for r in &target.references {
-            out += &format!(
-                "{:<8}   vs {:<40} error {:>8}: tuned gains {:+.3} ± {:.3} pp\n",
-                "",
-                r.name,
-                pct(r.scored.error),
-                100.0 * r.gain.mean,
-                100.0 * r.gain.half_width
-            );
-        }
-    }
-    out += &format!(
-        "(tolerance {} absolute; {} fragments per scene, {} settings screened on {} per scene, {} confirmed; 95 % paired intervals; {:.1} s)\n",
-        pct(t.tolerance),
-        t.fragments_per_scene,
-        t.settings_screened,
-        t.screen_per_scene,
-        t.settings_confirmed,
-        t.seconds
-    );
-    out
 }

@@ -14,6 +14,7 @@
 
 mod bias;
 mod evaluate;
+pub mod eye;
 mod fragments;
 mod pcf;
 mod report;

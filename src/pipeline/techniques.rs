@@ -4,8 +4,8 @@
 use super::progress::{bar, pct};
 use super::Plan;
 use crate::artefact::{read_json, write_json};
+use crate::metrics::eye;
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
-use crate::render::eye;
 use crate::report::pictures;
 use crate::report::recommend::{per_scene, Measured};
 use crate::stack::DepthStack;

@@ -327,5 +327,4 @@ pub fn default_dataset_views() -> Result<Vec<(String, String)>> {
         .collect())
 }
 
-pub mod eye;
 pub mod rectified;

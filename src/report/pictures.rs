@@ -303,7 +303,7 @@ pub fn write_png_to(out: &crate::artefact::OutDir, name: &str, img: &RgbImage) -
 /// bar (bottom = 0, top = 1, ticks at [`BAR_TICKS`]). Grey = 0.15 + 0.85·(n·l)⁺·(1 − shadow);
 /// pixels without a surface are [`BACKGROUND`], non-finite G is [`INVALID`].
 pub fn eye_picture(
-    view: &crate::render::eye::EyeView,
+    view: &crate::metrics::eye::EyeView,
     light_dir: [f64; 3],
     pcf: &[f64],
     g: &[f64],
@@ -324,11 +324,11 @@ pub fn eye_picture(
             let cols = match &view.points[i] {
                 None => [BACKGROUND; 3],
                 Some(p) => {
-                    let a = grey(crate::render::eye::shade(p, light_dir, pcf[i]));
+                    let a = grey(crate::metrics::eye::shade(p, light_dir, pcf[i]));
                     if g[i].is_finite() {
                         [
                             a,
-                            grey(crate::render::eye::shade(p, light_dir, g[i])),
+                            grey(crate::metrics::eye::shade(p, light_dir, g[i])),
                             error_colour(g[i] - pcf[i]),
                         ]
                     } else {
@@ -348,7 +348,7 @@ pub fn eye_picture(
 /// The eye-view picture of `subject` in `cmp` ([`eye_picture`]; for PCF itself the heat map
 /// is 0).
 pub fn eye_comparison(
-    cmp: &crate::render::eye::EyeComparison,
+    cmp: &crate::metrics::eye::EyeComparison,
     stack: &DepthStack,
     subject: crate::metrics::Subject,
     bias: &crate::metrics::Bias,

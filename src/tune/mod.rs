@@ -20,6 +20,7 @@
 pub mod export;
 pub mod sample;
 pub mod space;
+pub mod table;
 
 use crate::progress::Bar;
 use crate::stack::DepthStack;

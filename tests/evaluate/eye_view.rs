@@ -2,8 +2,8 @@
 //! eye view of a sphere over a plane against the analytic shadow disk.
 
 use crate::common::{decode_png, no_mesh, tmp};
+use momentlab::metrics::eye::{self, bilinear};
 use momentlab::metrics::{Bias, Subject};
-use momentlab::render::eye::{self, bilinear};
 use momentlab::render::scene::{quad, sphere};
 use momentlab::render::{render_view, Scene, Tri};
 

@@ -153,10 +153,10 @@ fn parse(name: &str, input: &[u8], scratch: &Path) {
             let _ = momentlab::basis::Function::parse(&text());
         }
         "lp" => {
-            let _ = momentlab::cli::lp::solve_batch(&text(), catalog(), false);
+            let _ = momentlab::batch::lp::solve_batch(&text(), catalog(), false);
         }
         "shadow" => {
-            let _ = momentlab::cli::shadow::evaluate_batch(&text(), "fuzz");
+            let _ = momentlab::batch::shadow::evaluate_batch(&text(), "fuzz");
         }
         _ => panic!("unknown parser {name}"),
     }

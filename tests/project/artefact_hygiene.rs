@@ -47,13 +47,13 @@ fn dead(command: &str, full: bool) -> Option<String> {
     args[0] = "momentlab".into();
     if args.len() > 1
         && !args[1].starts_with('-')
-        && momentlab::cli::Cli::command()
+        && crate::cli::Cli::command()
             .find_subcommand(&args[1])
             .is_none()
     {
         return Some(format!("no subcommand '{}'", args[1]));
     }
-    if let Err(e) = momentlab::cli::Cli::try_parse_from(&args) {
+    if let Err(e) = crate::cli::Cli::try_parse_from(&args) {
         if !full {
             return flags_dead(&args);
         }
@@ -67,7 +67,7 @@ fn dead(command: &str, full: bool) -> Option<String> {
 
 /// A flag of `args` that is not a visible long name of its subcommand.
 fn flags_dead(args: &[String]) -> Option<String> {
-    let root = momentlab::cli::Cli::command();
+    let root = crate::cli::Cli::command();
     let mut cmd = &root;
     for a in &args[1..] {
         match cmd.find_subcommand(a) {

@@ -318,7 +318,7 @@ fn command_args(cmd: &str) -> Vec<String> {
 /// Parse a documented command with today's CLI; `--help` and `--version` count as parsed.
 fn parse(cmd: &str) -> Result<(), clap::Error> {
     use clap::Parser;
-    match momentlab::cli::Cli::try_parse_from(command_args(cmd)) {
+    match crate::cli::Cli::try_parse_from(command_args(cmd)) {
         Ok(_) => Ok(()),
         Err(e)
             if matches!(

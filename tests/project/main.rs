@@ -5,6 +5,12 @@
 #[path = "../common/mod.rs"]
 mod common;
 
+/// The binary's command line (not part of the library), for its argument tree: documented
+/// command lines must parse with it.
+#[path = "../../src/cli/mod.rs"]
+#[allow(dead_code)]
+mod cli;
+
 mod artefact_hygiene;
 mod cli_bad_input;
 mod docs_figures;

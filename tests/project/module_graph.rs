@@ -2,8 +2,10 @@
 //! (outside comments, strings, `#[cfg(test)]` modules and `tests.rs` files) is an edge from the file's module to
 //! the file that defines the path's longest existing prefix (through `pub use` re-exports of a
 //! module file). Two graphs must be acyclic: the top-level modules of the crate, and the files
-//! (a file's paths into its own ancestors — `super::Thing` of mod.rs — are not edges). Library
-//! modules never name `crate::cli`.
+//! (a file's paths into its own ancestors — `super::Thing` of mod.rs — are not edges). The
+//! graphs are of the library (src/lib.rs's modules); the binary's modules (src/main.rs's: the
+//! command line) are not in the library and reach it as `momentlab::…` only. The top-level
+//! modules keep the order of the data flow ([`LAYERS`]): none imports a later one.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
@@ -308,8 +310,25 @@ fn references(module: &[String], code: &str) -> (Vec<Module>, Vec<Module>) {
     (all, reexports)
 }
 
-/// The crate's files: module path → source text (`lib.rs` and `main.rs` are not modules).
+/// The modules a crate root (lib.rs, main.rs) declares: `mod x;`, `pub mod x;`, `pub(crate) mod
+/// x;` outside comments and `#[cfg(test)]` items.
+fn declared_modules(root_file: &str) -> BTreeSet<String> {
+    let t = without_tests(tokens(&lex(root_file)));
+    let mut out = BTreeSet::new();
+    for i in 0..t.len().saturating_sub(2) {
+        if let (Tok::Ident(m), Tok::Ident(name), Tok::Semi) = (&t[i], &t[i + 1], &t[i + 2]) {
+            if m == "mod" {
+                out.insert(name.clone());
+            }
+        }
+    }
+    out
+}
+
+/// The library's files: module path → source text (`lib.rs` and `main.rs` are not modules, and
+/// the binary's modules — those src/main.rs declares — are not the library's).
 fn read_src(root: &Path) -> BTreeMap<Module, String> {
+    let binary = declared_modules(&std::fs::read_to_string(root.join("main.rs")).unwrap());
     let mut out = BTreeMap::new();
     let mut stack = vec![root.to_path_buf()];
     while let Some(dir) = stack.pop() {
@@ -328,7 +347,11 @@ fn read_src(root: &Path) -> BTreeMap<Module, String> {
                 }
                 // unit tests in a file of their own (`#[cfg(test)] mod tests;`), like the
                 // inline `#[cfg(test)]` modules, are not part of the graph
-                if m == ["lib"] || m == ["main"] || m.last().is_some_and(|s| s == "tests") {
+                if m == ["lib"]
+                    || m == ["main"]
+                    || m.last().is_some_and(|s| s == "tests")
+                    || binary.contains(&m[0])
+                {
                     continue;
                 }
                 out.insert(m, std::fs::read_to_string(&p).unwrap());
@@ -489,21 +512,137 @@ fn files_import_each_other_without_a_cycle() {
     assert_eq!(found, set(OPEN_FILE_CYCLES), "{}", explain(&files, &c));
 }
 
+fn src_file(name: &str) -> String {
+    std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("src").join(name)).unwrap()
+}
+
 #[test]
-fn library_modules_never_import_the_cli() {
+fn the_command_line_is_the_binarys_not_the_librarys() {
+    let lib = declared_modules(&src_file("lib.rs"));
+    let bin = declared_modules(&src_file("main.rs"));
+    assert!(
+        lib.contains("lp") && lib.len() > 10,
+        "lib.rs not parsed: {lib:?}"
+    );
+    assert!(
+        !lib.contains("cli"),
+        "the library declares a cli module: {lib:?}"
+    );
+    assert!(
+        bin.contains("cli"),
+        "src/main.rs declares no cli module: {bin:?}"
+    );
+    let shared: Vec<&String> = lib.intersection(&bin).collect();
+    assert!(
+        shared.is_empty(),
+        "modules in both the library and the binary: {shared:?}"
+    );
+    // no library file names the command line, and the command line reaches the library only as
+    // `momentlab::…` (a `crate::` path of a binary file names the binary's own modules)
+    let (files, _) = src_graphs();
+    let users: Vec<String> = files
+        .keys()
+        .filter(|f| f.split("::").any(|part| part == "cli"))
+        .cloned()
+        .collect();
+    assert!(
+        users.is_empty(),
+        "library files of the command line: {users:?}"
+    );
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut uses_library = false;
+    for m in &bin {
+        let dir = root.join(m);
+        let paths = if dir.is_dir() {
+            rust_files(&dir)
+        } else {
+            vec![root.join(format!("{m}.rs"))]
+        };
+        for p in paths {
+            let code = std::fs::read_to_string(&p).unwrap();
+            let t = without_tests(tokens(&lex(&code)));
+            for w in t.windows(3) {
+                if let (Tok::Ident(a), Tok::Path, Tok::Ident(b)) = (&w[0], &w[1], &w[2]) {
+                    uses_library |= a == "momentlab";
+                    assert!(
+                        a != "crate" || bin.contains(b),
+                        "{}: crate::{b} in the binary (the library is momentlab::{b})",
+                        p.display()
+                    );
+                }
+            }
+        }
+    }
+    assert!(uses_library, "the binary's modules were not parsed");
     let (_, top) = src_graphs();
     let users: Vec<&String> = top
         .iter()
-        .filter(|(m, to)| *m != "cli" && to.contains("cli"))
+        .filter(|(_, to)| to.iter().any(|t| bin.contains(t)))
         .map(|(m, _)| m)
         .collect();
     assert!(
         users.is_empty(),
-        "library modules importing crate::cli: {users:?}"
+        "library modules importing the binary: {users:?}"
     );
+}
+
+/// The library's top-level modules in the order of the data flow (src/lib.rs): foundations,
+/// then depth stacks and rendering, filtering, the moment problem and the techniques, the
+/// error against PCF (and the eye views built on it), the studies built on it, the GPU path
+/// that runs their settings, and the reports. A module imports only modules
+/// of earlier layers or of its own (within a layer the graph is acyclic, checked above).
+const LAYERS: &[&[&str]] = &[
+    &["artefact", "progress", "grid", "linalg"],
+    &["lp"],
+    &["basis", "bench"],
+    &["shader"],
+    &["technique"],
+    &["stack", "render"],
+    &["kernel"],
+    &["metrics"],
+    &["quantize", "stability"],
+    &["search", "tune"],
+    &["gpu"],
+    &["batch", "report"],
+    &["pipeline"],
+];
+
+fn layer_of(m: &str) -> Option<usize> {
+    LAYERS.iter().position(|l| l.contains(&m))
+}
+
+#[test]
+fn top_level_modules_never_import_a_later_layer() {
+    let (_, top) = src_graphs();
+    let lib = declared_modules(&src_file("lib.rs"));
+    let unlisted: Vec<&String> = lib.iter().filter(|m| layer_of(m).is_none()).collect();
     assert!(
-        top["cli"].contains("lp"),
-        "the cli's imports were not parsed"
+        unlisted.is_empty(),
+        "modules missing from LAYERS: {unlisted:?}"
+    );
+    let stale: Vec<&&str> = LAYERS
+        .iter()
+        .flat_map(|l| l.iter())
+        .filter(|m| !lib.contains(**m))
+        .collect();
+    assert!(
+        stale.is_empty(),
+        "LAYERS names modules lib.rs lacks: {stale:?}"
+    );
+    let mut back = Vec::new();
+    for (from, to) in &top {
+        for t in to {
+            if let (Some(a), Some(b)) = (layer_of(from), layer_of(t)) {
+                if b > a {
+                    back.push(format!("{from} (layer {a}) -> {t} (layer {b})"));
+                }
+            }
+        }
+    }
+    assert!(back.is_empty(), "backward arrows:\n{}", back.join("\n"));
+    assert!(
+        top["render"].contains("stack") || top["metrics"].contains("stack"),
+        "imports were not parsed: {top:?}"
     );
 }
 

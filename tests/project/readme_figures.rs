@@ -25,7 +25,7 @@ fn readme_text() -> String {
 /// The command table: every subcommand of `momentlab --help` (and of its command groups)
 /// with its one-line description.
 fn command_table() -> String {
-    let cli = momentlab::cli::Cli::command();
+    let cli = crate::cli::Cli::command();
     let mut s = String::from("| command | what |\n| --- | --- |\n");
     let about = |c: &clap::Command| {
         c.get_about()

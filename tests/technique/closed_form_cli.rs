@@ -1,6 +1,6 @@
 //! `momentlab shadow` batch parsing: results and one-line errors naming what and where.
 
-use momentlab::cli::shadow::evaluate_batch;
+use momentlab::batch::shadow::evaluate_batch;
 
 #[test]
 fn shadow_batch_results() {

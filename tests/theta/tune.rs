@@ -76,7 +76,7 @@ fn picks_16_bit_when_the_tolerance_allows_and_32_bit_when_not() {
     let t = tune(&stacks, &options(0.002), &Bar::hidden()).unwrap();
     let far = t.scenes.iter().find(|s| s.scene == "far").unwrap();
     let near = t.scenes.iter().find(|s| s.scene == "near").unwrap();
-    eprintln!("{}", momentlab::cli::tune::table(&t));
+    eprintln!("{}", momentlab::tune::table::table(&t));
     // Far: some setting is (nearly) exact, and a 16-bit one is within the tolerance.
     assert!(far.best.error < 0.002, "{:?}", far.best);
     assert_eq!(

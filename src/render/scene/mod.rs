@@ -35,7 +35,7 @@ pub struct Light {
     /// Unit direction the light travels (world space).
     pub dir: V3,
     /// Viewing direction (unit) of this view's eye-view camera from the scene file; `None`:
-    /// [`crate::render::eye::default_camera`] of `dir`.
+    /// [`crate::metrics::eye::default_camera`] of `dir`.
     pub camera: Option<V3>,
 }
 

@@ -5,10 +5,10 @@
 //! the point's biased depth z − ε′; PCF at those four texels (the point's depth carried to each
 //! texel centre along its receiver plane) blended with the same bilinear weights.
 
-use super::{light_bvh, Light, LightFrame, Scene, Tri, V3};
 use crate::kernel::{self, Gaussian};
 use crate::linalg::v3::{dot, norm, scale, sub};
 use crate::metrics::{self, Bias, FrontMap, Subject};
+use crate::render::{light_bvh, Light, LightFrame, Scene, Tri, V3};
 use crate::stack::DepthStack;
 use anyhow::{bail, Result};
 use rayon::prelude::*;
