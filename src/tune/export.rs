@@ -257,7 +257,8 @@ fn hausdorff4_into(f: &mut Func, b: &[V], zf: V) -> V {
     f.select(Cmp::Le, zf, zero, zero, g)
 }
 
-/// p(x), p′(x), p″(x) of Σ c_k x^k by Horner (`technique::linalg`'s `horner2`).
+/// p(x), p′(x), p″(x) of Σ c_k x^k (coefficients ascending) by Horner, p″ as twice the
+/// second accumulator (`technique::roots`'s `horner2`).
 fn horner2_into(f: &mut Func, c: &[V], x: V) -> (V, V, V) {
     let zero = f.c(0.0);
     let (mut p, mut d1, mut d2) = (zero, zero, zero);
@@ -274,19 +275,22 @@ fn horner2_into(f: &mut Func, c: &[V], x: V) -> (V, V, V) {
     (p, d1, d2)
 }
 
-/// Laguerre iterations unrolled in the straight-line form of `technique::linalg::real_roots`,
+/// Laguerre iterations unrolled in the straight-line form of `technique::roots::real_roots`,
 /// whose loop runs until a step is at rounding level (at most 200 times). For a quadratic
 /// Laguerre's step is exact up to rounding, so the loop ends after a few steps; where it does
 /// not (the iterate oscillates at rounding level), x after this many steps differs from the
 /// solver's at that level, and both are polished by the same three Newton steps.
 const LAGUERRE_STEPS: usize = 8;
 
-/// The real roots of Σ c_k z^k with c_n ≠ 0 (n = c.len() − 1 ≤ 2), ascending
-/// (`technique::linalg::real_roots`): for n = 2 [`LAGUERRE_STEPS`] Laguerre steps
-/// x ← x − n/(g ± √((n−1)(n h − g²))), g = p′/p, h = g² − p″/p, from x = −(1 + max|c_k/c_n|),
-/// stopped when p(x) = 0, the denominator is 0, the step is not finite or at most 4ε·max(|x|, ε);
-/// deflation by (z − x); for n = 1 the root −c₀/c₁; then three Newton steps on the undeflated
-/// polynomial per root (stopped at p′ = 0 or a non-finite step).
+/// The real roots of Σ c_k z^k with c_n ≠ 0 (n = c.len() − 1; the caller's n ≤ 2), ascending
+/// (`technique::roots::real_roots`, whose caller has already dropped zero leading
+/// coefficients). While the deflated polynomial has degree n ≥ 2: [`LAGUERRE_STEPS`] Laguerre
+/// steps x′ = x − n/(g ± √max((n−1)(n h − g²), 0)) (the sign of g), g = p′/p, h = g² − p″/p,
+/// from the Cauchy bound x = −(1 + max_k |c_k/c_n|); x is frozen before the step where p(x) = 0,
+/// the denominator is 0 or x′ is not finite, and after the step where
+/// |x′ − x| ≤ 4ε·max(|x′|, ε) (ε of f32); then deflation by (z − x). Degree 1: the root −c₀/c₁.
+/// Each root then takes up to three Newton steps on the undeflated polynomial, frozen at p′ = 0
+/// or a non-finite step; two roots are put in order.
 fn real_roots_into(f: &mut Func, c: &[V]) -> Vec<V> {
     let zero = f.c(0.0);
     let one = f.c(1.0);
@@ -401,11 +405,14 @@ fn cbrt_into(f: &mut Func, x: V) -> V {
     f.select(Cmp::Lt, x, zero, ne, e)
 }
 
-/// The three real roots of c₀ + c₁z + c₂z² + c₃z³, ascending (`technique::linalg::cubic_roots`):
-/// depressed cubic t³ + p t + q (z = t − a/3, a = c₂/c₃), for p < 0 the trigonometric form
-/// z = m cos(φ − 2πk/3) − a/3 with m = 2√(−p/3), φ = acos(clamp(3q/(p m), −1, 1))/3,
-/// otherwise the one real root u + v − a/3 of Cardano's formula three times; one Newton step
-/// per root on the monic cubic, then sorted.
+/// The three real roots of c₀ + c₁z + c₂z² + c₃z³ (c₃ ≠ 0), ascending
+/// (`technique::roots::cubic_roots`): the depressed cubic t³ + p t + q (z = t − a/3,
+/// a = c₂/c₃, b = c₁/c₃, c = c₀/c₃). Both branches are computed and p < 0 selects: the
+/// trigonometric form z_k = m cos(φ − 2πk/3) − a/3, k = 0, 1, 2, with m = 2√(−p/3),
+/// φ = acos(clamp(3q/(p m), −1, 1))/3 (cos(φ ∓ 2π/3) = −½cos φ ± (√3/2) sin φ), else the one
+/// real root u + v − a/3 of Cardano's formula, u, v = ∛(−q/2 ± √max(q²/4 + p³/27, 0)) by
+/// [`cbrt_into`], three times. One Newton step per root on the monic cubic, kept when p′ ≠ 0
+/// and the step is finite; then sorted by three compare-and-swaps.
 fn cubic_roots_into(f: &mut Func, c0: V, c1: V, c2: V, c3: V) -> [V; 3] {
     let zero = f.c(0.0);
     let one = f.c(1.0);
