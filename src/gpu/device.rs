@@ -97,8 +97,14 @@ const REQUIRED: wgpu::Features = wgpu::Features::TEXTURE_FORMAT_16BIT_NORM
 
 impl Gpu {
     /// The first adapter wgpu finds (a hardware one before a software one), or one line naming
-    /// why there is none. `MOMENTLAB_GPU_ADAPTER` picks an adapter whose name contains it.
+    /// why there is none. `MOMENTLAB_GPU_ADAPTER` picks an adapter whose name contains it;
+    /// `MOMENTLAB_GPU_ADAPTER=none` asks for none (the GPU step of `reproduce` is then skipped
+    /// on any machine, and wgpu is not touched).
     pub fn new() -> Result<Gpu> {
+        let want = std::env::var("MOMENTLAB_GPU_ADAPTER").ok();
+        if want.as_deref() == Some("none") {
+            bail!("no GPU adapter: MOMENTLAB_GPU_ADAPTER=none asks for none");
+        }
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
         desc.backends = wgpu::Backends::PRIMARY;
         let instance = wgpu::Instance::new(desc);
@@ -111,7 +117,6 @@ impl Gpu {
         }
         // hardware first, then software; stable otherwise
         adapters.sort_by_key(|a| a.get_info().device_type == wgpu::DeviceType::Cpu);
-        let want = std::env::var("MOMENTLAB_GPU_ADAPTER").ok();
         let names: Vec<String> = adapters.iter().map(|a| a.get_info().name).collect();
         let adapter = match &want {
             Some(w) => adapters

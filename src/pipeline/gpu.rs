@@ -80,9 +80,10 @@ pub fn section(doc: &mut Document, o: &Outcome) {
     doc.heading("On a GPU");
     let Some(a) = &o.adapter else {
         doc.paragraph(format!(
-            "Skipped: {} The CPU study above does not need a GPU; `momentlab gpu check` and \
-             `momentlab gpu bench` run the same pipeline where there is one.",
-            o.skipped
+            "The GPU step was skipped: {}. The CPU study above does not need a GPU; \
+             `momentlab gpu check` and `momentlab gpu bench` run the same pipeline where there \
+             is one.",
+            o.skipped.trim_end_matches('.')
         ));
         return;
     };

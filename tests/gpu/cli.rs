@@ -103,6 +103,68 @@ fn without_an_adapter_the_error_is_one_line() {
     assert_eq!(last_line(&out.stderr), lines[0]);
 }
 
+/// The Vulkan loader's files on this machine (`libvulkan.so*` in the usual library folders).
+fn vulkan_loader_files() -> Vec<std::path::PathBuf> {
+    let mut dirs: Vec<std::path::PathBuf> = Vec::new();
+    for top in ["/lib", "/lib64", "/usr/lib", "/usr/lib64", "/usr/local/lib"] {
+        let top = Path::new(top);
+        dirs.push(top.to_path_buf());
+        if let Ok(rd) = std::fs::read_dir(top) {
+            dirs.extend(rd.flatten().map(|e| e.path()).filter(|p| p.is_dir()));
+        }
+    }
+    let mut files = Vec::new();
+    for d in dirs {
+        if let Ok(rd) = std::fs::read_dir(&d) {
+            for e in rd.flatten() {
+                let name = e.file_name().to_string_lossy().into_owned();
+                if name.starts_with("libvulkan.so") && e.path().is_file() {
+                    files.push(e.path());
+                }
+            }
+        }
+    }
+    files.sort();
+    files.dedup();
+    files
+}
+
+/// With no Vulkan loader at all (its files hidden behind /dev/null in a private mount
+/// namespace, `unshare -rm`), `gpu check` and `gpu bench` end with the one-line "no GPU
+/// adapter" error, never a panic. Where user namespaces are not allowed the test skips loudly.
+#[test]
+fn without_a_vulkan_loader_the_error_is_one_line() {
+    let probe = Command::new("unshare").args(["-rm", "true"]).output();
+    if !probe.is_ok_and(|o| o.status.success()) {
+        eprintln!(
+            "SKIPPED without_a_vulkan_loader_the_error_is_one_line: `unshare -rm` is not \
+             available here (no user namespaces)"
+        );
+        return;
+    }
+    let mut script = String::from("set -e\n");
+    for f in vulkan_loader_files() {
+        script.push_str(&format!("mount --bind /dev/null '{}'\n", f.display()));
+    }
+    script.push_str("set +e\n\"$0\" gpu check --resolution 16\necho \"rc=$?\" >&2\n");
+    script.push_str("\"$0\" gpu bench --sizes 16 --out \"$1\"\necho \"rc=$?\" >&2\n");
+    let tmp = std::env::temp_dir().join(format!("momentlab-noloader-{}", std::process::id()));
+    let out = Command::new("unshare")
+        .args(["-rm", "sh", "-c", &script, env!("CARGO_BIN_EXE_momentlab")])
+        .arg(&tmp)
+        .env("XDG_RUNTIME_DIR", std::env::temp_dir())
+        .output()
+        .unwrap();
+    let _ = std::fs::remove_dir_all(&tmp);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error: ")).collect();
+    assert_eq!(errors.len(), 2, "{err}");
+    assert!(errors.iter().all(|l| l.contains("no GPU adapter")), "{err}");
+    assert_eq!(err.matches("rc=1").count(), 2, "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
+
 #[test]
 fn bad_lists_are_refused_before_any_gpu_work() {
     let out = momentlab(&["gpu", "check", "--storage", "f64"]);

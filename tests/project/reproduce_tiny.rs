@@ -233,3 +233,55 @@ fn a_linked_run_folder_is_refused() {
         std::fs::remove_dir_all(&root).unwrap();
     }
 }
+
+/// Without an adapter (`MOMENTLAB_GPU_ADAPTER=none`, which fails like a machine with no GPU,
+/// driver or Vulkan loader, on any machine) `reproduce` says in one line that it skipped the
+/// GPU step, still succeeds, writes no GPU artefacts, and its report says the step was skipped.
+#[test]
+fn without_an_adapter_reproduce_skips_the_gpu_step() {
+    let root = tmp_path("reproduce-no-adapter");
+    let out = Command::new(bin())
+        .args(["reproduce", "--tiny", "--skip-search", "--run", "n"])
+        .arg("--out")
+        .arg(root.join("r"))
+        .arg("--results")
+        .arg(root.join("d"))
+        .env("CI", "1")
+        .env("MOMENTLAB_GPU_ADAPTER", "none")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "reproduce failed:\n{stderr}");
+    let gpu_lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.contains("GPU") && !l.starts_with('['))
+        .collect();
+    assert_eq!(gpu_lines.len(), 1, "{gpu_lines:?}");
+    assert!(
+        gpu_lines[0].contains("GPU step skipped: no GPU adapter"),
+        "{}",
+        gpu_lines[0]
+    );
+    let run = root.join("r/n");
+    let gpu_dir = run.join("gpu");
+    let written: Vec<_> = std::fs::read_dir(&gpu_dir)
+        .map(|d| d.map(|e| e.unwrap().file_name()).collect())
+        .unwrap_or_default();
+    assert!(
+        written.is_empty(),
+        "GPU artefacts without a GPU: {written:?}"
+    );
+    let md = std::fs::read_to_string(run.join("report.md")).unwrap();
+    let section = md
+        .split("## On a GPU")
+        .nth(1)
+        .expect("the report has a GPU section");
+    assert!(
+        section.contains("The GPU step was skipped: no GPU adapter"),
+        "{}",
+        &section[..section.len().min(400)]
+    );
+    let html = std::fs::read_to_string(run.join("index.html")).unwrap();
+    assert!(html.contains("The GPU step was skipped"));
+    std::fs::remove_dir_all(&root).ok();
+}
