@@ -19,7 +19,7 @@ for s in "$@"; do
         { echo "race-orders.sh: search --m $m --race-seed $s failed" >&2; exit 1; }
     # "plan: expected from 64 runs of the race … stages …; 8 497 560 LP solves (80 % of the runs between 6.657 M and 10.367 M; …"
     # "plan: proxy race on 1/8 … its LP solves × 8 = 10 340 864"
-    # "plan:   racing (keep 0.25, at most)     20.462 M …"
+    # "plan:   racing (at most)     20.462 M …"
     "$bin" search --m "$m" --race-seed "$s" --plan > "results/search-m$m-order$s.plan" 2>/dev/null ||
         { echo "race-orders.sh: search --m $m --race-seed $s --plan failed" >&2; exit 1; }
 done
@@ -35,7 +35,7 @@ def plan_fields(d):
     num = lambda g: int(g.replace(" ", ""))
     expected = re.search(r"expected from [0-9]+ runs of the race .*?; ([0-9 ]+) LP solves \(80 % of the runs between ([0-9.]+) M and ([0-9.]+) M", plan)
     proxy = re.search(r"its LP solves × [0-9]+ = ([0-9 ]+)", plan)
-    bound = re.search(r"racing \(keep [^)]*, at most\) +([0-9.]+) M", plan)
+    bound = re.search(r"racing \(at most\) +([0-9.]+) M", plan)
     return {"plan_command": f"momentlab search --m {m} --race-seed {s} --plan",
             "plan_lp_solves": num(expected.group(1)) if expected else None,
             "plan_range": [round(float(expected.group(k)) * 1e6) for k in (2, 3)] if expected else None,

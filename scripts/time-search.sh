@@ -16,8 +16,8 @@ if [ -e "results/search-m$m/complete.json" ]; then
 fi
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
-# "plan: * racing (keep 0.25, expected)   157.9 M   1.234   26 min 1 s"
-plan=$("$bin" search --m "$m" --plan | sed -n 's/^plan: \* racing (keep [^)]*) *[0-9.]* [kMG]* *[0-9.]* *//p')
+# "plan: * racing (expected)   157.9 M   1.234   26 min 1 s"
+plan=$("$bin" search --m "$m" --plan | sed -n 's/^plan: \* racing (expected) *[0-9.]* [kMG]* *[0-9.]* *//p')
 start=$(date +%s)
 { "$bin" search --m "$m" --no-report 2>&1; echo "$?" > "$log.rc"; } | tee "$log"
 end=$(date +%s)

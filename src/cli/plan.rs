@@ -58,10 +58,8 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
     );
     // The chosen row is starred: racing's expected cost when a proxy race ran.
     let expected = plan.proxy.as_ref().filter(|_| !opts.exhaustive);
-    let mut rows: Vec<(String, &[Schedule])> = vec![(
-        format!("racing (keep {}, at most)", opts.keep),
-        plan.racing.as_slice(),
-    )];
+    let mut rows: Vec<(String, &[Schedule])> =
+        vec![("racing (at most)".to_string(), plan.racing.as_slice())];
     rows.push(("exhaustive".to_string(), plan.exhaustive.as_slice()));
     // One shard's proxy race; the rows are totals over the shards, like the others.
     let expected_seconds = expected.map(|p| {
@@ -72,7 +70,7 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         let all = secs * shards as f64;
         println!(
             "plan: {:<28} {:>12} {:>11} {:>18}",
-            format!("* racing (keep {}, expected)", opts.keep),
+            "* racing (expected)",
             big(p.expected().0 * shards as u64),
             format!("{:.3}", all * threads as f64 / 3600.0),
             duration(setup + plan.references_seconds + all)

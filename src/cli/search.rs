@@ -1,6 +1,6 @@
 //! `momentlab search`: the candidate sweep (see `momentlab::search` and docs/search.md).
 
-use super::common::{fraction, resolution, stacks_or_default, usize_in, MAX_GRID};
+use super::common::{resolution, stacks_or_default, usize_in, MAX_GRID};
 use anyhow::{bail, Context, Result};
 use momentlab::artefact::OutDir;
 use momentlab::basis::candidates::MAX_M;
@@ -55,9 +55,10 @@ pub struct Opts {
     /// kept apart from the report (--out).
     #[arg(long)]
     pub results: Option<PathBuf>,
-    /// Candidates scored on every fragment at the end of racing (≥ 1).
-    #[arg(long, default_value_t = 50, value_parser = usize_in(1, u32::MAX as u64))]
-    pub top: usize,
+    /// LP solves after which the race starts no further look (0 = no budget). The budget never
+    /// eliminates a candidate: the race ends with its survivors reported as unresolved.
+    #[arg(long, default_value_t = 0)]
+    pub lp_budget: u64,
     /// Every selected candidate on every fragment, no racing.
     #[arg(long)]
     pub exhaustive: bool,
@@ -78,7 +79,8 @@ pub struct Opts {
     /// is accepted as fast.
     #[arg(long, default_value = "fast")]
     pub solver: String,
-    /// Fragments in racing stage 0 (each next stage: × growth; ≥ 1).
+    /// Fragments in racing stage 0, the common sample every candidate is scored on (Fig. 4;
+    /// each next stage: × growth; ≥ 1).
     #[arg(long, default_value_t = momentlab::search::config::DEFAULT_FIRST_SAMPLE, value_parser = usize_in(1, u32::MAX as u64))]
     pub first_sample: usize,
     /// Factor by which each racing stage's fragment block grows (2..=64).
@@ -89,11 +91,6 @@ pub struct Opts {
     /// (0 = never).
     #[arg(long, default_value_t = momentlab::search::config::DEFAULT_EARLY_LOOK)]
     pub early_look: usize,
-    /// Budget cap per stage: of the candidates not eliminated by confidence, at most
-    /// max(⌈keep·|C|⌉, top) stay, C the candidates at the stage's last look (by their mean over
-    /// every block seen); the others leave "by the cap" and are reported as such (1 = no cap).
-    #[arg(long, default_value_t = 0.25, value_parser = fraction, allow_negative_numbers = true)]
-    pub keep: f64,
     /// Confidence of the elimination tests, for all stages and candidates together
     /// (Bonferroni): a candidate leaves by confidence only when it is worse than the stage
     /// reference at this level (docs/search.md).
@@ -280,7 +277,7 @@ pub fn run(args: Args) -> Result<()> {
         max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
         seed: args.seed,
         dataset: String::new(),
-        top: args.top,
+        lp_budget: args.lp_budget,
         exhaustive: args.exhaustive,
         candidates: args.candidates.clone(),
         names: args.names.clone(),
@@ -288,7 +285,6 @@ pub fn run(args: Args) -> Result<()> {
         first_sample: args.first_sample,
         growth: args.growth,
         early_look: args.early_look,
-        keep: args.keep,
         confidence: args.confidence,
         bound: momentlab::search::race::Bound::parse(&args.bound).context("--bound")?,
         race_seed: args.race_seed,

@@ -125,8 +125,8 @@ pub struct Plan {
     pub stability_samples: usize,
     /// Candidate sweeps for these m.
     pub search_ms: Vec<usize>,
+    /// Fragments of racing stage 0, the common sample of every candidate.
     pub search_first_sample: usize,
-    pub search_top: usize,
     /// Candidates per m ≥ 3 sweep (a seeded random subset plus the paper's bases); None = all.
     pub search_subset: Option<usize>,
     /// Cap on the sweep's non-trivial fragments.
@@ -159,7 +159,6 @@ impl Plan {
                 stability_samples: 120,
                 search_ms: vec![2],
                 search_first_sample: 128,
-                search_top: 5,
                 search_subset: Some(20),
                 search_max_fragments: 4096,
                 pictures: 1,
@@ -179,8 +178,7 @@ impl Plan {
                 stability_samples: 5000,
                 search_ms: vec![2, 3, 4],
                 // The `momentlab search` defaults: the full sweeps measured in README.
-                search_first_sample: 1024,
-                search_top: 50,
+                search_first_sample: crate::search::config::DEFAULT_FIRST_SAMPLE,
                 search_subset: None,
                 search_max_fragments: 131_072,
                 pictures: 12,
@@ -200,7 +198,6 @@ impl Plan {
                 stability_samples: 1200,
                 search_ms: vec![2, 3, 4],
                 search_first_sample: 1024,
-                search_top: 20,
                 search_subset: Some(150),
                 search_max_fragments: 32_768,
                 pictures: 4,

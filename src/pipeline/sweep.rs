@@ -37,7 +37,6 @@ pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec
             m,
             max_fragments: (plan.search_max_fragments > 0).then_some(plan.search_max_fragments),
             dataset: format!("stacks:{}", dirs.stacks.display()),
-            top: plan.search_top,
             candidates,
             first_sample: plan.search_first_sample,
             ..SweepOptions::default()

@@ -13,7 +13,7 @@ use std::path::Path;
 pub const IMAGES: [(&str, &str); 9] = [
     ("img/speed_accuracy.svg", "default/speed_accuracy.svg"),
     ("img/fig3.svg", "search/fig3.svg"),
-    ("img/fig4_m4.svg", "search/fig4_m4.svg"),
+    ("img/fig4_m3.svg", "search/fig4_m3.svg"),
     ("img/fig5.svg", "theta/fig5.svg"),
     ("img/stability_u16.svg", "stability/heatmap_u16.svg"),
     (

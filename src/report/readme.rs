@@ -207,6 +207,21 @@ struct SweepSummary {
     tied: String,
     /// "- b_MSM (LP): …" lines, without the prefix.
     msm: Vec<String>,
+    /// Candidates the report's race left by a budget cap, without evidence (a report of the
+    /// earlier race; the race now eliminates only by evidence).
+    capped: Option<String>,
+}
+
+impl SweepSummary {
+    /// The note on a report of the earlier, capped race.
+    fn capped_note(&self, m: usize) -> Option<String> {
+        self.capped.as_ref().map(|n| {
+            format!(
+                "m = {m}: this report is of the earlier race with a budget cap ({n} candidates left \
+                 without evidence), not regenerated with the race that eliminates only by evidence"
+            )
+        })
+    }
 }
 
 /// reports/search/search_m<m>.md, None when absent.
@@ -256,6 +271,11 @@ fn sweep_summary(reports: &Path, m: usize) -> Result<Option<SweepSummary>> {
             .filter_map(|l| l.strip_prefix("- b_MSM (LP): "))
             .map(|x| x.trim_end_matches('.').to_string())
             .collect(),
+        capped: text.lines().find_map(|l| {
+            l.strip_prefix("- ")?
+                .split_once(" candidates were **eliminated by the cap**")
+                .map(|x| x.0.to_string())
+        }),
     }))
 }
 
@@ -266,6 +286,16 @@ fn sweep_wall(reports: &Path, m: usize) -> Result<Option<(Value, std::path::Path
         return Ok(None);
     }
     Ok(Some((read_json(&file)?, file)))
+}
+
+/// " (shared cores)" for a wall-time file measured while other jobs shared the cores
+/// (`"shared": true`), else "".
+fn shared(v: &Value) -> &'static str {
+    if v.get("shared").and_then(Value::as_bool) == Some(true) {
+        " (shared cores)"
+    } else {
+        ""
+    }
 }
 
 /// The host line of the wall-time files: threads and CPU model.
@@ -285,6 +315,7 @@ fn sweeps(reports: &Path) -> Result<String> {
     );
     let mut hosts = None;
     let mut notes = Vec::new();
+    let mut capped = Vec::new();
     for m in 2..=4 {
         let Some(x) = sweep_summary(reports, m)? else {
             continue;
@@ -292,7 +323,7 @@ fn sweeps(reports: &Path) -> Result<String> {
         let wall = match sweep_wall(reports, m)? {
             Some((v, file)) => {
                 hosts = Some(host(&v));
-                minutes(f(&v, "seconds", &file)?)
+                minutes(f(&v, "seconds", &file)?) + shared(&v)
             }
             None => "–".to_string(),
         };
@@ -302,11 +333,13 @@ fn sweeps(reports: &Path) -> Result<String> {
             x.candidates, x.sampled, x.tied, x.functions, x.error, x.se
         );
         notes.extend(x.msm.iter().map(|l| format!("m = {m}: b_MSM (LP) {l}")));
+        capped.extend(x.capped_note(m));
     }
     if let Some((threads, cpu)) = hosts {
         let _ = writeln!(
             s,
-            "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`)."
+            "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`).{}",
+            capped.iter().map(|c| format!(" {c}.")).collect::<String>()
         );
     }
     for n in notes {
@@ -318,6 +351,7 @@ fn sweeps(reports: &Path) -> Result<String> {
 /// docs/search.md's table of the committed races' cost: LP solves, the sweep's and the whole
 /// command's wall time (wall_m<M>.json), winner and tie set (search_m<M>.md).
 fn race_times(reports: &Path) -> Result<String> {
+    let mut notes = Vec::new();
     let mut s = String::from(
         "| race | LP solves | sweep | whole command | `--plan` (vs the command) | winner | error | tied |\n| --- | ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
     );
@@ -328,6 +362,7 @@ fn race_times(reports: &Path) -> Result<String> {
             continue;
         };
         hosts = Some(host(&v));
+        notes.extend(x.capped_note(m));
         let solves = f(&v, "lp_solves", &file)?;
         let secs = f(&v, "seconds", &file)?;
         let plan = v.get("plan").and_then(Value::as_str);
@@ -340,7 +375,7 @@ fn race_times(reports: &Path) -> Result<String> {
             "| m = {m} | {:.1} M | {} | {} | {plan} | ({}) | {} % | {} |",
             solves / 1e6,
             minutes(f(&v, "sweep_seconds", &file)?),
-            minutes(secs),
+            minutes(secs) + shared(&v),
             x.functions,
             x.error,
             x.tied
@@ -351,6 +386,9 @@ fn race_times(reports: &Path) -> Result<String> {
             s,
             "\n{threads} threads ({cpu}); reports/search/wall_m<M>.json, written by `scripts/time-search.sh M`."
         );
+    }
+    for n in notes {
+        let _ = writeln!(s, "\n{n}.");
     }
     Ok(s)
 }

@@ -1,10 +1,10 @@
 //! The Markdown report of a sweep and the files it links (`search_m<m>.md`, `fig4_m<m>.svg`,
-//! `distributions.svg`, `fig3.svg`, `cap_eliminated_m<m>.csv`): what the race resolved, the
-//! winner against the paper's bases and the closed forms, the ranking, the tied set and the top
-//! 20. The numbers come from `crate::search::reference`; every file goes through
+//! `distributions.svg`, `fig3.svg`, `eliminated_m<m>.csv`): what the race resolved, every
+//! elimination's evidence, the winner against the paper's bases and the closed forms, the
+//! ranking, the tied set and the top 20. The numbers come from `crate::search::reference`; every file goes through
 //! `artefact::OutDir`.
 
-use super::sweep_charts::{plot_fig3, plot_fig4, plot_side_by_side};
+use super::sweep_charts::{fig4_data, plot_fig3, plot_fig4, plot_side_by_side};
 use crate::artefact::OutDir;
 use crate::search::race::normal_quantile;
 use crate::search::reference::{
@@ -35,8 +35,6 @@ pub struct ReportOptions {
     pub race: Option<RaceSummary>,
     /// Confidence of the race (intervals in the text are stated at this level).
     pub confidence: f64,
-    /// The cap of the race (kept fraction per stage).
-    pub keep: f64,
     /// What a partial merge lacks (`partial.json`): the report says "partial" and names it.
     pub partial: Option<crate::search::merge::Partial>,
 }
@@ -51,15 +49,14 @@ impl Default for ReportOptions {
             results_label: String::new(),
             race: None,
             confidence: 0.99,
-            keep: 0.25,
             partial: None,
         }
     }
 }
 
 impl ReportOptions {
-    /// The options of the report of sweep `opts` whose rows are in `results`: its solver, chunk,
-    /// confidence and cap, and the race's own account (`complete.json` of an unsharded racing
+    /// The options of the report of sweep `opts` whose rows are in `results`: its solver, chunk
+    /// and confidence, and the race's own account (`complete.json` of an unsharded racing
     /// run); no comparison sweeps, Fig. 3 at 96 depths.
     pub fn of(opts: &SweepOptions, results: &Path) -> ReportOptions {
         ReportOptions {
@@ -70,7 +67,6 @@ impl ReportOptions {
                 .ok()
                 .and_then(|s| s.race),
             confidence: opts.confidence,
-            keep: opts.keep,
             partial: read_json(&results.join(PARTIAL_FILE)).ok(),
             ..ReportOptions::default()
         }
@@ -83,7 +79,7 @@ pub fn files(m: usize) -> [String; 5] {
     [
         format!("search_m{m}.md"),
         format!("fig4_m{m}.svg"),
-        format!("cap_eliminated_m{m}.csv"),
+        format!("eliminated_m{m}.csv"),
         "distributions.svg".into(),
         "fig3.svg".into(),
     ]
@@ -91,7 +87,8 @@ pub fn files(m: usize) -> [String; 5] {
 
 /// Write the report of a sweep into `out`: `fig4_m<m>.svg` (histogram with `refs` marked),
 /// `distributions.svg` (this sweep and `opts.compare` side by side), `fig3.svg`,
-/// `cap_eliminated_m<m>.csv` (racing runs) and `search_m<m>.md` (ranking text, top-20 table).
+/// `eliminated_m<m>.csv` (racing runs: every elimination with its evidence) and `search_m<m>.md`
+/// (ranking text, evidence, top-20 table).
 /// Returns the numbers the text states.
 pub fn write(
     out: &OutDir,
@@ -109,14 +106,10 @@ pub fn write(
     let ties = tie_set(rows);
     out.write_text(
         &format!("fig4_m{m}.svg"),
-        &plot_fig4(
-            &format!("Candidate errors, m = {m} ({} candidates)", errs.len()),
-            rows,
-            refs,
-        )?,
+        &plot_fig4(&format!("Candidate errors, m = {m}"), rows, refs)?,
     )?;
-    if let Some(csv) = cap_list(&ties) {
-        out.write_text(&format!("cap_eliminated_m{m}.csv"), &csv)?;
+    if let Some(csv) = eliminated_list(rows, &ties) {
+        out.write_text(&format!("eliminated_m{m}.csv"), &csv)?;
     }
     let mut sets = vec![(format!("m = {m}"), errs.clone())];
     for d in &opts.compare {
@@ -135,8 +128,8 @@ pub fn write(
     let mut md = format!(
         "# Candidate sweep, m = {m}\n\nWritten by {}.\n\nResults: `{}`. {} fragments, {} non-trivial; the sweep's dataset \
          holds {} of the non-trivial ones ({:.2} %, stratified by view and layer), trivial fragments \
-         (G = 0 for every candidate) are counted exactly.\n\n![Fig. 4 analogue](fig4_m{m}.svg)\n\n\
-         ## What the race resolved\n\n{}\n## The winner, the paper's bases and the closed forms\n\n{}\n\
+         (G = 0 for every candidate) are counted exactly.\n\n![Fig. 4 analogue](fig4_m{m}.svg)\n\n{}\n\
+         ## What the race resolved\n\n{}\n## Eliminations and their evidence\n\n{}\n## The winner, the paper's bases and the closed forms\n\n{}\n\
          ## Ranking\n\n{}\n## Tied for first\n\n{}\n## Top 20\n\nCandidates scored on every fragment of the sample are ranked first; below them, \
          unranked (–), the lowest estimates of candidates that left the race on fewer fragments.\n\n{}\n\
          ![error distributions](distributions.svg)\n\n![Fig. 3 analogue](fig3.svg)\n",
@@ -146,7 +139,9 @@ pub fn write(
         data.nontrivial_population(),
         data.fragments().len(),
         sampled * 100.0,
+        fig4_text(rows),
         resolution_text(&ties, &summary, opts),
+        evidence_text(rows, &ties, opts, 40),
         reference_table(&summary, rows, opts.confidence),
         ranking_text(rows, refs),
         tie_table(&ties, opts.confidence, 50),
@@ -346,8 +341,26 @@ pub fn tie_table(t: &TieSet, confidence: f64, limit: usize) -> String {
     s
 }
 
-/// What the race resolved, with its budget and whether the budget bound.
-pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> String {
+/// The sentence under Fig. 4: what it is drawn from.
+pub fn fig4_text(rows: &[Row]) -> String {
+    let d = fig4_data(rows);
+    let n: usize = d.classes.iter().map(Vec::len).sum();
+    format!(
+        "Fig. 4 is drawn from one common sample: each of the {n} candidates is scored on the same \
+         {} fragments (racing stage 0's block; in an exhaustive run, every fragment), with a \
+         median standard error of {:.4} percentage points per candidate (the differences between \
+         candidates, paired on the same fragments, are more precise). The black outline is the \
+         race's deeper estimate of the {} candidates scored on more fragments; red: tied for \
+         first; grey: unresolved; the lines mark the paper's bases (b_MSM, b_TMSM), VSM, ESM and \
+         the closed forms.\n",
+        d.fragments,
+        d.median_se * 100.0,
+        d.deeper.len()
+    )
+}
+
+/// What the race resolved, with its budget and whether it bound.
+pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> String {
     if !t.raced {
         return "Exhaustive run: every candidate on every fragment of the sample, no racing. \
                 Differences between candidates are exact on the sample; ± s.e. is the \
@@ -355,31 +368,40 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
             .into();
     }
     let c = opts.confidence * 100.0;
-    let m = summary.best.as_ref().map_or(0, |b| b.functions.len());
     let mut s = String::new();
     if let Some(r) = &opts.race {
         let _ = writeln!(
             s,
-            "Budget: the sweep's sample of {} non-trivial fragments (`--max-fragments`) and a cap of \
-             max(⌈{}·|C|⌉, top) candidates per stage (C: the candidates at the stage's last look). Tests: {} bound, {}, confidence {c:.0} % for all \
-             eliminations together (Bonferroni over the {} looks of the stages, the candidates of each stage and the shards; \
-             a stage block whose halves hold at least `--early-look` fragments is tested on its first half by confidence only, then on the whole block).\n",
+            "A candidate leaves the race only by evidence: when it is worse than the stage's \
+             reference with confidence; there is no cap. Budget: the sweep's sample of {} \
+             non-trivial fragments (`--max-fragments`){}. Tests: {} bound, {}, confidence {c:.0} % \
+             for all eliminations together (Bonferroni over the {} looks of the stages, the \
+             candidates of each stage and the shards). Stage 0's block is the common sample: one \
+             look, every candidate scored on all of it; a later block whose halves hold at least \
+             `--early-look` fragments is tested on its first half, then on the whole block.\n",
             r.fragment_budget,
-            opts.keep,
+            if r.lp_budget_bound {
+                " and an LP budget (`--lp-budget`), which ended the race"
+            } else {
+                ""
+            },
             r.bound.name(),
-            if r.paired { "paired differences to the stage reference" } else { "independent intervals" },
+            if r.paired {
+                "paired differences to the stage reference"
+            } else {
+                "independent intervals"
+            },
             r.looks
         );
-        s.push_str("| stage | candidates | fragments | reference | z | cap | eliminated by confidence | by the cap |\n|---:|---:|---:|---:|---:|---:|---:|---:|\n");
+        s.push_str("| stage | candidates | fragments | reference | z | eliminated by evidence |\n|---:|---:|---:|---:|---:|---:|\n");
         for (k, st) in r.stages.iter().enumerate() {
             let _ = writeln!(
                 s,
-                "| {k} | {} | {} | {} | {:.2} | {} | {} | {} |",
+                "| {k} | {} | {} | {} | {:.2} | {} |",
                 st.candidates,
                 st.fragments,
                 st.reference,
                 st.z,
-                st.cap,
                 if st.early_eliminated > 0 {
                     format!(
                         "{} ({} at the early look)",
@@ -387,25 +409,36 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
                     )
                 } else {
                     st.confidence_eliminated.to_string()
-                },
-                st.cap_eliminated
+                }
             );
         }
+        let end = if r.lp_budget_bound {
+            format!(
+                "**Unresolved**: the LP budget ended the race with {} candidates left; none of them \
+                 was eliminated or completed, and the best candidate is among them at {c:.0} %.",
+                r.unresolved
+            )
+        } else if r.resolved {
+            "**Resolved**: one candidate was left before the fragment budget was reached (the \
+             budget did not bind)."
+                .to_string()
+        } else {
+            format!(
+                "**The fragment budget bound**: {} candidates are still statistically tied for \
+                 first; the {} fragments of the sample do not separate them at {c:.0} %.",
+                r.tied, r.fragment_budget
+            )
+        };
         let _ = writeln!(
             s,
-            "\nThe race used {} of the {} fragments (pilot block {}), then completed the survivors on \
-             the fragments they had not seen. {}\n",
+            "\nThe race used {} of the {} fragments (pilot block {}){}. {end}\n",
             r.fragments_used,
             r.fragment_budget,
             r.pilot_fragments,
-            if r.resolved {
-                "**Resolved**: one candidate was left before the fragment budget was reached (the budget did not bind).".to_string()
+            if r.lp_budget_bound {
+                ""
             } else {
-                format!(
-                    "**The fragment budget bound**: {} candidates are still statistically tied for first; \
-                     the {} fragments of the sample do not separate them at {c:.0} %.",
-                    r.tied, r.fragment_budget
-                )
+                ", then completed the survivors on the fragments they had not seen"
             }
         );
     } else {
@@ -417,70 +450,131 @@ pub fn resolution_text(t: &TieSet, summary: &Summary, opts: &ReportOptions) -> S
     }
     let _ = writeln!(
         s,
-        "- {} candidates were **eliminated by confidence**: each is worse than its stage reference; \
+        "- {} candidates were **eliminated by evidence**: each is worse than its stage reference; \
          all these statements hold together with probability ≥ {c:.0} % (normal approximation of \
-         block means).",
+         block means). No candidate left without evidence.",
         t.confidence
     );
-    if t.cap.is_empty() {
-        let _ = writeln!(
-            s,
-            "- The cap never bound: no candidate left without evidence."
-        );
+    let (n, what) = if t.unresolved.is_empty() {
+        (t.tied.len(), "tied for first")
     } else {
-        let b = &t.cap[0];
-        let _ = writeln!(
-            s,
-            "- {} candidates were **eliminated by the cap**, without evidence against them (all listed \
-             in `cap_eliminated_m{m}.csv`); the best of them by its sampled estimate is {} ({}) with \
-             {:.4} % ± {:.4} % on {} fragments.",
-            t.cap.len(),
-            b.index,
-            b.functions.join(", "),
-            b.error.unwrap_or(f64::NAN) * 100.0,
-            b.stderr.unwrap_or(0.0) * 100.0,
-            b.fragments
-        );
-    }
+        (t.unresolved.len(), "left unresolved by the LP budget")
+    };
     let _ = writeln!(
         s,
-        "- **Resolved**: with probability ≥ {c:.0} %, the best candidate (smallest mean error over the \
-         sample's fragments) is one of the {} candidates tied for first{}.\n\
-         - **Not resolved**: the order within the tied set{}; the absolute errors against the full \
-         stacks carry the ± s.e. of the sample (the same for every candidate, since all see the same \
-         fragments).",
-        t.tied.len(),
-        if t.cap.is_empty() {
-            String::new()
-        } else {
-            format!(" or the {} eliminated by the cap", t.cap.len())
-        },
-        if t.cap.is_empty() { "" } else { "; whether a cap-eliminated candidate would have been tied" }
+        "- **Certified**: with probability ≥ {c:.0} %, the best candidate (smallest mean error over \
+         the sample's fragments) is one of the {n} candidates {what}.\n\
+         - **Not resolved**: the order within that set; the absolute errors against the full \
+         stacks carry the ± s.e. of the sample (the same for every candidate, since all see the \
+         same fragments)."
     );
     s
 }
 
-/// Every candidate eliminated by the cap (CSV: index, functions, error, stderr, fragments,
-/// stage, versus, diff, diff_se); None for a run without racing.
-fn cap_list(t: &TieSet) -> Option<String> {
+/// Every elimination's evidence: per stage and look, how many left and the smallest lower
+/// bound; then the `limit` eliminated candidates with the lowest estimates, each with its
+/// look, reference, paired difference and the one-sided interval that removed it.
+pub fn evidence_text(rows: &[Row], t: &TieSet, opts: &ReportOptions, limit: usize) -> String {
+    if !t.raced {
+        return "Exhaustive run: no eliminations.\n".into();
+    }
+    let m = t.winner.as_ref().map_or(0, |w| w.functions.len());
+    let mut el: Vec<&Row> = rows.iter().filter(|r| r.eliminated.is_some()).collect();
+    if el.is_empty() {
+        return "No candidate was eliminated.\n".into();
+    }
+    let c = opts.confidence * 100.0;
+    let mut s = format!(
+        "Each eliminated candidate carries the stage and look that removed it, its stage \
+         reference, the paired difference Δ = error − error(reference) on the fragments of that \
+         stage's looks so far with its standard error, and the one-sided interval [lower, ∞) of \
+         Δ at the stage's per-test level (the Bonferroni share of {c:.0} %) whose lower end was \
+         above 0. All {} are listed in `eliminated_m{m}.csv` (and in the results' rows: `stage`, \
+         `look`, `versus`, `diff`, `diff_se`, `diff_lower`).\n\n\
+         | stage | look | eliminated | smallest lower bound (pp) | median lower bound (pp) |\n|---:|---:|---:|---:|---:|\n",
+        el.len()
+    );
+    let mut groups: std::collections::BTreeMap<(usize, usize), Vec<f64>> = Default::default();
+    for r in &el {
+        groups
+            .entry((r.stage, r.look.unwrap_or(0)))
+            .or_default()
+            .push(r.diff_lower.unwrap_or(f64::NAN));
+    }
+    for ((k, j), mut v) in groups {
+        v.sort_by(f64::total_cmp);
+        let _ = writeln!(
+            s,
+            "| {k} | {} | {} | {:+.4} | {:+.4} |",
+            j + 1,
+            v.len(),
+            v[0] * 100.0,
+            v[v.len() / 2] * 100.0
+        );
+    }
+    el.sort_by(|a, b| {
+        a.error
+            .unwrap_or(f64::INFINITY)
+            .total_cmp(&b.error.unwrap_or(f64::INFINITY))
+            .then(a.index.cmp(&b.index))
+    });
+    let _ = writeln!(
+        s,
+        "\nThe {} eliminated candidates with the lowest estimates:\n\n\
+         | index | functions | error (%) ± s.e. | fragments | stage | look | reference | Δ (pp) ± s.e. | interval of Δ (pp) |\n\
+         |---:|---|---:|---:|---:|---:|---:|---:|---|",
+        limit.min(el.len())
+    );
+    for r in el.iter().take(limit) {
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.4} ± {:.4} | {} | {} | {} | {} | {:+.4} ± {:.4} | [{:+.4}, ∞) |",
+            r.index,
+            r.functions.join(", "),
+            r.error.unwrap_or(f64::NAN) * 100.0,
+            r.stderr.unwrap_or(0.0) * 100.0,
+            r.fragments,
+            r.stage,
+            r.look.unwrap_or(0) + 1,
+            r.versus.map_or("–".into(), |v| v.to_string()),
+            r.diff.unwrap_or(f64::NAN) * 100.0,
+            r.diff_se.unwrap_or(f64::NAN) * 100.0,
+            r.diff_lower.unwrap_or(f64::NAN) * 100.0
+        );
+    }
+    s
+}
+
+/// Every candidate eliminated by evidence (CSV: index, functions, error, stderr, fragments,
+/// stage, look, versus, diff, diff_se, diff_lower, common_error, common_stderr), by index;
+/// None for a run without racing.
+fn eliminated_list(rows: &[Row], t: &TieSet) -> Option<String> {
     if !t.raced {
         return None;
     }
-    let mut s = String::from("index,functions,error,stderr,fragments,stage,versus,diff,diff_se\n");
-    for r in &t.cap {
+    let mut s = String::from(
+        "index,functions,error,stderr,fragments,stage,look,versus,diff,diff_se,diff_lower,common_error,common_stderr\n",
+    );
+    let mut el: Vec<&Row> = rows.iter().filter(|r| r.eliminated.is_some()).collect();
+    el.sort_by_key(|r| r.index);
+    for r in el {
         let o = |x: Option<f64>| x.map_or(String::new(), |v| format!("{v:.8}"));
         let _ = writeln!(
             s,
-            "{},\"{}\",{},{},{},{},{},{},{}",
+            "{},\"{}\",{},{},{},{},{},{},{},{},{},{},{}",
             r.index,
             r.functions.join(", "),
             o(r.error),
             o(r.stderr),
             r.fragments,
             r.stage,
+            r.look.unwrap_or(0) + 1,
             r.versus.map_or(String::new(), |v| v.to_string()),
             o(r.diff),
-            o(r.diff_se)
+            o(r.diff_se),
+            o(r.diff_lower),
+            o(r.common_error),
+            o(r.common_stderr)
         );
     }
     Some(s)

@@ -1,13 +1,13 @@
 //! The SVG charts of a sweep report (plotters, drawn in memory and written by the caller through
-//! `artefact::OutDir`): the Fig. 4 analogue (histogram of candidate errors, the set tied for
-//! first and the cap-eliminated candidates marked, reference values as lines), error
+//! `artefact::OutDir`): the Fig. 4 analogue (histogram of every candidate's error on the common
+//! sample, the set tied for first marked, the race's deeper estimates as an outline, reference
+//! values as lines), error
 //! distributions of several m side by side, and the Fig. 3 analogue (F_Z and the sharp lower
 //! bounds of Algorithm 1).
 
 use super::chart::svg_string;
-use crate::search::race::Elimination;
 use crate::search::reference::{Fig3Panel, Reference};
-use crate::search::results::{ranking, Row};
+use crate::search::results::Row;
 use anyhow::Result;
 use plotters::prelude::*;
 
@@ -116,44 +116,86 @@ where
     Ok(())
 }
 
-/// Classes of the Fig. 4 bars: tied for first, eliminated by the cap, the others.
-fn fig4_classes(rows: &[Row]) -> [Vec<f64>; 3] {
+/// What Fig. 4 draws: every candidate's error on the common sample (the same fragments for
+/// every candidate), split into tied for first, unresolved and the others; the race's deeper
+/// estimates (candidates scored on more fragments than the common sample); the common sample's
+/// size and the median standard error of a candidate's estimate on it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Fig4Data {
+    pub classes: [Vec<f64>; 3],
+    pub deeper: Vec<f64>,
+    pub fragments: u64,
+    pub median_se: f64,
+}
+
+/// The Fig. 4 values of `rows`: a candidate's `common_error` (racing: stage 0's block), or its
+/// error when it was scored on every fragment of an exhaustive run; duplicates count with
+/// their representative's values. Candidates without either are left out.
+pub fn fig4_data(rows: &[Row]) -> Fig4Data {
     let by_index: std::collections::HashMap<u64, &Row> =
         rows.iter().map(|r| (r.index, r)).collect();
-    let mut out: [Vec<f64>; 3] = Default::default();
-    for r in ranking(rows) {
+    let mut out = Fig4Data::default();
+    let mut ses = Vec::new();
+    for r in rows.iter().filter(|r| !r.degenerate) {
         let own = r
             .duplicate_of
             .and_then(|d| by_index.get(&d))
-            .map_or(&r, |x| *x);
+            .map_or(r, |x| *x);
+        let (value, se, n) = match (own.common_error, own.error) {
+            (Some(c), _) => (c, own.common_stderr.unwrap_or(0.0), own.common_fragments),
+            (None, Some(e)) if own.full && own.eliminated.is_none() && !own.tied => {
+                (e, own.stderr.unwrap_or(0.0), own.fragments)
+            }
+            _ => continue,
+        };
         let k = if own.tied {
             0
-        } else if own.eliminated == Some(Elimination::Cap) {
+        } else if own.unresolved {
             1
         } else {
             2
         };
-        out[k].push(r.error.unwrap());
+        out.classes[k].push(value);
+        ses.push(se);
+        out.fragments = out.fragments.max(n);
+        if own.common_error.is_some() && own.fragments > own.common_fragments {
+            if let Some(e) = own.error {
+                out.deeper.push(e);
+            }
+        }
     }
+    ses.sort_by(f64::total_cmp);
+    out.median_se = ses.get(ses.len() / 2).copied().unwrap_or(0.0);
     out
 }
 
-/// Fig. 4 analogue: the histogram of candidate errors with the set tied for first (red) and
-/// the cap-eliminated candidates (grey) marked, the references as lines; below, the same
-/// zoomed on the top of the ranking.
+/// Fig. 4 analogue: the histogram of every candidate's error on the common sample, with the
+/// set tied for first (red) and unresolved candidates (grey) stacked apart from the rest, the
+/// race's deeper estimates as a black outline, the references (the paper's bases, the closed
+/// forms) as lines; below, the same zoomed on the top of the ranking.
 pub fn plot_fig4(title: &str, rows: &[Row], refs: &[Reference]) -> Result<String> {
+    let data = fig4_data(rows);
     svg_string((900, 900), |root| {
         let (top, bottom) = root.split_vertically(500);
-        let classes = fig4_classes(rows);
+        let classes = &data.classes;
         let all: Vec<f64> = classes.iter().flatten().copied().collect();
         let (lo, hi) = range_of(&all, refs);
-        draw_stacked(&top, title, &classes, refs, lo, hi, 60)?;
-        let best = all.iter().copied().fold(f64::INFINITY, f64::min);
+        let head = format!(
+            "{title}: {} candidates on a common sample of {} fragments (median s.e. {:.3} pp)",
+            all.len(),
+            data.fragments,
+            data.median_se * 100.0
+        );
+        draw_stacked(&top, &head, classes, &data.deeper, refs, lo, hi, 60)?;
+        let best = all
+            .iter()
+            .chain(&data.deeper)
+            .copied()
+            .fold(f64::INFINITY, f64::min);
         let worst_tied = classes[0].iter().copied().fold(best, f64::max);
-        let zhi = best + (2.0 * (worst_tied - best)).max(0.002);
-        let zoom: [Vec<f64>; 3] = classes
-            .clone()
-            .map(|v| v.into_iter().filter(|&e| e <= zhi).collect());
+        let zhi = best + (2.0 * (worst_tied - best)).max(0.004);
+        let cut = |v: &Vec<f64>| -> Vec<f64> { v.iter().copied().filter(|&e| e <= zhi).collect() };
+        let zoom: [Vec<f64>; 3] = [cut(&classes[0]), cut(&classes[1]), cut(&classes[2])];
         let zrefs: Vec<Reference> = refs
             .iter()
             .filter(|r| r.error <= zhi && r.error >= best - 1e-3)
@@ -166,6 +208,7 @@ pub fn plot_fig4(title: &str, rows: &[Row], refs: &[Reference]) -> Result<String
                 (zhi - best) * 100.0
             ),
             &zoom,
+            &cut(&data.deeper),
             &zrefs,
             (best - 0.02 * (zhi - best)).max(0.0),
             zhi,
@@ -180,6 +223,7 @@ fn draw_stacked<DB: DrawingBackend>(
     area: &DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     classes: &[Vec<f64>; 3],
+    deeper: &[f64],
     refs: &[Reference],
     lo: f64,
     hi: f64,
@@ -195,9 +239,10 @@ where
         .map(|v| histogram_bins(v, lo, hi, bins))
         .collect();
     let tot: Vec<u32> = (0..bins).map(|k| h.iter().map(|c| c[k]).sum()).collect();
-    let ymax = tot.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.15;
+    let hd = histogram_bins(deeper, lo, hi, bins);
+    let ymax = tot.iter().chain(&hd).copied().max().unwrap_or(1).max(1) as f64 * 1.15;
     let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 18))
+        .caption(title, ("sans-serif", 15))
         .margin(10)
         .x_label_area_size(40)
         .y_label_area_size(55)
@@ -217,14 +262,14 @@ where
         ),
         (
             RGBColor(150, 150, 150).mix(0.7),
-            format!("eliminated by the cap ({})", classes[1].len()),
+            format!("unresolved, LP budget ({})", classes[1].len()),
         ),
         (
             BLUE.mix(0.5),
-            format!("worse with confidence / others ({})", classes[2].len()),
+            format!("eliminated by evidence ({})", classes[2].len()),
         ),
     ];
-    // Stack: tied at the bottom, then cap, then the rest.
+    // Stack: tied at the bottom, then unresolved, then the eliminated.
     for (c, (color, label)) in styles.iter().enumerate() {
         let color = *color;
         chart
@@ -240,8 +285,22 @@ where
             .label(label.clone())
             .legend(move |(a, b)| Rectangle::new([(a, b - 5), (a + 12, b + 5)], color.filled()));
     }
+    if !deeper.is_empty() {
+        // The race's deeper estimates (more fragments than the common sample) as an outline.
+        let mut pts = Vec::with_capacity(2 * bins + 2);
+        for (k, &c) in hd.iter().enumerate() {
+            let x0 = lo * 100.0 + k as f64 * w;
+            pts.push((x0, c as f64));
+            pts.push((x0 + w, c as f64));
+        }
+        chart
+            .draw_series(LineSeries::new(pts, BLACK.stroke_width(1)))
+            .map_err(err)?
+            .label(format!("deeper estimate of the race ({})", deeper.len()))
+            .legend(|(a, b)| PathElement::new(vec![(a, b), (a + 15, b)], BLACK.stroke_width(1)));
+    }
     let colors = [
-        BLACK,
+        full_palette::PINK,
         GREEN,
         MAGENTA,
         CYAN,

@@ -7,9 +7,10 @@ use super::Scorer;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
-/// Fragments in racing stage 0 by default (then ×`growth` per stage: 512, 2048, 8192, 32768, the
-/// rest of the 131 072-fragment sample): the budget of docs/search.md, "Budget".
-pub const DEFAULT_FIRST_SAMPLE: usize = 512;
+/// Fragments in racing stage 0 by default, the *common sample* every candidate is scored on
+/// (Fig. 4); then ×`growth` per stage: 4096, 16384, 65536, the rest of the 131 072-fragment
+/// sample.
+pub const DEFAULT_FIRST_SAMPLE: usize = 4096;
 
 /// Early look by default: blocks of at least 2 × 1024 fragments are tested on their first half
 /// too (the normal approximation is used on blocks of ≥ 1024 fragments only).
@@ -31,8 +32,10 @@ pub struct SweepConfig {
     /// Fingerprint of the dataset's fragments.
     pub dataset_fingerprint: String,
     pub seed: u64,
-    /// Candidates scored on every fragment at the end of racing.
-    pub top: usize,
+    /// LP solves after which no further look starts (0: none). It never eliminates anyone:
+    /// the race ends with its survivors *unresolved*.
+    #[serde(default)]
+    pub lp_budget: u64,
     /// Every candidate on every fragment, no racing.
     pub exhaustive: bool,
     /// Restrict to these candidate indices (None: all C(N, m)).
@@ -49,9 +52,6 @@ pub struct SweepConfig {
     /// on its first half, by confidence only (0: never; [`super::race::looks`]).
     #[serde(default)]
     pub early_look: usize,
-    /// Budget cap: at most max(⌈keep·|C|⌉, top) candidates stay per stage, C the candidates at
-    /// the stage's last look.
-    pub keep: f64,
     /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
     pub confidence: f64,
     /// One-sided bound of the tests (normal approximation or empirical Bernstein).
@@ -75,14 +75,12 @@ pub struct Parameters {
     pub first_sample: usize,
     pub growth: usize,
     pub batch: usize,
-    pub top: usize,
-    pub keep: f64,
     pub confidence: f64,
 }
 
 impl Parameters {
-    /// The one validation of a sweep's parameters: shard i/N with i < N, positive sizes, the
-    /// cap's `keep` in (0, 1], `confidence` in (0, 1). [`super::run_sweep`] calls it, and
+    /// The one validation of a sweep's parameters: shard i/N with i < N, positive sizes,
+    /// `confidence` in (0, 1). [`super::run_sweep`] calls it, and
     /// `momentlab search` before any work.
     pub fn check(&self) -> Result<()> {
         let [i, n] = self.shard;
@@ -93,17 +91,10 @@ impl Parameters {
             ("first-sample", self.first_sample),
             ("growth", self.growth),
             ("batch", self.batch),
-            ("top", self.top),
         ] {
             if v == 0 {
                 bail!("{name} 0: must be at least 1");
             }
-        }
-        if !(self.keep > 0.0 && self.keep <= 1.0) {
-            bail!(
-                "keep {}: the budget cap per stage must be in (0, 1]",
-                self.keep
-            );
         }
         if !(self.confidence > 0.0 && self.confidence < 1.0) {
             bail!(
@@ -123,8 +114,6 @@ impl SweepConfig {
             first_sample: self.first_sample,
             growth: self.growth,
             batch: self.batch,
-            top: self.top,
-            keep: self.keep,
             confidence: self.confidence,
         }
     }
@@ -139,7 +128,7 @@ impl SweepConfig {
             dataset: dataset.to_string(),
             dataset_fingerprint: format!("{:016x}", scorer.data().fingerprint()),
             seed: 1,
-            top: 50,
+            lp_budget: 0,
             exhaustive: false,
             candidates: None,
             shard: [0, 1],
@@ -147,7 +136,6 @@ impl SweepConfig {
             first_sample: DEFAULT_FIRST_SAMPLE,
             growth: 4,
             early_look: DEFAULT_EARLY_LOOK,
-            keep: 0.25,
             confidence: 0.99,
             bound: Bound::Normal,
             paired: true,

@@ -3,14 +3,13 @@
 //!
 //! The proxy race decides on 1/s of every block, so its block means are √s times noisier than
 //! the run's. Where many candidates lie a little below the run's threshold (m = 4) it eliminates
-//! them by noise, and its cap, ranking by noisier means, keeps a worse set; its own LP solves
-//! then fall short of the run's. Its statistics are used instead as estimates
+//! them by noise; its own LP solves then fall short of the run's. Its statistics are used instead as estimates
 //! ([`estimates`]): each candidate's mean error gap g_c to the proxy's winner, paired over the
 //! looks both saw, and the per-fragment spread σ_c of its paired differences to a reference.
 //!
 //! [`simulate`] then runs the run's own race on them: the run's blocks and looks
 //! ([`race::blocks`], [`race::looks`]), δ ([`race::stage_delta`]) and decisions
-//! ([`race::decide`]: confidence, cap, `top`). On a look of n fragments each candidate's mean
+//! ([`race::decide`]: evidence only) and LP budget. On a look of n fragments each candidate's mean
 //! error is g_c + ι_c with independent ι_c ~ N(0, σ_c²/(2n)), so a paired difference to the
 //! reference R has variance (σ_c² + σ_R²)/(2n) ≈ σ_c²/n, half of it R's own noise, shared by
 //! every candidate of the look (as for exchangeable candidates). The mean LP solves over the
@@ -100,8 +99,8 @@ pub struct Shape {
     pub growth: usize,
     pub early_look: usize,
     pub pilot: usize,
-    pub keep: f64,
-    pub top: usize,
+    /// LP solves after which no look starts (0: none; [`SweepConfig::lp_budget`]).
+    pub lp_budget: u64,
     pub confidence: f64,
     pub bound: Bound,
     pub paired: bool,
@@ -117,8 +116,7 @@ impl Shape {
             growth: cfg.growth,
             early_look: cfg.early_look,
             pilot: cfg.pilot,
-            keep: cfg.keep,
-            top: cfg.top,
+            lp_budget: cfg.lp_budget,
             confidence: cfg.confidence,
             bound: cfg.bound,
             paired: cfg.paired,
@@ -211,6 +209,7 @@ fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
             per_candidate: vec![0; est.len()],
             stages: Vec::new(),
         },
+        stopped: false,
     };
     if est.is_empty() || shape.fragments == 0 {
         return sim.run;
@@ -218,20 +217,32 @@ fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
     let (pilot, plan) = race::blocks(shape.fragments, shape.first_sample, shape.growth);
     let planned_looks: usize = plan
         .iter()
-        .map(|r| race::looks(r.len(), shape.early_look).len())
+        .enumerate()
+        .map(|(k, r)| race::looks(k, r.len(), shape.early_look).len())
         .sum();
     let mut cur: Vec<usize> = (0..est.len()).collect();
-    let mut reference = sim.pilot(pilot.len());
+    let mut reference = None;
     let mut stages_run = 0;
-    for block in &plan {
-        if cur.len() <= 1 {
+    for (k, block) in plan.iter().enumerate() {
+        if cur.len() <= 1 || sim.stopped {
             break;
         }
-        cur = sim.stage(&cur, reference, block.len(), planned_looks);
-        stages_run += 1;
-        if let Some(best) = sim.leader(&cur) {
-            reference = best;
+        let first = race::looks(k, block.len(), shape.early_look)[0].len();
+        if sim.over_budget(cur.len(), first) {
+            sim.stopped = true;
+            break;
         }
+        let r = match reference {
+            Some(r) => r,
+            None => sim.pilot(pilot.len()),
+        };
+        cur = sim.stage(&cur, r, k, block.len(), planned_looks);
+        stages_run += 1;
+        reference = sim.leader(&cur).or(Some(r));
+    }
+    if sim.stopped && cur.len() > 1 {
+        // The LP budget ended the race: the survivors stay unresolved, not completed.
+        return sim.run;
     }
     // The survivors on every fragment they have not seen (`racing::Race::complete`).
     let rest = if stages_run > 0 {
@@ -253,9 +264,18 @@ struct Sim<'a, 'r> {
     /// Each candidate's sums over every block it has seen.
     pooled: Vec<Sums>,
     run: Run,
+    /// The LP budget ended the race.
+    stopped: bool,
 }
 
 impl Sim<'_, '_> {
+    /// Whether a look of `alive` candidates and the reference on `len` fragments would exceed
+    /// the LP budget.
+    fn over_budget(&self, alive: usize, len: usize) -> bool {
+        let b = self.shape.lp_budget;
+        b > 0 && self.run.lp_solves + ((alive + 1) * len) as u64 > b
+    }
+
     /// Sum of candidate c's errors over m fragments: m·g_c + √(m/2)·σ_c · N(0, 1).
     fn draw(&mut self, c: usize, m: usize) -> f64 {
         let z: f64 = StandardNormal.sample(self.rng);
@@ -285,24 +305,33 @@ impl Sim<'_, '_> {
             .0
     }
 
-    /// One stage of `cur` against `reference` on a block of `len` fragments: its looks, each
-    /// decided by [`race::decide`] (the early look by confidence only); the survivors.
-    fn stage(&mut self, cur: &[usize], reference: usize, len: usize, planned: usize) -> Vec<usize> {
+    /// Stage k of `cur` against `reference` on a block of `len` fragments: its looks, each
+    /// decided by [`race::decide`]; the survivors.
+    fn stage(
+        &mut self,
+        cur: &[usize],
+        reference: usize,
+        k: usize,
+        len: usize,
+        planned: usize,
+    ) -> Vec<usize> {
         self.run.stages.push(cur.len() as u64);
         let shape = self.shape;
         let rule = Rule {
             delta: race::stage_delta(1.0 - shape.confidence, planned, cur.len(), shape.shards),
             bound: shape.bound,
             paired: shape.paired,
-            keep: shape.keep,
-            top: shape.top,
             width: 1.0,
         };
-        let looks = race::looks(len, shape.early_look);
+        let looks = race::looks(k, len, shape.early_look);
         let mut acc: HashMap<usize, Sums> = HashMap::with_capacity(cur.len() + 1);
         let mut alive = cur.to_vec();
         for (j, part) in looks.iter().enumerate() {
             let m = part.len();
+            if j > 0 && self.over_budget(alive.len(), m) {
+                self.stopped = true;
+                break;
+            }
             self.score(&alive, m);
             let mut scored = alive.clone();
             if !alive.contains(&reference) {
@@ -319,19 +348,7 @@ impl Sim<'_, '_> {
                 .iter()
                 .map(|&c| stage_stats(&self.est[c], acc[&c], r, c == reference))
                 .collect();
-            let rank: Vec<f64> = alive
-                .iter()
-                .map(|&c| {
-                    let (p, a) = (self.pooled[c], acc[&c]);
-                    (p.sum + a.sum) / (p.n + a.n) as f64
-                })
-                .collect();
-            let look_rule = if j + 1 == looks.len() {
-                rule
-            } else {
-                Rule { keep: 1.0, ..rule }
-            };
-            let decisions = race::decide(&stats, &rank, self.est[reference].index, &look_rule);
+            let decisions = race::decide(&stats, self.est[reference].index, &rule);
             alive = alive
                 .iter()
                 .zip(&decisions)
@@ -388,8 +405,7 @@ mod tests {
             growth: 4,
             early_look: 0,
             pilot: 4,
-            keep: 0.25,
-            top: 2,
+            lp_budget: 0,
             confidence: 0.99,
             bound: Bound::Normal,
             paired: true,
@@ -462,10 +478,11 @@ mod tests {
         assert_eq!(f.per_candidate[1], blocks as f64);
     }
 
-    /// Identical candidates never leave by confidence at δ ≈ 1e-4 (a few in a million looks),
-    /// so every stage is the cap's: the simulated runs are the fixed schedule.
+    /// Identical candidates never leave by confidence at δ ≈ 1e-4 (a few in a million looks):
+    /// every candidate runs every stage and is completed; an LP budget ends the race before
+    /// the look that would exceed it, without completing anyone.
     #[test]
-    fn ties_follow_the_cap() {
+    fn ties_run_every_stage_until_the_budget() {
         let est: Vec<Estimate> = (0..256u64)
             .map(|index| Estimate {
                 index,
@@ -475,10 +492,20 @@ mod tests {
             })
             .collect();
         let f = simulate(&est, &shape(8192), 16, 3);
-        // Blocks 64, 256, 1024, 4096, then 2688; the cap 256 → 64 → 16 → 4 → 2 (top).
-        assert_eq!(f.stages, [256.0, 64.0, 16.0, 4.0, 2.0]);
-        let lp = 4 * 64 + 257 * 64 + 65 * 256 + 17 * 1024 + 5 * 4096 + 3 * 2688 + 3 * 64;
+        // Pilot 64, blocks 64, 256, 1024, 4096, then 2688; all 256 in every stage, then the
+        // pilot block for all.
+        assert_eq!(f.stages, [256.0; 5]);
+        let lp = 4 * 64 + 257 * (64 + 256 + 1024 + 4096 + 2688) + 257 * 64;
         assert_eq!(f.lp_solves, lp as f64);
+        // A budget that admits stages 0 and 1 only.
+        let budget = (4 * 64 + 257 * (64 + 256) + 10) as u64;
+        let s = Shape {
+            lp_budget: budget,
+            ..shape(8192)
+        };
+        let f = simulate(&est, &s, 16, 3);
+        assert_eq!(f.stages, [256.0, 256.0]);
+        assert_eq!(f.lp_solves, (4 * 64 + 257 * (64 + 256)) as f64);
     }
 
     /// At stage 0 a candidate whose gap to the reference is exactly the run's threshold
@@ -490,8 +517,6 @@ mod tests {
     fn stage_zero_eliminations_match_the_normal_model() {
         let s = Shape {
             pilot: 1,
-            keep: 1.0,
-            top: 1000,
             ..shape(4 * 64)
         };
         let (pilot, blocks) = race::blocks(s.fragments, s.first_sample, s.growth);

@@ -6,11 +6,11 @@
 //!
 //! LP solves (as `SweepSummary::lp_solves`): the pilot block P picks the stage-0 reference
 //! (pilot·|P| solves); racing stage k with |C_k| candidates on a block of B_k fragments costs
-//! (|C_k| + 1)·B_k (the stage reference included); |C_{k+1}| ≤ min(max(⌈keep·|C_k|⌉, top), |C_k|)
-//! (the cap; eliminations by confidence only lower it, and racing stops early when one
-//! candidate is left); then the survivors on the fragments they have not seen, (|C| + 1)·|rest|.
-//! The racing schedule is therefore an upper bound, reached when no candidate is eliminated by
-//! confidence. Exhaustive: |C|·F, exact. How many leave by confidence, and when, depends on
+//! (|C_k| + 1)·B_k (the stage reference included); |C_{k+1}| ≤ |C_k| (eliminations by
+//! confidence lower it, and racing stops early when one candidate is left); then the survivors
+//! on the fragments they have not seen, (|C| + 1)·|rest|. The racing schedule is therefore an
+//! upper bound, reached when no candidate is eliminated; with an LP budget it stops before the
+//! look that would exceed it, as the run does, and completes no one. Exhaustive: |C|·F, exact. How many leave by confidence, and when, depends on
 //! the gaps between the leaders and the field, which only racing itself finds: the proxy race
 //! runs it on a stratified 1/s of the fragments and scales its LP solves by s.
 
@@ -38,10 +38,9 @@ pub struct Schedule {
 }
 
 /// The schedule of a run scoring `active` candidates on `fragments` kept non-trivial fragments
-/// (racing unless `cfg.exhaustive`), each stage promoting the fraction `keep`.
-pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64, keep: f64) -> Schedule {
-    let top = cfg.top as u64;
-    let (mut cur, mut lp, mut stages) = (active, 0u64, Vec::new());
+/// (racing unless `cfg.exhaustive`) when no candidate is eliminated: racing's upper bound.
+pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64) -> Schedule {
+    let (cur, mut lp, mut stages) = (active, 0u64, Vec::new());
     if cfg.exhaustive {
         return Schedule {
             stages,
@@ -50,18 +49,38 @@ pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64, keep: f64) -> Sc
         };
     }
     let (pilot, blocks) = super::race::blocks(fragments as usize, cfg.first_sample, cfg.growth);
+    let over =
+        |lp: u64, len: usize| cfg.lp_budget > 0 && lp + (cur + 1) * len as u64 > cfg.lp_budget;
     let mut run = 0;
-    for b in &blocks {
+    let mut stopped = false;
+    'stages: for (k, b) in blocks.iter().enumerate() {
         if cur <= 1 {
+            break;
+        }
+        let looks = super::race::looks(k, b.len(), cfg.early_look);
+        if over(lp, looks[0].len()) {
+            stopped = true;
             break;
         }
         if stages.is_empty() {
             lp += (cfg.pilot as u64).clamp(1, cur) * pilot.len() as u64;
         }
-        lp += (cur + 1) * b.len() as u64;
         stages.push((cur, b.len() as u64));
-        cur = super::race::cap(keep, cur, top).min(cur);
         run += 1;
+        for (j, part) in looks.iter().enumerate() {
+            if j > 0 && over(lp, part.len()) {
+                stopped = true;
+                break 'stages;
+            }
+            lp += (cur + 1) * part.len() as u64;
+        }
+    }
+    if stopped && cur > 1 {
+        return Schedule {
+            stages,
+            full: 0,
+            lp_solves: lp,
+        };
     }
     let rest: u64 = if run > 0 {
         pilot.len() as u64 + blocks[run..].iter().map(|b| b.len() as u64).sum::<u64>()
@@ -193,14 +212,14 @@ pub fn plan(
         }
     }
     let fragments = scorer.data().fragments().len() as u64;
-    let per = |keep: f64, exhaustive: bool| -> Vec<Schedule> {
+    let per = |exhaustive: bool| -> Vec<Schedule> {
         let c = SweepConfig {
             exhaustive,
             ..cfg.clone()
         };
         active_per_shard
             .iter()
-            .map(|&a| schedule(&c, a, fragments, keep))
+            .map(|&a| schedule(&c, a, fragments))
             .collect()
     };
     let order = scorer.data().stratified_order(cfg.seed);
@@ -209,8 +228,8 @@ pub fn plan(
         degenerate: flags.iter().filter(|f| f.0).count() as u64,
         duplicates: flags.iter().filter(|f| f.1.is_some()).count() as u64,
         fragments,
-        racing: per(cfg.keep, false),
-        exhaustive: per(cfg.keep, true),
+        racing: per(false),
+        exhaustive: per(true),
         calibration: calibrate(scorer, &active, &order, calibration)?,
         proxy: match proxy {
             Some((share, scratch)) if !cfg.exhaustive => {
@@ -288,7 +307,7 @@ pub const FORECAST_RUNS: usize = 64;
 /// large (first sample, early look) and every half-width × 1/√s, so that each test compares the
 /// block mean with the threshold the full block would have: a candidate whose gap to the
 /// reference exceeds the full-size half-width leaves in the proxy as in the run, in
-/// expectation. Eliminations, the cap and the stopping rule are the run's own code
+/// expectation. Eliminations and the stopping rule are the run's own code
 /// ([`super::run_sweep`], in the scratch folder `scratch`, which it removes). Racing's cost
 /// depends on when candidates leave by confidence, which the fixed schedule ([`schedule`])
 /// cannot know; the proxy's LP solves × s, per candidate family, estimate it (costed by

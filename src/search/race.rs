@@ -1,6 +1,6 @@
 //! Racing statistics (pure functions, no IO): when a candidate is worse than the stage reference
-//! with a stated confidence, how α is split over stages and candidates, the budget cap, the
-//! block plan, and paired differences pooled over blocks.
+//! with a stated confidence, how α is split over stages and candidates, the block plan, and
+//! paired differences pooled over blocks.
 //!
 //! **Test.** On stage k's block (fresh fragments, disjoint from the blocks that chose the
 //! reference R_k) candidate c is eliminated *by confidence* when the lower confidence bound of
@@ -11,14 +11,9 @@
 //! **Correction.** δ = α / (K · |C_k| · S) for K planned stages, |C_k| candidates of the stage and
 //! S shards (Bonferroni over stages, candidates and shards): with probability ≥ 1 − α no
 //! candidate anywhere is eliminated by confidence while it is at least as good as its stage
-//! reference, so the best candidate is among the survivors and the candidates removed by the
-//! cap (the *certified set*).
-//!
-//! **Cap.** Of the candidates not eliminated by confidence, at most max(⌈keep·|C′_k|⌉, top) stay,
-//! C′_k the candidates tested at the stage's last look (after an early look, its survivors),
-//! ordered by their mean over every block they have seen (the same blocks for every candidate of
-//! a stage: all survived the stages before); the others leave *by the cap*, without evidence
-//! against them.
+//! reference, so the best candidate is among the survivors (the *certified set*). No candidate
+//! leaves for any other reason: there is no cap. A budget (`lp_budget` of the sweep) can only
+//! end the race early, leaving its survivors *unresolved*.
 
 /// Count, Σx and Σx² of a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -175,14 +170,12 @@ pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) 
     alpha / (stages.max(1) * candidates.max(1) * shards.max(1)) as f64
 }
 
-/// Why a candidate left the race.
+/// Why a candidate left the race: the only reason is evidence.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Elimination {
     /// Worse than the stage reference with the stated confidence.
     Confidence,
-    /// Removed by the budget cap (the kept fraction), not by evidence.
-    Cap,
 }
 
 /// One candidate's statistics on a stage block.
@@ -204,18 +197,9 @@ pub struct Rule {
     /// Paired differences (true) or independent intervals: c is worse when its lower bound is
     /// above the reference's upper bound, each at δ/2 (for comparison only).
     pub paired: bool,
-    /// Cap: at most max(⌈keep·|C|⌉, top) of the |C| candidates tested stay.
-    pub keep: f64,
-    pub top: usize,
     /// Factor on every half-width: 1 in a run; 1/√s in the plan's proxy race, which decides on
     /// 1/s of each block with the threshold the full block would have ([`super::plan`]).
     pub width: f64,
-}
-
-/// The budget cap of a stage of `candidates`: at most max(⌈keep·candidates⌉, top) stay (the
-/// one formula of the race, its log and the plan).
-pub fn cap(keep: f64, candidates: u64, top: u64) -> u64 {
-    ((keep * candidates as f64).ceil() as u64).max(top)
 }
 
 /// Lower confidence bound of μ_c − μ_R (in per-fragment error units) under `rule`.
@@ -228,40 +212,25 @@ pub fn gap_lower_bound(c: &StageStats, r: &StageStats, rule: &Rule) -> f64 {
     }
 }
 
-/// Decisions for every candidate of a stage (None: stays), `reference` = index of R (it is
-/// never eliminated by confidence); the cap keeps the smallest `rank` (one per candidate: its
-/// mean error over every block seen). Panics if `reference` is not among `stats` or `rank`
-/// is shorter than `stats`.
-pub fn decide(
-    stats: &[StageStats],
-    rank: &[f64],
-    reference: u64,
-    rule: &Rule,
-) -> Vec<Option<Elimination>> {
+/// Decisions for every candidate of a stage: `Some(lower)` when c is eliminated by confidence,
+/// with `lower` the lower confidence bound of μ_c − μ_R (> 0, per-fragment error units) that
+/// removed it; None: it stays. `reference` = index of R, never eliminated. Panics if
+/// `reference` is not among `stats`.
+pub fn decide(stats: &[StageStats], reference: u64, rule: &Rule) -> Vec<Option<f64>> {
     let r = stats
         .iter()
         .find(|s| s.index == reference)
         .expect("the stage reference is scored in its stage");
-    let mut out: Vec<Option<Elimination>> = stats
+    stats
         .iter()
         .map(|c| {
-            (c.index != reference && gap_lower_bound(c, r, rule) > 0.0)
-                .then_some(Elimination::Confidence)
+            if c.index == reference {
+                return None;
+            }
+            let lower = gap_lower_bound(c, r, rule);
+            (lower > 0.0).then_some(lower)
         })
-        .collect();
-    let mut alive: Vec<usize> = (0..stats.len()).filter(|&i| out[i].is_none()).collect();
-    let cap = cap(rule.keep, stats.len() as u64, rule.top as u64) as usize;
-    if alive.len() > cap {
-        alive.sort_by(|&a, &b| {
-            rank[a]
-                .total_cmp(&rank[b])
-                .then(stats[a].index.cmp(&stats[b].index))
-        });
-        for &i in &alive[cap..] {
-            out[i] = Some(Elimination::Cap);
-        }
-    }
-    out
+        .collect()
 }
 
 /// The block plan over `total` fragments of the stratified order: a pilot block (picks the
@@ -284,12 +253,13 @@ pub fn blocks(
     (pilot, out)
 }
 
-/// The looks of a stage block of `len` fragments (ranges into the block): when each half holds
-/// at least `early_look` fragments (0: never), the candidates are first tested on the first
-/// half by confidence only, and the survivors then on the whole block (confidence and cap);
+/// The looks of stage `stage`'s block of `len` fragments (ranges into the block): stage 0 is
+/// one look at the whole block (the *common sample*: every candidate is scored on all of it);
+/// in a later stage, when each half holds at least `early_look` fragments (0: never), the
+/// candidates are first tested on the first half, and the survivors then on the whole block;
 /// otherwise one look at the whole block. Each look counts as a test in [`stage_delta`].
-pub fn looks(len: usize, early_look: usize) -> Vec<std::ops::Range<usize>> {
-    if early_look > 0 && len / 2 >= early_look {
+pub fn looks(stage: usize, len: usize, early_look: usize) -> Vec<std::ops::Range<usize>> {
+    if stage > 0 && early_look > 0 && len / 2 >= early_look {
         vec![0..len / 2, len / 2..len]
     } else {
         std::iter::once(0..len).collect()
@@ -342,8 +312,6 @@ mod tests {
                 delta: 1e-4,
                 bound: Bound::Normal,
                 paired: true,
-                keep: 1.0,
-                top: 1,
                 width: 1.0,
             };
             let full = gap_lower_bound(&stats(&full_d, &full_e), &reference, &rule);
@@ -437,8 +405,8 @@ mod tests {
     }
 
     /// A shared fragment effect dominates the errors: pairing sees a small constant gap that
-    /// independent intervals cannot; the cap removes the worst survivors by mean; the reference
-    /// itself is never eliminated by confidence.
+    /// independent intervals cannot; the reference itself is never eliminated; a candidate
+    /// that is not shown worse stays, however bad its mean looks.
     #[test]
     fn paired_test_sees_what_independent_intervals_miss() {
         let n = 400;
@@ -456,24 +424,24 @@ mod tests {
             .map(|(k, x)| x + 0.003 * ((k % 5) as f64 - 2.0))
             .collect();
         let s = vec![stats(0, &r, &r), stats(1, &worse, &r), stats(2, &tied, &r)];
-        let means: Vec<f64> = s.iter().map(|c| c.e.mean()).collect();
         let rule = Rule {
             delta: 1e-6,
             bound: Bound::Normal,
             paired: true,
-            keep: 1.0,
-            top: 1,
             width: 1.0,
         };
         assert_eq!(
-            decide(&s, &means, 0, &rule),
-            vec![None, Some(Elimination::Confidence), None]
+            decide(&s, 0, &rule)
+                .iter()
+                .map(Option::is_some)
+                .collect::<Vec<_>>(),
+            vec![false, true, false]
         );
         let indep = Rule {
             paired: false,
             ..rule
         };
-        assert_eq!(decide(&s, &means, 0, &indep), vec![None, None, None]);
+        assert_eq!(decide(&s, 0, &indep), vec![None, None, None]);
         // Bernstein is valid for any distribution, hence wider: at n = 400 its range term
         // 7·2·ln(2/δ)/(3·399) ≈ 0.17 is far above the gap 0.01, so nothing is eliminated.
         let eb = Rule {
@@ -483,35 +451,30 @@ mod tests {
         let h_eb = half_width(&s[1].d, 1e-6, Bound::Bernstein, 2.0);
         let h_n = half_width(&s[1].d, 1e-6, Bound::Normal, 2.0);
         assert!(h_eb > h_n);
-        assert_eq!(decide(&s, &means, 0, &eb)[1], None);
+        assert_eq!(decide(&s, 0, &eb)[1], None);
         let far: Vec<f64> = r.iter().map(|x| x + 0.3).collect();
         let s2 = vec![stats(0, &r, &r), stats(1, &far, &r)];
-        assert_eq!(
-            decide(&s2, &means, 0, &eb)[1],
-            Some(Elimination::Confidence)
-        );
-        // Cap: keep one of three, the smallest rank: the reference by the stage means; by
-        // earlier blocks' evidence (a rank that puts `tied` first), `tied`.
-        let cap = Rule { keep: 0.2, ..indep };
-        let d = decide(&s, &means, 0, &cap);
-        assert_eq!(
-            d,
-            vec![None, Some(Elimination::Cap), Some(Elimination::Cap)]
-        );
-        let d = decide(&s, &[0.52, 0.6, 0.5], 0, &cap);
-        assert_eq!(
-            d,
-            vec![Some(Elimination::Cap), Some(Elimination::Cap), None]
-        );
+        let lower = decide(&s2, 0, &eb)[1].expect("far is shown worse");
+        // The evidence returned is the lower bound that removed it: below the gap 0.3.
+        assert!(lower > 0.0 && lower < 0.3, "{lower}");
+        // The paired lower bound of `worse` is d̄ − z·s_d/√n, returned as its evidence.
+        let lower = decide(&s, 0, &rule)[1].unwrap();
+        let want = s[1].d.mean() - normal_quantile(1.0 - 1e-6) * s[1].d.se();
+        assert!((lower - want).abs() < 1e-15);
+        // A candidate far worse by its mean but with too few fragments for evidence stays.
+        let short = stats(3, &far[..1], &r[..1]);
+        assert_eq!(decide(&[s2[0], short], 0, &rule), vec![None, None]);
     }
 
     #[test]
     fn early_look_splits_large_blocks_in_halves() {
-        assert_eq!(looks(2048, 1024), vec![0..1024, 1024..2048]);
-        assert_eq!(looks(2047, 1024), vec![0..2047]);
-        assert_eq!(looks(87_040, 1024), vec![0..43_520, 43_520..87_040]);
-        assert_eq!(looks(4096, 0), vec![0..4096]);
-        assert_eq!(looks(1, 1), vec![0..1]);
+        assert_eq!(looks(1, 2048, 1024), vec![0..1024, 1024..2048]);
+        assert_eq!(looks(1, 2047, 1024), vec![0..2047]);
+        assert_eq!(looks(3, 87_040, 1024), vec![0..43_520, 43_520..87_040]);
+        assert_eq!(looks(1, 4096, 0), vec![0..4096]);
+        assert_eq!(looks(1, 1, 1), vec![0..1]);
+        // Stage 0 is the common sample: one look, whatever its size.
+        assert_eq!(looks(0, 8192, 1024), vec![0..8192]);
     }
 
     #[test]

@@ -242,10 +242,10 @@ pub struct Summary {
     pub best: Option<Best>,
     pub references: Vec<RankedReference>,
     /// Racing: candidates statistically tied for first (the winner included), eliminated by
-    /// confidence, eliminated by the cap (0 for exhaustive runs).
+    /// evidence, left unresolved by an LP budget (0 for exhaustive runs).
     pub tied: usize,
     pub confidence_eliminated: usize,
-    pub cap_eliminated: usize,
+    pub unresolved: usize,
 }
 
 impl Summary {
@@ -299,7 +299,7 @@ pub fn summarize(rows: &[Row], refs: &[Reference]) -> Summary {
         best,
         tied: t.tied.len(),
         confidence_eliminated: t.confidence,
-        cap_eliminated: t.cap.len(),
+        unresolved: t.unresolved.len(),
     }
 }
 

@@ -64,6 +64,28 @@ pub struct Row {
     pub diff: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff_se: Option<f64>,
+    /// Eliminated: the look of stage `stage` that removed it (0: the first or only look, 1: the
+    /// whole block after an early look) and the one-sided lower confidence bound of `diff` at
+    /// the stage's δ that was above 0 (the evidence: diff ∈ [diff_lower, ∞)).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub look: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub diff_lower: Option<f64>,
+    /// Racing survivor when the LP budget ended the race: neither eliminated nor completed.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub unresolved: bool,
+    /// Estimate on the common sample (racing stage 0's block, the same fragments for every
+    /// candidate of the run): error, its standard error and the fragments (Fig. 4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub common_error: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub common_stderr: Option<f64>,
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub common_fragments: u64,
+}
+
+fn is_zero(n: &u64) -> bool {
+    *n == 0
 }
 
 impl Row {
@@ -86,6 +108,12 @@ impl Row {
             versus: None,
             diff: None,
             diff_se: None,
+            look: None,
+            diff_lower: None,
+            unresolved: false,
+            common_error: None,
+            common_stderr: None,
+            common_fragments: 0,
         }
     }
 }

@@ -37,8 +37,8 @@ pub struct SweepOptions {
     pub seed: u64,
     /// Name of the data in the config (e.g. "default dataset 512").
     pub dataset: String,
-    /// Racing parameters (see [`SweepConfig`]).
-    pub top: usize,
+    /// Racing parameters (see [`SweepConfig`]); `lp_budget` 0: none.
+    pub lp_budget: u64,
     pub exhaustive: bool,
     /// Only these candidate indices, or these candidates by names "f1,f2;g1,g2".
     pub candidates: Option<Vec<u64>>,
@@ -48,7 +48,6 @@ pub struct SweepOptions {
     pub growth: usize,
     /// Early look (see [`SweepConfig::early_look`]).
     pub early_look: usize,
-    pub keep: f64,
     /// Confidence of the elimination tests (all stages and candidates together).
     pub confidence: f64,
     pub bound: super::race::Bound,
@@ -72,7 +71,7 @@ impl Default for SweepOptions {
             max_fragments: Some(super::DEFAULT_MAX_FRAGMENTS),
             seed: 1,
             dataset: "stacks".into(),
-            top: 50,
+            lp_budget: 0,
             exhaustive: false,
             candidates: None,
             names: None,
@@ -80,7 +79,6 @@ impl Default for SweepOptions {
             first_sample: super::config::DEFAULT_FIRST_SAMPLE,
             growth: 4,
             early_look: super::config::DEFAULT_EARLY_LOOK,
-            keep: 0.25,
             confidence: 0.99,
             bound: super::race::Bound::Normal,
             race_seed: None,
@@ -117,8 +115,6 @@ impl SweepOptions {
             first_sample: self.first_sample,
             growth: self.growth,
             batch: self.batch,
-            top: self.top,
-            keep: self.keep,
             confidence: self.confidence,
         }
     }
@@ -242,7 +238,7 @@ pub fn sweep_dataset(
 pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig> {
     Ok(SweepConfig {
         seed: opts.race_seed.unwrap_or(opts.seed),
-        top: opts.top,
+        lp_budget: opts.lp_budget,
         exhaustive: opts.exhaustive,
         candidates: resolve_candidates(
             scorer.table(),
@@ -254,7 +250,6 @@ pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig>
         first_sample: opts.first_sample,
         growth: opts.growth,
         early_look: opts.early_look,
-        keep: opts.keep,
         confidence: opts.confidence,
         bound: opts.bound,
         pilot: opts.pilot,
@@ -366,14 +361,20 @@ pub fn sweep_line(r: &SweepResult) -> Option<String> {
     );
     if let Some(race) = &s.race {
         line.push_str(&format!(
-            "\nsearch: race at {:.0} % confidence: {} tied for first, {} eliminated by confidence, {} by the cap; {} of {} fragments used, {}",
+            "\nsearch: race at {:.0} % confidence: {} tied for first, {} unresolved, {} eliminated by evidence (none otherwise); {} of {} fragments used, {}",
             race.confidence * 100.0,
             race.tied,
+            race.unresolved,
             race.confidence_eliminated,
-            race.cap_eliminated,
             race.fragments_used,
             race.fragment_budget,
-            if race.resolved { "resolved" } else { "the fragment budget bound" }
+            if race.resolved {
+                "resolved"
+            } else if race.lp_budget_bound {
+                "the LP budget ended the race (unresolved)"
+            } else {
+                "the fragment budget bound"
+            }
         ));
     }
     Some(line)

@@ -10,22 +10,22 @@
 //! evenly spaced candidates on a separate pilot block; later: the leader by pooled mean after
 //! the previous stage) is scored on the block with every candidate c, which records the paired
 //! differences d = e_c − e_R. c leaves *by confidence* when μ_c − μ_R > 0 at confidence
-//! 1 − δ, δ = (1 − `confidence`) / (stages · candidates · shards) (Bonferroni over the planned
-//! stages, the stage's candidates and the shards; [`super::race`]). Of the rest, at most
-//! max(⌈keep·|C′|⌉, top) stay, C′ the candidates at the stage's last look (by their mean over
-//! every block seen): the others leave *by the cap*, the budget,
-//! without evidence, and are marked so. Racing stops when one candidate is left (resolved) or
+//! 1 − δ, δ = (1 − `confidence`) / (looks · candidates · shards) (Bonferroni over the planned
+//! looks, the stage's candidates and the shards; [`super::race`]); no candidate leaves for any
+//! other reason. Stage 0's block is the *common sample*: one look, every candidate scored on all
+//! of it (`common_*` of the rows, Fig. 4). Racing stops when one candidate is left (resolved) or
 //! the fragments run out (the fragment budget bound); the survivors are then completed on the
 //! fragments they have not seen (the pilot block, unused blocks), so they are scored on every
 //! fragment, and form the set *statistically tied for first*. With probability ≥ `confidence`
 //! (normal approximation of block means, or always with the Bernstein bound) no candidate is
-//! eliminated by confidence while it is at least as good as its reference; so the best candidate
-//! is among the tied and the cap-eliminated candidates.
+//! eliminated while it is at least as good as its reference; so the best candidate is among the
+//! tied. An `lp_budget` can end the race before a look that would exceed it: the survivors are
+//! then *unresolved* (not completed, not eliminated), and the best is among them.
 //!
 //! Every decision uses only the stage's block, which is disjoint from the blocks that chose its
 //! reference, so selection does not bias the test. Eliminated candidates keep their pooled
-//! estimate (over the blocks they saw), the stage evidence (`versus`, `diff`, `diff_se`) and the
-//! reason; survivors carry the paired difference to the winner pooled over all blocks (its
+//! estimate (over the blocks they saw) and the evidence: the stage and look, `versus`, `diff`,
+//! `diff_se` and the lower confidence bound `diff_lower` > 0 that removed them; survivors carry the paired difference to the winner pooled over all blocks (its
 //! standard error is exact on blocks whose reference is the winner, else bounded by
 //! se(d_c) + se(d_w), Cauchy–Schwarz).
 //!
@@ -108,11 +108,22 @@ pub struct RaceSummary {
     pub resolved: bool,
     /// The fragments ran out with more than one candidate left.
     pub budget_bound: bool,
-    /// Candidates left at the end (statistically tied for first), the winner among them.
+    /// The LP budget (`lp_budget`) ended the race before its next look: the survivors are
+    /// unresolved (`unresolved` candidates, not completed).
+    #[serde(default)]
+    pub lp_budget_bound: bool,
+    /// Candidates left at the end (statistically tied for first), the winner among them; 0 when
+    /// the LP budget ended the race.
     pub tied: u64,
+    /// Survivors when the LP budget ended the race (the best is among them).
+    #[serde(default)]
+    pub unresolved: u64,
+    /// The best by pooled mean among the tied (or, when unresolved, among the survivors).
     pub winner: Option<u64>,
     pub confidence_eliminated: u64,
-    pub cap_eliminated: u64,
+    /// Fragments of the common sample (stage 0's block): every candidate is scored on it.
+    #[serde(default)]
+    pub common_fragments: u64,
 }
 
 /// One racing stage.
@@ -124,14 +135,10 @@ pub struct StageLog {
     /// Per-test error probability δ and the matching normal quantile z_{1−δ}.
     pub delta: f64,
     pub z: f64,
-    /// Candidates allowed to stay by the cap: max(⌈keep·|C′|⌉, top), C′ the candidates tested at
-    /// the stage's last look (those left after the early look).
-    pub cap: u64,
     pub confidence_eliminated: u64,
     /// Of those, eliminated at the early look (on the first half of the block).
     #[serde(default)]
     pub early_eliminated: u64,
-    pub cap_eliminated: u64,
 }
 
 impl SweepSummary {

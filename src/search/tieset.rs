@@ -1,5 +1,6 @@
-//! The answer of a race as sets: the winner, the candidates statistically tied for first, the
-//! candidates eliminated by confidence and by the budget cap; and the check of a race against
+//! The answer of a race as sets: the winner, the candidates statistically tied for first (or
+//! unresolved, when an LP budget ended the race), the candidates eliminated by confidence;
+//! and the check of a race against
 //! an exhaustive run of the same data (docs/search.md, "Validation").
 
 use super::race::Elimination;
@@ -16,8 +17,8 @@ pub struct TieSet {
     pub tied: Vec<Row>,
     /// Duplicate-span candidates of tied ones (same G, hence tied too).
     pub tied_duplicates: usize,
-    /// Eliminated by the cap (no evidence against them), by error.
-    pub cap: Vec<Row>,
+    /// Survivors of a race the LP budget ended (not completed), by their estimate.
+    pub unresolved: Vec<Row>,
     /// Eliminated by confidence.
     pub confidence: usize,
     /// Rows carry racing decisions (false: exhaustive or older results).
@@ -25,9 +26,13 @@ pub struct TieSet {
 }
 
 impl TieSet {
-    /// The certified set: tied ∪ cap-eliminated (contains the best at the stated confidence).
+    /// The certified set: tied ∪ unresolved (contains the best at the stated confidence).
     pub fn certified(&self) -> HashSet<u64> {
-        self.tied.iter().chain(&self.cap).map(|r| r.index).collect()
+        self.tied
+            .iter()
+            .chain(&self.unresolved)
+            .map(|r| r.index)
+            .collect()
     }
 }
 
@@ -40,8 +45,8 @@ fn by_error(v: &mut [Row]) {
     });
 }
 
-/// The winner of `rows`: the best tied row, else the best row scored on every fragment, else
-/// the best row.
+/// The winner of `rows`: the best tied row, else the best unresolved row (by its estimate),
+/// else the best row scored on every fragment, else the best row.
 pub fn winner_of(rows: &[Row]) -> Option<Row> {
     let best = |f: &dyn Fn(&Row) -> bool| {
         let mut v: Vec<Row> = rows
@@ -53,6 +58,7 @@ pub fn winner_of(rows: &[Row]) -> Option<Row> {
         v.into_iter().next()
     };
     best(&|r| r.tied)
+        .or_else(|| best(&|r| r.unresolved))
         .or_else(|| best(&|r| r.full))
         .or_else(|| best(&|_| true))
 }
@@ -60,13 +66,9 @@ pub fn winner_of(rows: &[Row]) -> Option<Row> {
 /// The sets of a results file.
 pub fn tie_set(rows: &[Row]) -> TieSet {
     let mut tied: Vec<Row> = rows.iter().filter(|r| r.tied).cloned().collect();
-    let mut cap: Vec<Row> = rows
-        .iter()
-        .filter(|r| r.eliminated == Some(Elimination::Cap))
-        .cloned()
-        .collect();
+    let mut unresolved: Vec<Row> = rows.iter().filter(|r| r.unresolved).cloned().collect();
     by_error(&mut tied);
-    by_error(&mut cap);
+    by_error(&mut unresolved);
     let tied_ids: HashSet<u64> = tied.iter().map(|r| r.index).collect();
     TieSet {
         winner: winner_of(rows),
@@ -78,9 +80,11 @@ pub fn tie_set(rows: &[Row]) -> TieSet {
             .iter()
             .filter(|r| r.eliminated == Some(Elimination::Confidence))
             .count(),
-        raced: !tied.is_empty() || rows.iter().any(|r| r.eliminated.is_some()),
+        raced: !tied.is_empty()
+            || !unresolved.is_empty()
+            || rows.iter().any(|r| r.eliminated.is_some()),
         tied,
-        cap,
+        unresolved,
     }
 }
 
@@ -89,8 +93,14 @@ pub fn tie_set(rows: &[Row]) -> TieSet {
 pub fn status(r: &Row) -> String {
     match (r.tied, r.eliminated) {
         (true, _) => "tied for first".into(),
-        (_, Some(Elimination::Confidence)) => format!("worse (confidence, stage {})", r.stage),
-        (_, Some(Elimination::Cap)) => format!("cap (stage {}, no evidence)", r.stage),
+        (_, Some(Elimination::Confidence)) => format!(
+            "worse (stage {}, look {}: Δ ≥ {:+.4} pp vs {})",
+            r.stage,
+            r.look.unwrap_or(0) + 1,
+            r.diff_lower.unwrap_or(f64::NAN) * 100.0,
+            r.versus.map_or("?".into(), |v| v.to_string())
+        ),
+        _ if r.unresolved => format!("unresolved (LP budget, after stage {})", r.stage),
         _ if r.degenerate => "degenerate".into(),
         _ if r.duplicate_of.is_some() => "duplicate".into(),
         _ if r.full => "all fragments".into(),
@@ -109,7 +119,7 @@ pub struct Validation {
     pub race_winner_error: f64,
     /// Status of the exhaustive winner in the race.
     pub exhaustive_winner_status: String,
-    /// The exhaustive winner is tied / in the certified set (tied ∪ cap).
+    /// The exhaustive winner is tied / in the certified set (tied ∪ unresolved).
     pub winner_tied: bool,
     pub winner_certified: bool,
     /// Confidence-eliminated candidates with an exhaustive error ≤ the race winner's.
@@ -118,7 +128,7 @@ pub struct Validation {
     /// reference: the false eliminations the stated confidence bounds.
     pub false_eliminations: Vec<u64>,
     pub tied: usize,
-    pub cap: usize,
+    pub unresolved: usize,
     pub confidence: usize,
     /// Rank (exhaustive) of the worst tied candidate.
     pub worst_tied_rank: usize,
@@ -183,7 +193,7 @@ pub fn validate(race: &[Row], exhaustive: &[Row]) -> Result<Validation> {
             .map(|r| r.index)
             .collect(),
         tied: t.tied.len(),
-        cap: t.cap.len(),
+        unresolved: t.unresolved.len(),
         confidence: t.confidence,
         worst_tied_rank: t.tied.iter().map(|r| rank[&r.index]).max().unwrap_or(0),
     })
@@ -194,7 +204,7 @@ impl Validation {
     pub fn lines(&self) -> Vec<String> {
         vec![
             format!(
-                "exhaustive winner {} ({:.4} %): {} in the race; in the tied set: {}; in the certified set (tied ∪ cap): {}",
+                "exhaustive winner {} ({:.4} %): {} in the race; in the tied set: {}; in the certified set (tied ∪ unresolved): {}",
                 self.exhaustive_winner,
                 self.exhaustive_error * 100.0,
                 self.exhaustive_winner_status,
@@ -208,8 +218,8 @@ impl Validation {
                 (self.race_winner_error - self.exhaustive_error) * 100.0
             ),
             format!(
-                "{} tied (worst exhaustive rank {}), {} eliminated by confidence, {} by the cap",
-                self.tied, self.worst_tied_rank, self.confidence, self.cap
+                "{} tied (worst exhaustive rank {}), {} unresolved, {} eliminated by confidence",
+                self.tied, self.worst_tied_rank, self.unresolved, self.confidence
             ),
             format!(
                 "confidence-eliminated candidates better than the race winner on the full sample: {} {:?}",
@@ -245,7 +255,10 @@ mod tests {
         let race = vec![
             row(0, 0.10, true, None, Some(0)),
             row(1, 0.11, true, None, Some(0)),
-            row(2, 0.09, false, Some(Elimination::Cap), Some(0)), // sampled estimate
+            Row {
+                unresolved: true,
+                ..row(2, 0.09, false, None, Some(0)) // sampled estimate
+            },
             row(3, 0.30, false, Some(Elimination::Confidence), Some(0)),
             row(4, 0.20, false, Some(Elimination::Confidence), Some(1)),
         ];
@@ -256,7 +269,7 @@ mod tests {
             "the best tied row, not a sample"
         );
         assert_eq!(t.tied.len(), 2);
-        assert_eq!(t.cap.len(), 1);
+        assert_eq!(t.unresolved.len(), 1);
         assert_eq!(t.confidence, 2);
         assert!(t.raced);
         // Exhaustive: candidate 1 is the best; 4 is better than its reference 1 (a false

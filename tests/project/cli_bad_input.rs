@@ -393,7 +393,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             2,
             "-1 is negative",
         ),
-        (args(&["search", "--keep", "0"]), None, 2, "not in (0, 1]"),
+        (args(&["search", "--lp-budget", "x"]), None, 2, "--lp-budget"),
         (args(&["search", "--growth", "1"]), None, 2, "--growth"),
         // Rejected before any rendering.
         (args(&["search", "--m", "0"]), None, 2, "--m"),

@@ -27,10 +27,10 @@ fn fixture() -> Fixture {
 
 fn config(s: &Scorer, m: usize) -> SweepConfig {
     let mut c = SweepConfig::new(m, s, "synthetic");
-    c.top = 4;
     c.first_sample = 40;
     c.growth = 2;
-    // Every block of ≥ 40 fragments is tested on its first half too (the early look).
+    // Every block after stage 0 of ≥ 40 fragments is tested on its first half too (the early
+    // look); stage 0's block is the common sample, one look.
     c.early_look = 20;
     c.pilot = 4;
     c.batch = 3;
@@ -60,15 +60,13 @@ fn run(cfg: &SweepConfig, s: &Scorer, dir: &Path) -> Outcome {
     run_sweep(cfg, s, dir, &Hooks::default()).unwrap()
 }
 
-/// The default rule (cap ¼ per stage, 99 % confidence) and the race without a cap.
+/// The default rule (99 % confidence, elimination by evidence only) against the exhaustive run.
 #[test]
 fn racing_finds_the_exhaustive_winner() {
-    racing_matches_exhaustive(None, 1);
-    racing_matches_exhaustive(Some(1.0), 1);
+    racing_matches_exhaustive(2);
 }
 
-/// `keep`: None = the default of `SweepConfig::new`.
-fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
+fn racing_matches_exhaustive(min_stages: usize) {
     let f = fixture();
     let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
     assert!(
@@ -76,30 +74,30 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
         "{}",
         f.data.fragments().len()
     );
-    let mut cfg = config(&s, 2);
-    if let Some(k) = keep {
-        cfg.keep = k;
-    }
-    let race = tmp_path(&format!("race{}", cfg.keep));
+    let cfg = config(&s, 2);
+    let race = tmp_path("race");
     let Outcome::Complete(sum) = run(&cfg, &s, &race) else {
         panic!()
     };
     assert!(sum.stages.len() >= min_stages, "{sum:?}");
-    // Stage 0's block (40 fragments) was looked at twice: the second half's statistics exist.
-    assert!(race.join("stage0.look1.jsonl").exists());
+    // Stage 0's block (40 fragments, the common sample) was looked at once, stage 1's block
+    // (80) twice: the second half's statistics exist.
+    assert!(!race.join("stage0.look1.jsonl").exists());
+    assert!(race.join("stage1.look1.jsonl").exists());
     let (_, plan) = momentlab::search::race::blocks(f.data.fragments().len(), 40, 2);
     let planned: usize = plan
         .iter()
-        .map(|r| momentlab::search::race::looks(r.len(), 20).len())
+        .enumerate()
+        .map(|(k, r)| momentlab::search::race::looks(k, r.len(), 20).len())
         .sum();
     assert!(planned > plan.len());
     assert_eq!(sum.race.as_ref().unwrap().looks, planned as u64);
     assert!(sum.sampled_share < 1.0, "{sum:?}");
     let race_sum = sum.race.clone().unwrap();
-    check_stage_logs(&cfg, &sum);
+    check_stage_logs(&sum);
     let mut ex_cfg = cfg.clone();
     ex_cfg.exhaustive = true;
-    let ex = tmp_path(&format!("exhaustive{}", cfg.keep));
+    let ex = tmp_path("exhaustive");
     run(&ex_cfg, &s, &ex);
 
     let ex_rows = rows(&ex);
@@ -132,25 +130,38 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     // The exhaustive winner is tied for first, and it is the race's winner here.
     assert!(tied.iter().any(|r| r.index == ranked[0].index));
     assert_eq!(race_sum.winner, Some(ranked[0].index));
-    // Every candidate eliminated by confidence is worse than its stage reference on the whole
-    // sample (no false elimination in this easy case), and carries its evidence.
+    // Every eliminated candidate left by evidence: it is worse than its stage reference on the
+    // whole sample (no false elimination in this easy case), and carries its evidence: the
+    // stage and look, the paired difference, its s.e. and the lower bound (> 0, below Δ).
     let mut conf = 0;
     for r in race_rows.iter().filter(|r| r.eliminated.is_some()) {
         assert!(r.fragments > 0 && r.fragments < f.data.fragments().len() as u64);
-        assert!(
-            r.stderr.unwrap() > 0.0 && r.diff_se.unwrap() >= 0.0,
-            "{r:?}"
-        );
-        if r.eliminated == Some(Elimination::Confidence) {
-            conf += 1;
-            assert!(r.diff.unwrap() > 0.0 && r.diff_se.unwrap() > 0.0, "{r:?}");
-            assert!(exact(r.index) > exact(r.versus.unwrap()), "{r:?}");
-        }
+        assert_eq!(r.eliminated, Some(Elimination::Confidence));
+        conf += 1;
+        let (d, se, lo) = (r.diff.unwrap(), r.diff_se.unwrap(), r.diff_lower.unwrap());
+        assert!(r.stderr.unwrap() > 0.0 && se > 0.0, "{r:?}");
+        assert!(lo > 0.0 && lo < d, "{r:?}");
+        let look = r.look.unwrap();
+        assert!(look < 2 && (r.stage > 0 || look == 0), "{r:?}");
+        assert!(r.stage < race_sum.stages.len(), "{r:?}");
+        assert!(exact(r.index) > exact(r.versus.unwrap()), "{r:?}");
     }
     assert_eq!(conf, race_sum.confidence_eliminated);
-    if cfg.keep == 1.0 {
-        assert_eq!(race_sum.cap_eliminated, 0);
+    assert!(conf > 0);
+    // Every candidate of the race carries its estimate on the common sample (stage 0's 40
+    // fragments); a candidate eliminated in stage 0 saw only them.
+    for r in race_rows
+        .iter()
+        .filter(|r| !r.degenerate && r.duplicate_of.is_none())
+    {
+        assert_eq!(r.common_fragments, 40, "{r:?}");
+        assert!(r.common_error.is_some() && r.common_stderr.unwrap() > 0.0);
+        if r.stage == 0 && r.eliminated.is_some() {
+            assert!((r.common_error.unwrap() - r.error.unwrap()).abs() < 1e-12);
+        }
     }
+    assert_eq!(race_sum.common_fragments, 40);
+    assert!(!race_sum.lp_budget_bound && race_sum.unresolved == 0);
     // The exhaustive error equals an independent computation from per-fragment errors.
     let e0 = &ranked[0];
     let cols: Vec<usize> = e0
@@ -168,12 +179,59 @@ fn racing_matches_exhaustive(keep: Option<f64>, min_stages: usize) {
     }
 }
 
+/// An LP budget ends the race before the look that would exceed it and eliminates no one: the
+/// eliminations before it are the unbudgeted race's, the survivors are unresolved (neither
+/// eliminated nor completed) and the best is among them.
+#[test]
+fn an_lp_budget_leaves_survivors_unresolved() {
+    let f = fixture();
+    let s = Scorer::new(&f.data, &f.table, "reference", 16).unwrap();
+    let cfg = config(&s, 2);
+    let free = tmp_path("budget-free");
+    let Outcome::Complete(all) = run(&cfg, &s, &free) else {
+        panic!()
+    };
+    let stage0 = all.race.as_ref().unwrap().stages[0].clone();
+    assert!(stage0.candidates - stage0.confidence_eliminated > 1);
+    // Pilot and stage 0 fit, stage 1's first look does not.
+    let mut capped = cfg.clone();
+    capped.lp_budget = cfg.pilot as u64 * 40 + (stage0.candidates + 1) * 40 + 10;
+    let dir = tmp_path("budget");
+    let Outcome::Complete(sum) = run(&capped, &s, &dir) else {
+        panic!()
+    };
+    let race = sum.race.as_ref().unwrap();
+    assert!(race.lp_budget_bound && !race.resolved && !race.budget_bound);
+    assert!(sum.lp_solves <= capped.lp_budget, "{sum:?}");
+    assert_eq!(race.stages.len(), 1);
+    assert_eq!(race.tied, 0);
+    let left = stage0.candidates - stage0.confidence_eliminated;
+    assert_eq!(race.unresolved, left);
+    let (free_rows, rows) = (rows(&free), rows(&dir));
+    assert_eq!(rows.len(), free_rows.len());
+    for (a, b) in rows.iter().zip(&free_rows) {
+        if b.eliminated.is_some() && b.stage == 0 {
+            // The same eliminations with the same evidence.
+            assert_eq!((a.eliminated, a.diff_lower), (b.eliminated, b.diff_lower));
+        } else if !a.degenerate && a.duplicate_of.is_none() {
+            assert!(a.unresolved && !a.tied && a.eliminated.is_none(), "{a:?}");
+            assert_eq!(a.fragments, 40, "not completed: {a:?}");
+        }
+    }
+    let unresolved = rows.iter().filter(|r| r.unresolved).count() as u64;
+    assert_eq!(unresolved, left);
+    // The unbudgeted winner is among the unresolved.
+    let w = all.race.as_ref().unwrap().winner.unwrap();
+    assert!(rows.iter().any(|r| r.index == w && r.unresolved));
+    for d in [free, dir] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
 /// Each stage's log adds up: its survivors (the next stage's candidates, or the fully scored
-/// ones after the last stage) are its candidates less both kinds of elimination, and the cap is
-/// the one applied at the last look, to the early look's survivors (with `keep` 1 the default
-/// race's stage 2 has 9 candidates, 5 leave at the early look and the cap is 4, not 9); a binding
-/// cap keeps exactly its number.
-fn check_stage_logs(cfg: &SweepConfig, sum: &SweepSummary) {
+/// ones after the last stage) are its candidates less its eliminations by evidence, the only
+/// kind there is.
+fn check_stage_logs(sum: &SweepSummary) {
     let race = sum.race.as_ref().unwrap();
     for (k, st) in race.stages.iter().enumerate() {
         let survivors = race
@@ -182,18 +240,10 @@ fn check_stage_logs(cfg: &SweepConfig, sum: &SweepSummary) {
             .map_or(sum.full, |next| next.candidates);
         assert_eq!(
             survivors,
-            st.candidates - st.confidence_eliminated - st.cap_eliminated,
+            st.candidates - st.confidence_eliminated,
             "{st:?}"
         );
-        let tested = st.candidates - st.early_eliminated;
-        assert_eq!(
-            st.cap,
-            momentlab::search::race::cap(cfg.keep, tested, cfg.top as u64)
-        );
-        assert!(survivors <= st.cap, "{st:?}");
-        if st.cap_eliminated > 0 {
-            assert_eq!(survivors, st.cap, "{st:?}");
-        }
+        assert!(st.early_eliminated <= st.confidence_eliminated, "{st:?}");
     }
 }
 
@@ -250,7 +300,7 @@ fn interrupted_runs_resume_to_the_same_file() {
     run(&cfg, &s, &full);
     let want = file_without_seconds(&full, "results.jsonl");
     let want_stage0 = file_without_seconds(&full, "stage0.jsonl");
-    let want_look = file_without_seconds(&full, "stage0.look1.jsonl");
+    let want_look = file_without_seconds(&full, "stage1.look1.jsonl");
     // Kill after k batches, once or repeatedly, then resume.
     for k in [1usize, 2, 4, 7, 11] {
         let dir = tmp_path(&format!("resume{k}"));
@@ -275,7 +325,7 @@ fn interrupted_runs_resume_to_the_same_file() {
             "k = {k}"
         );
         assert_eq!(
-            file_without_seconds(&dir, "stage0.look1.jsonl"),
+            file_without_seconds(&dir, "stage1.look1.jsonl"),
             want_look,
             "k = {k}"
         );
@@ -293,7 +343,7 @@ fn interrupted_runs_resume_to_the_same_file() {
         for name in [
             "results.jsonl",
             "stage0.jsonl",
-            "stage0.look1.jsonl",
+            "stage1.look1.jsonl",
             "stage1.jsonl",
         ] {
             let p = dir.join(name);

@@ -1,7 +1,10 @@
 //! The racing driver of [`super::run_sweep`] (module docs of [`super`]): stage k scores its
 //! candidates on block k of the stratified order in one or two looks, eliminates by the
-//! stage's [`race::Rule`], records the eliminated candidates' rows and the [`StageLog`]; the
-//! survivors are then completed on every fragment they have not seen and form the tie set.
+//! stage's [`race::Rule`] (evidence only), records the eliminated candidates' rows with their
+//! evidence and the [`StageLog`]; the survivors are then completed on every fragment they have
+//! not seen and form the tie set. Stage 0's block is the common sample (one look, every
+//! candidate). An LP budget ends the race before a look that would exceed it, leaving the
+//! survivors unresolved.
 
 use super::{
     pilot_best, pooled_row, score_block, stage_file, Ctx, RaceSummary, StageLog, StageRow, Stopped,
@@ -23,15 +26,27 @@ pub(super) struct Raced {
     pub(super) summary: RaceSummary,
 }
 
+/// One elimination: the candidate's statistics on the looks of its stage so far, the look that
+/// removed it and the lower confidence bound of μ_c − μ_R (> 0) that did.
+struct Left {
+    stats: StageStats,
+    look: usize,
+    lower: f64,
+}
+
 /// What the looks of one stage left: the survivors, every candidate's statistics on the
 /// block, the eliminated with their evidence, and how many left at the early look.
 struct StageOutcome {
     alive: Vec<u64>,
     acc: HashMap<u64, StageRow>,
-    left: Vec<(StageStats, Elimination)>,
+    left: Vec<Left>,
     early: u64,
     /// LP solves of the looks (the reference included).
     solves: u64,
+    /// Looks run (fewer than planned when the LP budget stopped the stage).
+    looks: usize,
+    /// The LP budget stopped the race before a look of this stage.
+    budget: bool,
 }
 
 /// A race between stages: the fixed plan (fragment order, pilot block, stage blocks) and the
@@ -67,6 +82,10 @@ pub(super) struct Race<'r, 'a, 'h> {
     used: u64,
     /// Stages run.
     run: usize,
+    /// Every stage-0 candidate's statistics on stage 0's block (the common sample).
+    common: HashMap<u64, StageRow>,
+    /// The LP budget ended the race.
+    budget_stop: bool,
 }
 
 impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
@@ -88,7 +107,8 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         let (pilot, plan) = race::blocks(order.len(), cfg.first_sample, cfg.growth);
         let planned_looks = plan
             .iter()
-            .map(|r| race::looks(r.len(), cfg.early_look).len())
+            .enumerate()
+            .map(|(k, r)| race::looks(k, r.len(), cfg.early_look).len())
             .sum();
         Race {
             ctx,
@@ -111,6 +131,8 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
             leader: None,
             used: 0,
             run: 0,
+            common: HashMap::new(),
+            budget_stop: false,
         }
     }
 
@@ -126,15 +148,17 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         done: &mut BTreeSet<u64>,
     ) -> Result<Result<Raced, Stopped>> {
         for k in 0..self.plan.len() {
-            if self.cur.len() <= 1 {
+            if self.cur.len() <= 1 || self.budget_stop {
                 break;
             }
             if let Err(Stopped) = self.stage(w, done, k)? {
                 return Ok(Err(Stopped));
             }
         }
-        if let Err(Stopped) = self.complete(w)? {
-            return Ok(Err(Stopped));
+        if !self.unresolved() {
+            if let Err(Stopped) = self.complete(w)? {
+                return Ok(Err(Stopped));
+            }
         }
         let rows = self.tied_rows(done);
         if let Err(Stopped) = self.append(w, done, &rows)? {
@@ -163,6 +187,11 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         k: usize,
     ) -> Result<Result<(), Stopped>> {
         let block = self.order[self.plan[k].clone()].to_vec();
+        let looks = race::looks(k, block.len(), self.cfg.early_look);
+        if self.over_budget(0, self.cur.len(), looks[0].len()) {
+            self.budget_stop = true;
+            return Ok(Ok(()));
+        }
         let reference = self.reference()?;
         self.stage_sizes
             .push((self.cur.len() as u64, block.len() as u64));
@@ -178,15 +207,17 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
             delta,
             bound: cfg.bound,
             paired: cfg.paired,
-            keep: cfg.keep,
-            top: cfg.top,
             width: self.ctx.hooks.half_width.unwrap_or(1.0),
         };
-        let out = match self.looks(w, k, &block, reference, &rule)? {
+        let out = match self.looks(w, k, &block, &looks, reference, &rule)? {
             Ok(out) => out,
             Err(Stopped) => return Ok(Err(Stopped)),
         };
         self.lp_solves += out.solves;
+        self.budget_stop = out.budget;
+        if k == 0 && out.looks == looks.len() {
+            self.common = out.acc.clone();
+        }
         for i in &self.cur {
             self.pooled
                 .entry(*i)
@@ -197,17 +228,14 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         if let Err(Stopped) = self.append(w, done, &rows)? {
             return Ok(Err(Stopped));
         }
-        let count = |kind| out.left.iter().filter(|(_, e)| *e == kind).count() as u64;
         self.logs.push(StageLog {
             candidates: self.cur.len() as u64,
             fragments: block.len() as u64,
             reference,
             delta,
             z: race::normal_quantile(1.0 - delta),
-            cap: race::cap(cfg.keep, self.cur.len() as u64 - out.early, cfg.top as u64),
-            confidence_eliminated: count(Elimination::Confidence),
+            confidence_eliminated: out.left.len() as u64,
             early_eliminated: out.early,
-            cap_eliminated: count(Elimination::Cap),
         });
         self.history.push((reference, out.acc));
         self.cur = out.alive;
@@ -216,26 +244,45 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         Ok(Ok(()))
     }
 
-    /// The looks of stage k on `block` ([`race::looks`]): the first half by confidence only,
-    /// then the survivors on the whole block by `rule`.
+    /// The LP budget ended the race with more than one candidate left.
+    fn unresolved(&self) -> bool {
+        self.budget_stop && self.cur.len() > 1
+    }
+
+    /// Whether a look of `alive` candidates (and the reference) on `len` fragments, after
+    /// `pending` solves of the stage so far, would exceed the LP budget.
+    fn over_budget(&self, pending: u64, alive: usize, len: usize) -> bool {
+        let budget = self.cfg.lp_budget;
+        budget > 0 && self.lp_solves + pending + ((alive + 1) * len) as u64 > budget
+    }
+
+    /// The looks of stage k on `block` ([`race::looks`]): candidates are tested by `rule` on
+    /// each look's fragments so far (the first half, then the whole block); the LP budget can
+    /// stop the stage before a look.
     fn looks(
         &self,
         w: &mut Writer,
         k: usize,
         block: &[u32],
+        looks: &[Range<usize>],
         reference: u64,
         rule: &race::Rule,
     ) -> Result<Result<StageOutcome, Stopped>> {
-        let looks = race::looks(block.len(), self.cfg.early_look);
         let mut out = StageOutcome {
             alive: self.cur.clone(),
             acc: HashMap::new(),
             left: Vec::new(),
             early: 0,
             solves: 0,
+            looks: 0,
+            budget: false,
         };
         for (j, part) in looks.iter().enumerate() {
             let last = j + 1 == looks.len();
+            if j > 0 && self.over_budget(out.solves, out.alive.len(), part.len()) {
+                out.budget = true;
+                break;
+            }
             let ids = sorted(&block[part.clone()]);
             let path = stage_file(self.dir, k, j);
             let look = if looks.len() > 1 {
@@ -254,20 +301,20 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
                 Err(Stopped) => return Ok(Err(Stopped)),
             };
             out.solves += ((out.alive.len() + 1) * ids.len()) as u64;
+            out.looks += 1;
             let stats = accumulate(&mut out.acc, &out.alive, &stored, &path)?;
-            let look_rule = if last {
-                *rule
-            } else {
-                race::Rule { keep: 1.0, ..*rule }
-            };
-            let decisions = race::decide(&stats, &self.rank(&stats), reference, &look_rule);
+            let decisions = race::decide(&stats, reference, rule);
             out.alive.clear();
             for (s, d) in stats.iter().zip(&decisions) {
                 match d {
                     None => out.alive.push(s.index),
-                    Some(e) => {
+                    Some(lower) => {
                         out.early += !last as u64;
-                        out.left.push((*s, *e));
+                        out.left.push(Left {
+                            stats: *s,
+                            look: j,
+                            lower: *lower,
+                        });
                     }
                 }
             }
@@ -275,36 +322,28 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         Ok(Ok(out))
     }
 
-    /// The cap's ranking: each candidate's mean over every block seen (earlier stages and
-    /// this one, whose statistics are `stats`).
-    fn rank(&self, stats: &[StageStats]) -> Vec<f64> {
-        stats
-            .iter()
-            .map(|c| {
-                let before = self.pooled.get(&c.index).map_or((0, 0.0), |p| (p.n, p.sum));
-                (before.1 + c.e.sum) / (before.0 + c.e.n) as f64
-            })
-            .collect()
-    }
-
-    /// Rows of the candidates stage k eliminated (not yet written), with the stage evidence.
+    /// Rows of the candidates stage k eliminated (not yet written), with the evidence: the
+    /// look, the paired difference to the reference on the stage's fragments so far, its
+    /// standard error and the lower confidence bound that was above 0.
     fn eliminated_rows(
         &self,
         k: usize,
         reference: u64,
-        left: &[(StageStats, Elimination)],
+        left: &[Left],
         done: &BTreeSet<u64>,
     ) -> Vec<Row> {
         let mut out: Vec<Row> = left
             .iter()
-            .filter(|(s, _)| !done.contains(&s.index))
-            .map(|(s, e)| {
-                let mut row = self.pooled_row(s.index);
+            .filter(|l| !done.contains(&l.stats.index))
+            .map(|l| {
+                let mut row = self.pooled_row(l.stats.index);
                 row.stage = k;
-                row.eliminated = Some(*e);
+                row.look = Some(l.look);
+                row.eliminated = Some(Elimination::Confidence);
                 row.versus = Some(reference);
-                row.diff = Some(s.d.mean() * self.scale);
-                row.diff_se = Some(s.d.se() * self.scale);
+                row.diff = Some(l.stats.d.mean() * self.scale);
+                row.diff_se = Some(l.stats.d.se() * self.scale);
+                row.diff_lower = Some(l.lower * self.scale);
                 row
             })
             .collect();
@@ -355,8 +394,9 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         Ok(Ok(()))
     }
 
-    /// Rows of the survivors (not yet written): tied for first, with the paired difference to
-    /// the winner pooled over every block ([`race::pooled`]).
+    /// Rows of the survivors (not yet written): tied for first (or unresolved, when the LP
+    /// budget ended the race), with the paired difference to the winner pooled over every
+    /// block ([`race::pooled`]).
     fn tied_rows(&self, done: &BTreeSet<u64>) -> Vec<Row> {
         let Some(winner) = best_of(&self.cur, &self.pooled) else {
             return Vec::new();
@@ -374,7 +414,8 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
                 .collect();
             let (d, se) = race::pooled(&parts);
             row.stage = self.run;
-            row.tied = true;
+            row.tied = !self.unresolved();
+            row.unresolved = self.unresolved();
             row.versus = Some(winner);
             row.diff = Some(d * self.scale);
             row.diff_se = Some(if i == winner { 0.0 } else { se * self.scale });
@@ -385,7 +426,14 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
 
     /// A result row from candidate i's pooled statistics.
     fn pooled_row(&self, i: u64) -> Row {
-        pooled_row(&self.pooled[&i], self.data(), self.names, self.nontrivial)
+        let mut row = pooled_row(&self.pooled[&i], self.data(), self.names, self.nontrivial);
+        if let Some(c) = self.common.get(&i) {
+            let (error, se) = self.data().error_estimate(c.n, c.sum, c.sumsq);
+            row.common_error = Some(error);
+            row.common_stderr = Some(se);
+            row.common_fragments = c.n;
+        }
+        row
     }
 
     /// Append `rows` to the results in batches of 1 000, marking them done.
@@ -407,7 +455,9 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
     /// The race's summary once the survivors' rows are written.
     fn finish(self) -> Raced {
         let run = self.run > 0;
-        let tied = self.cur.len() as u64;
+        let left = self.cur.len() as u64;
+        let stopped = self.unresolved();
+        let tied = if stopped { 0 } else { left };
         let sum = |f: fn(&StageLog) -> u64| self.logs.iter().map(f).sum::<u64>();
         let summary = RaceSummary {
             confidence: self.cfg.confidence,
@@ -417,12 +467,14 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
             looks: self.planned_looks as u64,
             fragment_budget: self.nontrivial,
             fragments_used: if run { self.used } else { self.nontrivial },
-            resolved: tied == 1,
-            budget_bound: tied > 1,
+            resolved: left == 1,
+            budget_bound: !stopped && left > 1,
+            lp_budget_bound: stopped,
             tied,
+            unresolved: if stopped { left } else { 0 },
             winner: best_of(&self.cur, &self.pooled),
             confidence_eliminated: sum(|l| l.confidence_eliminated),
-            cap_eliminated: sum(|l| l.cap_eliminated),
+            common_fragments: self.common.values().next().map_or(0, |c| c.n),
             stages: self.logs,
         };
         Raced {
