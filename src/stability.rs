@@ -6,7 +6,7 @@
 //! Pure library code (no IO): [`generate`] draws the inputs, [`run`] evaluates and summarises;
 //! the CLI writes tables and plots. Documented in docs/stability.md.
 
-use crate::lp::{make_solver, GridTable, Status};
+use crate::lp::{make_solver, GridTable, SolverKind, Status};
 use crate::quantize::theta::{self, Theta};
 use crate::technique::Technique;
 use crate::Grid;
@@ -502,24 +502,19 @@ pub fn sharp_bound(tech: &dyn Technique, sample: &Sample, grid_points: usize, so
         .iter()
         .map(|&(z, w)| (grid.nearest(z) as u32, w))
         .collect();
-    let Ok(mut s) = make_solver(solver, table) else {
+    let Ok(kind) = solver.parse::<SolverKind>() else {
         return f64::NAN;
     };
+    let mut s = make_solver(kind, table);
     match s.solve_distribution(&dist, sample.zf) {
         Ok(sol) if sol.status == Status::Optimal => sol.g,
         _ => f64::NAN,
     }
 }
 
-/// The LP solver used as oracle: "fast" when it is built, else "reference".
+/// The LP solver used as oracle: the certified fast solver.
 pub fn oracle_solver() -> String {
-    let g = Grid::uniform(3).expect("3 points");
-    let t = GridTable::from_fn(&g, 1, |z, o| o[0] = z).expect("finite");
-    if make_solver("fast", t).is_ok() {
-        "fast".into()
-    } else {
-        "reference".into()
-    }
+    SolverKind::Fast.name().into()
 }
 
 /// Per technique on one sample: the sharp bound and G per applicable mode.

@@ -10,7 +10,7 @@
 //! solver cannot settle gets its own status, the rest of the batch is answered.
 
 use crate::basis::Catalog;
-use crate::lp::{make_solver, GridTable, Status};
+use crate::lp::{make_solver, GridTable, SolverKind, Status};
 use crate::Grid;
 use anyhow::{bail, Context, Result};
 use rayon::prelude::*;
@@ -109,7 +109,7 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
     }
     let basis = catalog.basis(&input.basis)?;
     let grid = grid_of(input.grid)?;
-    let solver = input.solver.unwrap_or_else(|| "fast".to_string());
+    let solver: SolverKind = input.solver.as_deref().unwrap_or("fast").parse()?;
     let m = basis.len();
     for (k, p) in input.problems.iter().enumerate() {
         if p.moments.len() != m {
@@ -126,9 +126,6 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
         }
     }
     let table = GridTable::from_fn(&grid, m, |z, out| basis.eval(z, out))?;
-    // Fail early (unknown or unavailable solver) before spawning work.
-    make_solver(&solver, table.clone())?;
-
     let bar = if input.problems.len() < 1000 {
         crate::progress::Bar::hidden()
     } else {
@@ -139,7 +136,7 @@ pub fn solve_batch(text: &str, catalog: &Catalog, pretty: bool) -> Result<String
         .par_chunks(CHUNK)
         .enumerate()
         .map(|(c, chunk)| -> Result<Vec<Output>> {
-            let mut s = make_solver(&solver, table.clone())?;
+            let mut s = make_solver(solver, table.clone());
             let mut out = Vec::with_capacity(chunk.len());
             for (k, p) in chunk.iter().enumerate() {
                 let sol = s.solve(&p.moments, p.zf).unwrap_or_else(|e| {

@@ -190,11 +190,11 @@ pub fn table_for(catalog: &Catalog, grid: &Grid, basis: &[String]) -> Result<Gri
         .map(|s| catalog.resolve(s))
         .collect::<Result<Vec<_>>>()
         .context("corpus basis")?;
-    GridTable::from_fn(grid, fns.len(), |z, out| {
+    Ok(GridTable::from_fn(grid, fns.len(), |z, out| {
         for (o, f) in out.iter_mut().zip(&fns) {
             *o = f.eval(z);
         }
-    })
+    })?)
 }
 
 /// One problem of `kind` on a uniform grid of n points for m functions.

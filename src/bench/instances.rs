@@ -42,22 +42,22 @@ pub fn smooth_functions() -> Vec<SmoothFn> {
 
 /// Tabulate the given functions on `grid`.
 pub fn table_of(grid: &Grid, fns: &[SmoothFn]) -> Result<GridTable> {
-    GridTable::from_fn(grid, fns.len(), |z, out| {
+    Ok(GridTable::from_fn(grid, fns.len(), |z, out| {
         for (o, (_, f)) in out.iter_mut().zip(fns) {
             *o = f(z);
         }
-    })
+    })?)
 }
 
 /// The power basis (z, z², …, z^m) on `grid`, as used by MSM.
 pub fn power_table(grid: &Grid, m: usize) -> Result<GridTable> {
-    GridTable::from_fn(grid, m, |z, out| {
+    Ok(GridTable::from_fn(grid, m, |z, out| {
         let mut p = 1.0;
         for o in out.iter_mut() {
             p *= z;
             *o = p;
         }
-    })
+    })?)
 }
 
 /// Moments Σ w_k b(z_{i_k}) of a mixture of Diracs at grid indices (weights sum to 1).

@@ -254,7 +254,7 @@ struct Timed {
     stats: crate::lp::FastStats,
     /// (solve index, moments, µs, answer) of the reference on the first fragment depth of each
     /// of the first problems.
-    reference: Vec<(usize, Vec<f64>, f64, Result<Solution>)>,
+    reference: Vec<(usize, Vec<f64>, f64, crate::lp::Result<Solution>)>,
 }
 
 /// The fast solver on every problem of `g`, `repeats` passes (minimum per problem), with the
@@ -283,7 +283,7 @@ fn time_group(
             Start::Moments => stretch
                 .iter()
                 .map(|p| distribution_moments(&g.table, &p.dist))
-                .collect::<Result<_>>()?,
+                .collect::<crate::lp::Result<_>>()?,
         };
         time_stretch(&mut solver, stretch, &moments, repeats, &mut out)?;
         // The reference on the first fragment depth of the stretch's problems in the prefix.

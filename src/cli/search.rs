@@ -221,7 +221,9 @@ fn check_flags(args: &Opts) -> Result<()> {
             bail!("--validate {}: no results.jsonl there", v.display());
         }
     }
-    momentlab::lp::check_solver(&args.solver).context("--solver")?;
+    args.solver
+        .parse::<momentlab::lp::SolverKind>()
+        .context("--solver")?;
     for c in &args.compare {
         momentlab::search::merge::verify_results(c, false)
             .with_context(|| format!("--compare {}", c.display()))?;

@@ -34,16 +34,17 @@
 mod certify;
 mod cpu;
 mod dense;
+mod error;
 mod fast;
 mod ortho;
 mod ratio;
 mod reference;
 
+pub use error::{Error, Result, SolverKind};
 pub use fast::{FastSolver, FastStats};
 pub use reference::ReferenceSolver;
 
 use crate::Grid;
-use anyhow::{bail, Result};
 
 /// The pricing kernel the fast solver uses on this CPU ("avx512", "avx2" or "scalar"; the
 /// environment variable `MOMENTLAB_PRICING` selects a supported one).
@@ -64,24 +65,21 @@ impl GridTable {
     /// Tabulate `f(z, out)` (writing the m values b(z)) at every grid point.
     pub fn from_fn(grid: &Grid, m: usize, mut f: impl FnMut(f64, &mut [f64])) -> Result<GridTable> {
         if m == 0 {
-            bail!("basis: need at least one function");
+            return Err(Error::NoFunctions);
         }
         if m > MAX_FUNCTIONS {
-            bail!("basis: {m} functions is more than the LP's limit of {MAX_FUNCTIONS}");
+            return Err(Error::TooManyFunctions { m });
         }
         let n = grid.len();
         if n.saturating_mul(m) > MAX_TABLE_VALUES {
-            bail!(
-                "grid × basis: {n} points × {m} functions is more than the limit of \
-                 {MAX_TABLE_VALUES} table values"
-            );
+            return Err(Error::TableTooLarge { n, m });
         }
         let mut values = vec![0.0; n * m];
         for (i, &z) in grid.points().iter().enumerate() {
             let row = &mut values[i * m..(i + 1) * m];
             f(z, row);
             if let Some(j) = row.iter().position(|v| !v.is_finite()) {
-                bail!("basis: function {} is not finite at z = {z}", j + 1);
+                return Err(Error::NotFinite { function: j + 1, z });
             }
         }
         Ok(GridTable {
@@ -97,16 +95,14 @@ impl GridTable {
     pub(crate) fn wide(grid: &Grid, m: usize, values: Vec<f64>) -> Result<GridTable> {
         let n = grid.len();
         if m == 0 || values.len() != n * m {
-            bail!(
-                "function table: {} values for {n} points × {m} functions",
-                values.len()
-            );
+            return Err(Error::TableShape {
+                values: values.len(),
+                n,
+                m,
+            });
         }
         if values.len() > MAX_TABLE_VALUES {
-            bail!(
-                "grid × functions: {n} points × {m} functions is more than the limit of \
-                 {MAX_TABLE_VALUES} table values"
-            );
+            return Err(Error::TableTooLarge { n, m });
         }
         Ok(GridTable {
             grid: grid.clone(),
@@ -119,7 +115,10 @@ impl GridTable {
     /// columns, with the limits of [`GridTable::from_fn`].
     pub fn columns(&self, cols: &[usize]) -> Result<GridTable> {
         if let Some(&c) = cols.iter().find(|&&c| c >= self.m) {
-            bail!("function index {c} out of range (table has {})", self.m);
+            return Err(Error::ColumnOutOfRange {
+                index: c,
+                m: self.m,
+            });
         }
         let mut i = 0;
         GridTable::from_fn(&self.grid, cols.len(), |_, out| {
@@ -235,21 +234,12 @@ pub const MAX_FUNCTIONS: usize = 31;
 /// Largest grid table n·m (f64 values, 512 MiB), checked before it is allocated.
 pub const MAX_TABLE_VALUES: usize = 1 << 26;
 
-/// The solver of the given name on `table`: "reference" or "fast" (also accepted as
-/// "fast-strict", its earlier name). Problems nothing certifies come back `Failed`.
-pub fn make_solver(kind: &str, table: GridTable) -> Result<Box<dyn MomentSolver>> {
-    check_solver(kind)?;
-    Ok(match kind {
-        "reference" => Box::new(reference::ReferenceSolver::new(table)),
-        _ => Box::new(fast::FastSolver::new(table)),
-    })
-}
-
-/// An error unless `kind` names a solver of [`make_solver`] (checked before any work).
-pub fn check_solver(kind: &str) -> Result<()> {
+/// A solver of the given kind on `table` (a name is parsed by `str::parse::<SolverKind>`).
+/// Problems nothing certifies come back `Failed`.
+pub fn make_solver(kind: SolverKind, table: GridTable) -> Box<dyn MomentSolver> {
     match kind {
-        "reference" | "fast" | "fast-strict" => Ok(()),
-        other => bail!("unknown LP solver '{other}' (expected 'fast' or 'reference')"),
+        SolverKind::Reference => Box::new(reference::ReferenceSolver::new(table)),
+        SolverKind::Fast => Box::new(fast::FastSolver::new(table)),
     }
 }
 
@@ -299,7 +289,12 @@ pub fn distribution_moments(table: &GridTable, dist: &[(u32, f64)]) -> Result<Ve
     for (k, &(i, w)) in dist.iter().enumerate() {
         let i = i as usize;
         if i >= n || !w.is_finite() || w < 0.0 {
-            bail!("distribution entry {k}: grid index {i} (of {n}) or weight {w} invalid");
+            return Err(Error::DistributionEntry {
+                entry: k,
+                index: i,
+                n,
+                weight: w,
+            });
         }
         total += w;
         for (bj, fj) in b.iter_mut().zip(table.row(i)) {
@@ -307,7 +302,7 @@ pub fn distribution_moments(table: &GridTable, dist: &[(u32, f64)]) -> Result<Ve
         }
     }
     if total <= 0.0 || !total.is_finite() {
-        bail!("distribution with zero (or infinite) total weight");
+        return Err(Error::DistributionWeight);
     }
     b.iter_mut().for_each(|v| *v /= total);
     Ok(b)

@@ -9,8 +9,7 @@
 //! The combinatorial answer (which support) is microlp's; the polish is accepted only when it
 //! keeps the weights non-negative and reduces the residual.
 
-use super::{GridTable, MomentSolver, Solution, Status};
-use anyhow::{bail, Result};
+use super::{Error, GridTable, MomentSolver, Result, Solution, Status};
 use good_lp::{
     constraint, microlp, variable, variables, Expression, ResolutionError, Solution as _,
     SolverModel, Variable,
@@ -38,13 +37,19 @@ impl MomentSolver for ReferenceSolver {
         let t = &self.table;
         let (n, m) = (t.n(), t.m());
         if moments.len() != m {
-            bail!("expected {m} moments, got {}", moments.len());
+            return Err(Error::MomentCount {
+                expected: m,
+                got: moments.len(),
+            });
         }
         if let Some(j) = moments.iter().position(|v| !v.is_finite()) {
-            bail!("moment {} is not finite ({})", j + 1, moments[j]);
+            return Err(Error::MomentNotFinite {
+                index: j + 1,
+                value: moments[j],
+            });
         }
         if zf.is_nan() {
-            bail!("z_f is NaN");
+            return Err(Error::ZfNaN);
         }
         // Row equilibration: row j of [A; b] divided by max_i |b_j(z_i)|.
         let scale: Vec<f64> = (0..m)
@@ -148,7 +153,7 @@ fn microlp_solve(t: &GridTable, moments: &[f64], zf: f64, tm: &[f64]) -> Result<
     match model.solve() {
         Ok(sol) => Ok(Some(w.iter().map(|v| sol.value(*v)).collect())),
         Err(ResolutionError::Infeasible) => Ok(None),
-        Err(e) => bail!("reference LP solver failed: {e}"),
+        Err(e) => Err(Error::Reference(e.to_string())),
     }
 }
 

@@ -107,7 +107,7 @@ impl FunctionTable {
     }
     /// The Algorithm 1 constraint table of the candidate `cols` (a gather of m columns).
     pub fn grid_table(&self, cols: &[usize]) -> Result<GridTable> {
-        self.table.columns(cols)
+        Ok(self.table.columns(cols)?)
     }
     /// The names of the functions `cols`.
     pub fn names_of(&self, cols: &[usize]) -> Vec<String> {

@@ -9,7 +9,7 @@
 
 use super::{Dataset, FunctionTable};
 use crate::lp::{self, Status};
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -28,12 +28,12 @@ pub struct Errors {
 pub struct Scorer<'a> {
     data: &'a Dataset,
     table: &'a FunctionTable,
-    solver: String,
+    solver: lp::SolverKind,
     chunk: usize,
 }
 
 impl<'a> Scorer<'a> {
-    /// `solver`: "reference" or "fast" ([`lp::make_solver`]); `chunk`: fragments per solver.
+    /// `solver`: "reference" or "fast" ([`lp::SolverKind`]); `chunk`: fragments per solver.
     pub fn new(
         data: &'a Dataset,
         table: &'a FunctionTable,
@@ -49,7 +49,7 @@ impl<'a> Scorer<'a> {
         Ok(Scorer {
             data,
             table,
-            solver: solver.to_string(),
+            solver: solver.parse()?,
             chunk,
         })
     }
@@ -61,14 +61,13 @@ impl<'a> Scorer<'a> {
         self.table
     }
     pub fn solver(&self) -> &str {
-        &self.solver
+        self.solver.name()
     }
 
     /// Errors of candidate `cols` on fragments `ids`, sequentially with one solver.
     pub fn errors_seq(&self, cols: &[usize], ids: &[u32]) -> Result<Errors> {
         let table = self.table.grid_table(cols)?;
-        let mut solver = lp::make_solver(&self.solver, table)
-            .with_context(|| format!("LP solver for {:?}", self.table.names_of(cols)))?;
+        let mut solver = lp::make_solver(self.solver, table);
         let z = self.data.grid().points();
         let frags = self.data.fragments();
         let mut out = Errors {
@@ -146,7 +145,7 @@ pub fn bound_curve(
     zf: &[usize],
     solver: &str,
 ) -> Result<Vec<f64>> {
-    let mut s = lp::make_solver(solver, table.grid_table(cols)?)?;
+    let mut s = lp::make_solver(solver.parse()?, table.grid_table(cols)?);
     let z = table.grid().points();
     Ok(zf
         .iter()

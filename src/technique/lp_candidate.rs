@@ -4,7 +4,7 @@
 
 use super::{Evaluator, Technique};
 use crate::basis::{split_list, Basis, Catalog};
-use crate::lp::{self, make_solver, GridTable, MomentSolver};
+use crate::lp::{self, make_solver, GridTable, MomentSolver, SolverKind};
 use crate::Grid;
 use anyhow::{bail, Context, Result};
 
@@ -15,7 +15,7 @@ pub const DEFAULT_GRID_POINTS: usize = crate::grid::DEFAULT_POINTS;
 pub struct LpCandidate {
     basis: Basis,
     grid: Grid,
-    solver_kind: String,
+    solver_kind: SolverKind,
     table: GridTable,
 }
 
@@ -28,11 +28,11 @@ impl LpCandidate {
         let m = basis.len();
         let table = GridTable::from_fn(&grid, m, |z, out| basis.eval(z, out))
             .with_context(|| format!("LP candidate [{}]", basis.names().join(",")))?;
-        make_solver(solver_kind, table.clone())?;
+        let solver_kind: SolverKind = solver_kind.parse()?;
         Ok(LpCandidate {
             basis,
             grid,
-            solver_kind: solver_kind.to_string(),
+            solver_kind,
             table,
         })
     }
@@ -61,7 +61,7 @@ impl LpCandidate {
     }
 
     pub fn solver_kind(&self) -> &str {
-        &self.solver_kind
+        self.solver_kind.name()
     }
 
     pub fn table(&self) -> &GridTable {
@@ -116,9 +116,8 @@ impl Technique for LpCandidate {
         Some(&self.grid)
     }
     fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        // `new` checked that this solver kind builds on this table.
         Box::new(LpEvaluator {
-            solver: make_solver(&self.solver_kind, self.table.clone()).ok(),
+            solver: Some(make_solver(self.solver_kind, self.table.clone())),
             unsettled: 0,
         })
     }

@@ -5,7 +5,7 @@ use momentlab::bench::instances::{
     mixture_moments, power_table, random_mixture, smooth_functions, table_of,
 };
 use momentlab::lp::FastSolver;
-use momentlab::lp::{make_solver, MomentSolver, Status};
+use momentlab::lp::{make_solver, MomentSolver, SolverKind, Status};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -80,7 +80,7 @@ fn cantelli_limit_with_shrinking_error() {
 #[test]
 fn bad_input_is_an_error_not_a_panic() {
     let grid = Grid::uniform(16).unwrap();
-    let mut s = make_solver("fast", power_table(&grid, 3).unwrap()).unwrap();
+    let mut s = make_solver(SolverKind::Fast, power_table(&grid, 3).unwrap());
     assert!(s.solve(&[0.5, 0.3], 0.5).is_err());
     assert!(s.solve(&[0.5, f64::NAN, 0.1], 0.5).is_err());
     assert!(s.solve(&[0.5, f64::INFINITY, 0.1], 0.5).is_err());
@@ -88,7 +88,7 @@ fn bad_input_is_an_error_not_a_panic() {
     // Out-of-range but finite moments are simply infeasible.
     let sol = s.solve(&[5.0, 0.3, 0.2], 0.5).unwrap();
     assert_eq!(sol.status, Status::Infeasible);
-    assert!(make_solver("nope", power_table(&grid, 1).unwrap()).is_err());
+    assert!("nope".parse::<SolverKind>().is_err());
     let mut f = FastSolver::new(power_table(&grid, 3).unwrap());
     assert!(f.set_warm_basis(&[0, 1]).is_err());
     assert!(f.set_warm_basis(&[0, 1, 1, 2]).is_err());

@@ -1,7 +1,7 @@
 //! Solver names: "fast-strict" (the fast solver's earlier name) is the fast solver, answer for
 //! answer; an unknown name is an error naming the choices.
 
-use momentlab::lp::{make_solver, GridTable};
+use momentlab::lp::{make_solver, GridTable, SolverKind};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -16,8 +16,10 @@ fn fast_strict_is_the_fast_solver() {
         o[3] = z * z * z * z;
     })
     .unwrap();
-    let mut fast = make_solver("fast", table.clone()).unwrap();
-    let mut strict = make_solver("fast-strict", table.clone()).unwrap();
+    let strict: SolverKind = "fast-strict".parse().unwrap();
+    assert_eq!(strict, SolverKind::Fast);
+    let mut fast = make_solver(SolverKind::Fast, table.clone());
+    let mut strict = make_solver(strict, table.clone());
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for _ in 0..2000 {
         let k = rng.gen_range(1..=5);
@@ -54,9 +56,7 @@ fn fast_strict_is_the_fast_solver() {
 
 #[test]
 fn unknown_solver_names_the_choices() {
-    let grid = Grid::uniform(8).unwrap();
-    let table = GridTable::from_fn(&grid, 1, |z, o| o[0] = z).unwrap();
-    let e = make_solver("simplex", table).err().unwrap().to_string();
+    let e = "simplex".parse::<SolverKind>().err().unwrap().to_string();
     assert!(
         e.contains("fast") && e.contains("reference") && e.contains("simplex"),
         "{e}"

@@ -10,7 +10,7 @@
 //!
 //! The instance count per technique is `MOMENTLAB_CF_INSTANCES` (default 10 000).
 
-use momentlab::lp::{make_solver, GridTable, Status};
+use momentlab::lp::{make_solver, GridTable, SolverKind, Status};
 use momentlab::technique::hamburger::Hamburger;
 use momentlab::technique::hamburger4::Hamburger4;
 use momentlab::technique::hamburger6::Hamburger6;
@@ -28,21 +28,15 @@ fn instances() -> usize {
         .unwrap_or(10_000)
 }
 
-fn solver_kind() -> &'static str {
-    // The fast solver once merged; the reference solver otherwise.
-    let probe = GridTable::from_fn(&Grid::uniform(3).unwrap(), 1, |z, o| o[0] = z).unwrap();
-    if make_solver("fast", probe).is_ok() {
-        "fast"
-    } else {
-        "reference"
-    }
+fn solver_kind() -> SolverKind {
+    SolverKind::Fast
 }
 
 /// Algorithm 1 on the grid `points` with basis `basis` (m functions); None if the LP solver
 /// reports infeasibility or fails (happens only through its tolerances: all moments here are
 /// moments of grid distributions).
 fn try_lp(
-    kind: &str,
+    kind: SolverKind,
     basis: &dyn Fn(f64, &mut [f64]),
     m: usize,
     points: Vec<f64>,
@@ -51,7 +45,7 @@ fn try_lp(
 ) -> Option<f64> {
     let grid = Grid::from_values(points).unwrap();
     let table = GridTable::from_fn(&grid, m, basis).unwrap();
-    let mut s = make_solver(kind, table).unwrap();
+    let mut s = make_solver(kind, table);
     let sol = s.solve(b, zf).ok()?;
     if sol.status != Status::Optimal {
         return None;

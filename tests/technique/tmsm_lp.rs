@@ -1,5 +1,5 @@
 //! TMSM closed form (docs/tmsm.md) against Algorithm 1 with the same basis on a periodic grid
-//! of [0,1), with the fast LP solver (`lp::make_solver("fast", …)`) (0 included, 1 excluded: the same point of the circle).
+//! of [0,1), with the fast LP solver (`lp::make_solver(SolverKind::Fast, …)`) (0 included, 1 excluded: the same point of the circle).
 //!
 //! Tolerance (docs/tmsm.md §5). Every distribution on a grid is a distribution on the circle, so
 //! the grid LP value is never below the continuous sharp bound: G_cf ≤ G_LP + 1e-7 on any grid.
@@ -11,7 +11,7 @@
 //! value is bounded by h²/2·‖p_h‖∞ (Bernstein); we allow 400·h² and report the maximum.
 
 use crate::common::technique::tmsm_moments;
-use momentlab::lp::{make_solver, GridTable, Status};
+use momentlab::lp::{make_solver, GridTable, SolverKind, Status};
 use momentlab::technique::tmsm::{self, Case};
 use momentlab::Grid;
 use rand::{Rng, SeedableRng};
@@ -78,7 +78,7 @@ fn run(n: usize, count: usize, seed: u64) -> Stats {
         );
         let grid = Grid::from_values(pts).unwrap();
         let table = GridTable::from_fn(&grid, 4, tmsm::basis).unwrap();
-        let sol = make_solver("fast", table).and_then(|mut s| s.solve(&b, zf));
+        let sol = make_solver(SolverKind::Fast, table).solve(&b, zf);
         let Some(sol) = sol.ok().filter(|s| s.status == Status::Optimal) else {
             // microlp's tolerances on clustered Diracs (the data is feasible by construction).
             st.lp_failures += 1;

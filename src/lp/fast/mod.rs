@@ -69,8 +69,7 @@ mod simplex;
 mod starts;
 
 use super::certify::{Certified, Certifier};
-use super::{GridTable, MomentSolver, Solution, Status};
-use anyhow::{bail, Result};
+use super::{Error, GridTable, MomentSolver, Result, Solution, Status};
 use escalate::band;
 use escalate::scaled::ScaledSimplex;
 use linalg::max_volume_rows;
@@ -379,11 +378,14 @@ impl FastSolver {
     /// start basis gives the same answer. Invalid bases are rejected.
     pub fn set_warm_basis(&mut self, basis: &[usize]) -> Result<()> {
         if basis.len() != self.r {
-            bail!("basis: expected {} indices, got {}", self.r, basis.len());
+            return Err(Error::WarmBasisSize {
+                expected: self.r,
+                got: basis.len(),
+            });
         }
         for (k, &i) in basis.iter().enumerate() {
             if i >= self.n || basis[..k].contains(&i) {
-                bail!("basis: index {i} out of range or repeated");
+                return Err(Error::WarmBasisIndex { index: i });
             }
         }
         self.warm.on = true;
@@ -667,13 +669,19 @@ impl FastSolver {
     /// A one-line error for malformed moments or z_f, before any work.
     fn check_problem(&self, moments: &[f64], zf: f64) -> Result<()> {
         if moments.len() != self.m {
-            bail!("expected {} moments, got {}", self.m, moments.len());
+            return Err(Error::MomentCount {
+                expected: self.m,
+                got: moments.len(),
+            });
         }
         if let Some(j) = moments.iter().position(|v| !v.is_finite()) {
-            bail!("moment {} is not finite ({})", j + 1, moments[j]);
+            return Err(Error::MomentNotFinite {
+                index: j + 1,
+                value: moments[j],
+            });
         }
         if zf.is_nan() {
-            bail!("z_f is NaN");
+            return Err(Error::ZfNaN);
         }
         Ok(())
     }
