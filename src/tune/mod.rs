@@ -17,6 +17,7 @@
 //! runner-up and to the published defaults are paired (same fragments) with a 95 % normal
 //! confidence interval: mean ± 1.96·sd/√n.
 
+pub mod cost;
 pub mod export;
 pub mod sample;
 pub mod space;

@@ -5,5 +5,6 @@
 mod common;
 
 mod cli;
+mod cost;
 mod pipeline;
 mod programs;
