@@ -35,7 +35,7 @@ fn odd_taps(s: &str) -> std::result::Result<usize, String> {
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
     /// Shadow-map sizes (texels per edge, comma list) of the size axis.
-    #[arg(long, value_delimiter = ',', default_value = "256,512,1024,2048", value_parser = usize_in(1, 16384))]
+    #[arg(long, value_delimiter = ',', default_value = "512,1024,2048,4096", value_parser = usize_in(1, 16384))]
     pub sizes: Vec<usize>,
     /// Filter taps per axis (odd, comma list) of the filter axis.
     #[arg(long, value_delimiter = ',', default_value = "3,9,15", value_parser = odd_taps)]
@@ -49,6 +49,12 @@ pub struct BenchArgs {
     /// Timed runs per point (after one warm-up; 1..=100).
     #[arg(long, default_value_t = 3, value_parser = usize_in(1, 100))]
     pub repeats: usize,
+    /// Timed runs per point whose shadow map's edge is at least --large-from (1..=100).
+    #[arg(long, default_value_t = 1, value_parser = usize_in(1, 100))]
+    pub repeats_large: usize,
+    /// The edge (texels) from which a point counts as large.
+    #[arg(long, default_value_t = 2048, value_parser = usize_in(1, 16384))]
+    pub large_from: usize,
     /// Techniques (repeatable, comma lists).
     #[arg(
         long,
@@ -158,6 +164,8 @@ fn bench_cmd(args: BenchArgs) -> Result<()> {
         outputs: args.outputs.clone(),
         base: (args.base[0], args.base[1], args.base[2]),
         repeats: args.repeats,
+        repeats_large: args.repeats_large,
+        large_from: args.large_from,
     };
     let out = momentlab::artefact::OutDir::new(&args.out, args.force).context("--out")?;
     let gpu = Gpu::new()?;

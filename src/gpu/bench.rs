@@ -5,7 +5,8 @@
 //!
 //! Times come from timestamp queries around each pass (GPU time) where the adapter has them,
 //! else from the wall clock around a run (labelled "wall"). Each point is run `repeats` times
-//! after one warm-up; the median, mean and maximum are kept. A software adapter (lavapipe) is
+//! (`repeats_large` times where the map's edge is at least `large_from`) after one warm-up;
+//! the median, mean and maximum are kept. A software adapter (lavapipe) is
 //! labelled so: its figures are CPU figures and are never put beside hardware ones.
 
 use super::pipeline::{Compiled, Program, Receivers};
@@ -31,7 +32,33 @@ pub struct Plan {
     pub outputs: Vec<usize>,
     /// The base point (size, filter taps, output edge).
     pub base: (usize, usize, usize),
+    /// Timed runs per point (after one warm-up run).
     pub repeats: usize,
+    /// Timed runs per point whose shadow map has an edge of at least [`Plan::large_from`]
+    /// texels (a 4096² map on a software rasterizer takes seconds per run).
+    #[serde(default = "one")]
+    pub repeats_large: usize,
+    #[serde(default = "never")]
+    pub large_from: usize,
+}
+
+fn one() -> usize {
+    1
+}
+
+fn never() -> usize {
+    usize::MAX
+}
+
+impl Plan {
+    /// Timed runs at a shadow map of `size`² texels.
+    pub fn repeats_at(&self, size: usize) -> usize {
+        if size >= self.large_from {
+            self.repeats_large
+        } else {
+            self.repeats
+        }
+    }
 }
 
 /// Median, mean and maximum of a time in milliseconds.
@@ -65,6 +92,9 @@ pub struct Point {
     pub size: usize,
     pub filter: usize,
     pub output: usize,
+    /// Timed runs behind the statistics.
+    #[serde(default)]
+    pub runs: usize,
     pub encode_ms: Stat,
     pub filter_ms: Stat,
     pub lookup_ms: Stat,
@@ -215,7 +245,8 @@ pub fn run(
         for (axis, pts) in axes {
             for p in pts {
                 progress(&format!("{} {axis} {:?}", s.family.label(), p));
-                let [e, f, l, t] = measure(gpu, s, src, p, plan.repeats)?;
+                let runs = plan.repeats_at(p.0);
+                let [e, f, l, t] = measure(gpu, s, src, p, runs)?;
                 points.push(Point {
                     technique: s.family.technique.name().into(),
                     storage: s.family.storage.name().into(),
@@ -224,6 +255,7 @@ pub fn run(
                     size: p.0,
                     filter: p.1,
                     output: p.2,
+                    runs,
                     encode_ms: e,
                     filter_ms: f,
                     lookup_ms: l,

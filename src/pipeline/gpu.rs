@@ -56,6 +56,8 @@ pub fn run(stacks: &[DepthStack], dir: &Path) -> Result<Outcome> {
         outputs: vec![128, 256],
         base: (512, 9, 256),
         repeats: 3,
+        repeats_large: 3,
+        large_from: usize::MAX,
     };
     let view = stacks
         .iter()

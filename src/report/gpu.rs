@@ -62,15 +62,25 @@ pub fn readme_block(reports: &std::path::Path) -> Result<String> {
             .unwrap_or("")
             .to_string();
         let (size, taps, output) = r.plan.base;
+        let large = if r.plan.sizes.iter().any(|&e| e >= r.plan.large_from) {
+            format!(
+                "; shadow maps from {0}² up: {1} run{2}",
+                r.plan.large_from,
+                r.plan.repeats_large,
+                if r.plan.repeats_large == 1 { "" } else { "s" }
+            )
+        } else {
+            String::new()
+        };
         s += &format!(
             "The paper's Figure 7 analogue on **{}** ({}, {}, {} timer; `reports/gpu/{stem}.json`): \
              ns per lookup at a {size}² shadow map, {taps}×{taps} filter, {output}² lookups \
-             (median of {} runs; encode and filter times, mean and max in the artefact).\n\n",
+             (median of {} runs{large}; encode and filter times, mean and max in the artefact).\n\n",
             r.adapter.name,
             r.adapter.backend,
             if r.adapter.software { "software: CPU times" } else { "hardware" },
             r.timer,
-            r.plan.repeats
+            r.plan.repeats_at(size)
         );
         let base = |p: &crate::gpu::bench::Point| {
             p.axis == "size" && p.size == size && p.filter == taps && p.output == output
