@@ -421,6 +421,8 @@ pub fn measured_costs(
         outputs: vec![],
         base: MEASURE,
         repeats: MEASURE_REPEATS,
+        repeats_large: MEASURE_REPEATS,
+        large_from: usize::MAX,
     };
     let report = bench::run(gpu, &plan, &settings, src, |_| {})?;
     programs
