@@ -30,6 +30,10 @@ pub struct Args {
     /// Comma-separated storages to search (f32, unorm16-theta, unorm16, f16).
     #[arg(long, default_value = "f32,unorm16-theta,unorm16,f16")]
     pub storages: String,
+    /// Largest share of fragments whose shadow is more than 1/255 (one 8-bit display step) from
+    /// the same technique on exact moments, for a setting to be feasible (0.001 = 0.1 %).
+    #[arg(long, default_value_t = 0.001, value_parser = non_negative, allow_negative_numbers = true)]
+    pub max_noise: f64,
     /// Fragments sampled per scene (1..=10000000).
     #[arg(long, default_value_t = 8192, value_parser = usize_in(1, MAX_INPUTS))]
     pub fragments: usize,
@@ -70,6 +74,7 @@ pub fn options(args: &Args) -> Result<Options> {
         )?,
         storages: parse_list("--storages", &args.storages, StorageKind::parse, &snames)?,
         tolerance: args.tolerance,
+        max_noise: args.max_noise,
         fragments_per_scene: args.fragments,
         screen_per_scene: args.screen.min(args.fragments),
         keep: args.keep,

@@ -69,7 +69,10 @@ pub fn tuning(
 ) -> Result<Tuning> {
     let file = out.join(TUNE_FILE);
     if let Ok(t) = crate::artefact::read_json::<Tuning>(&file) {
-        if t.tolerance == tolerance && t.fragments_per_scene == plan.tune_fragments {
+        if t.tolerance == tolerance
+            && t.fragments_per_scene == plan.tune_fragments
+            && t.max_noise == Options::default().max_noise
+        {
             return Ok(t);
         }
     }

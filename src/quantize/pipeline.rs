@@ -91,6 +91,49 @@ pub fn encode_map(
     Ok(out)
 }
 
+/// One filter tap sum in f32, in tap order: acc ← acc + w_i·v(i) for i = 0..n (unfused: the
+/// product rounded, then the sum; fused: one rounding per tap).
+#[inline]
+pub fn tap_sum(weights: &[f32], v: impl Fn(usize) -> f32, order: Order) -> f32 {
+    let mut acc = 0.0f32;
+    for (i, &w) in weights.iter().enumerate() {
+        acc = match order {
+            Order::Unfused => acc + w * v(i),
+            Order::Fused => w.mul_add(v(i), acc),
+        };
+    }
+    acc
+}
+
+/// The stored, filtered value of the centre texel of one (2r+1)² window, as [`filter_pass`]
+/// along x and then along y computes it there: `texels` holds the window's stored texels row by
+/// row (dy outer, dx inner, edges already clamped), `m` channels each; row j's pass output
+/// h_j = store(Σ_i w_i·s(i, j)), then out = store(Σ_j w_j·h_j). The windows that
+/// `crate::tune::sample` gathers with clamped coordinates give the same values as the whole-map
+/// passes at that texel (a test).
+pub fn filtered_window(
+    texels: &[f32],
+    (m, weights): (usize, &[f32]),
+    order: Order,
+    storage: (Storage, HalfRounding),
+    out: &mut [f32],
+) {
+    let n = weights.len();
+    assert_eq!(texels.len(), n * n * m, "filtered_window: window size");
+    let mut rows = [0.0f32; 129]; // radius ≤ 64 (`Gaussian::new`)
+    for c in 0..m {
+        for (j, h) in rows.iter_mut().enumerate().take(n) {
+            let row = &texels[j * n * m..(j + 1) * n * m];
+            *h = store(
+                storage.0,
+                storage.1,
+                tap_sum(weights, |i| row[i * m + c], order),
+            );
+        }
+        out[c] = store(storage.0, storage.1, tap_sum(weights, |j| rows[j], order));
+    }
+}
+
 /// One filter pass over a map of `m` channels per texel: along x (`vertical` false) or y,
 /// out = store(Σ_i w_i·map(p + i)) accumulated in f32 in tap order.
 pub fn filter_pass(
@@ -107,20 +150,16 @@ pub fn filter_pass(
     for y in 0..height {
         for x in 0..width {
             for c in 0..m {
-                let mut acc = 0.0f32;
-                for (i, &w) in weights.iter().enumerate() {
+                let tap = |i: usize| {
                     let d = i as i64 - r;
                     let t = if vertical {
                         clamp_coord(y, d, height) * width + x
                     } else {
                         y * width + clamp_coord(x, d, width)
                     };
-                    let v = map[t * m + c];
-                    acc = match order {
-                        Order::Unfused => acc + w * v,
-                        Order::Fused => w.mul_add(v, acc),
-                    };
-                }
+                    map[t * m + c]
+                };
+                let acc = tap_sum(weights, tap, order);
                 out[(y * width + x) * m + c] = store(storage, rounding, acc);
             }
         }
@@ -254,6 +293,46 @@ mod tests {
             store(Storage::Unorm(16), HalfRounding::NearestEven, v),
             (32816.0f64 / 65535.0) as f32
         );
+    }
+
+    #[test]
+    fn a_window_filters_to_the_whole_map_passes_bit_for_bit() {
+        let k = Gaussian::paper();
+        let w = weights_f32(&k);
+        let (width, height, m) = (13usize, 11usize, 3usize);
+        let mut x = 0x2545f491u64;
+        let mut rnd = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for storage in [Storage::Float32, Storage::Unorm(16), Storage::Half] {
+            for order in [Order::Unfused, Order::Fused] {
+                let st = (storage, HalfRounding::TowardZero);
+                let map: Vec<f32> = (0..width * height * m)
+                    .map(|_| store(storage, st.1, rnd() * 1.3 - 0.1))
+                    .collect();
+                let h = filter_pass(&map, (width, height, m), &w, false, order, st);
+                let v = filter_pass(&h, (width, height, m), &w, true, order, st);
+                let mut out = [0.0f32; 3];
+                for y in 0..height {
+                    for xx in 0..width {
+                        let mut win = Vec::new();
+                        for dy in -4i64..=4 {
+                            for dx in -4i64..=4 {
+                                let t =
+                                    clamp_coord(y, dy, height) * width + clamp_coord(xx, dx, width);
+                                win.extend_from_slice(&map[t * m..(t + 1) * m]);
+                            }
+                        }
+                        filtered_window(&win, (m, &w), order, st, &mut out);
+                        let t = y * width + xx;
+                        assert_eq!(&out[..], &v[t * m..(t + 1) * m], "{storage:?} {order:?}");
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -20,6 +20,7 @@
 pub mod cost;
 pub mod export;
 pub mod sample;
+pub mod score;
 pub mod space;
 pub mod table;
 
@@ -30,6 +31,7 @@ use crate::technique::{Evaluator, Technique};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 use sample::Sample;
+use score::{Acc, Moments, Outcome};
 use serde::{Deserialize, Serialize};
 use space::{DepthBias, Family, Own, Setting, StorageKind, TechniqueKind};
 use std::time::Instant;
@@ -41,6 +43,9 @@ pub struct Options {
     pub storages: Vec<StorageKind>,
     /// Error above the best setting that is acceptable (absolute; 0.002 = 0.2 points).
     pub tolerance: f64,
+    /// Largest share of fragments whose G is more than 1/255 from G_exact (noise) for a
+    /// feasible setting (0.001 = 0.1 %).
+    pub max_noise: f64,
     /// Fragments sampled per scene (the confirming sample).
     pub fragments_per_scene: usize,
     /// Fragments per scene of the screening subsample (at most `fragments_per_scene`).
@@ -58,6 +63,7 @@ impl Default for Options {
             techniques: TechniqueKind::ALL.to_vec(),
             storages: StorageKind::ALL.to_vec(),
             tolerance: 0.002,
+            max_noise: 0.001,
             fragments_per_scene: 8192,
             screen_per_scene: 1024,
             keep: 2,
@@ -74,6 +80,12 @@ impl Options {
             bail!(
                 "tolerance must be a finite number ≥ 0, got {}",
                 self.tolerance
+            );
+        }
+        if !(self.max_noise.is_finite() && (0.0..=1.0).contains(&self.max_noise)) {
+            bail!(
+                "max noise must be a share in [0, 1] (0.001 = 0.1 %), got {}",
+                self.max_noise
             );
         }
         if self.fragments_per_scene == 0 || self.screen_per_scene == 0 || self.keep == 0 {
@@ -93,12 +105,21 @@ pub struct Scored {
     pub label: String,
     pub bits_per_texel: u32,
     pub ns_per_fragment: f64,
-    /// Mean |G − PCF| (= leak + darkening + non_finite/fragments).
+    /// The score ([`score`]): leak + darkening + noise + non_finite/fragments, an upper bound
+    /// of mean |G − PCF| that noise cannot lower.
     pub error: f64,
-    /// Mean max(PCF − G, 0): light leaking.
+    /// Mean max(PCF − G_exact, 0): light leaking of the technique on exact moments.
     pub leak: f64,
-    /// Mean max(G − PCF, 0): over-darkening.
+    /// Mean max(G_exact − PCF, 0): over-darkening of the technique on exact moments.
     pub darkening: f64,
+    /// Mean |G − G_exact|: noise from storage and f32 arithmetic.
+    pub noise: f64,
+    /// 99.9th percentile of |G − G_exact| (NaN where not measured).
+    pub noise_p999: f64,
+    /// Share of fragments with |G − G_exact| > 1/255 (non-finite ones included).
+    pub noise_share: f64,
+    /// noise_share ≤ the run's max_noise.
+    pub feasible: bool,
     pub non_finite: usize,
     pub fragments: usize,
 }
@@ -169,12 +190,26 @@ pub struct Target {
     /// (ascending bits, then ns).
     pub pareto: Vec<Scored>,
     pub references: Vec<Reference>,
+    /// Per family searched: the smallest α that keeps the noise bound on this target's
+    /// fragments (None: no α of the grid does).
+    pub alpha_floor: Vec<AlphaFloor>,
+    /// Settings confirmed on this target that break the noise bound (left out of the choice).
+    pub infeasible: usize,
+}
+
+/// The smallest moment bias α of a family that keeps the noise bound.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct AlphaFloor {
+    pub family: String,
+    pub alpha: Option<f64>,
 }
 
 /// Everything `tune` found.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Tuning {
     pub tolerance: f64,
+    /// Largest share of fragments with noise above 1/255 for a feasible setting.
+    pub max_noise: f64,
     pub fragments_per_scene: usize,
     pub screen_per_scene: usize,
     pub seed: u64,
@@ -260,123 +295,87 @@ pub fn references() -> Vec<(String, Setting)> {
     ]
 }
 
-/// Decoded filtered moments of every fragment for one family (row-major, n × m).
-struct Moments {
-    family: Family,
-    values: Vec<f64>,
-}
-
-fn decode_family(f: &Family, sample: &Sample) -> Result<Moments> {
-    let t = f.build(f.technique.alphas()[0])?;
-    let theta = f.technique.theta(f.storage);
-    let storage = f.storage.storage();
-    let m = t.moment_count();
-    let basis = |z: f64, o: &mut [f64]| t.basis(z, o);
-    let mut values = vec![0.0; sample.len() * m];
-    values
-        .par_chunks_mut(m * 256)
-        .enumerate()
-        .for_each(|(c, chunk)| {
-            for (k, row) in chunk.chunks_mut(m).enumerate() {
-                let i = c * 256 + k;
-                crate::quantize::study::decoded_window(
-                    sample.window_of(i),
-                    &basis,
-                    &theta,
-                    storage,
-                    row,
-                );
-            }
-        });
-    Ok(Moments { family: *f, values })
-}
-
-/// Per-scene sums of one setting.
-#[derive(Clone, Copy, Debug, Default)]
-struct Acc {
-    n: usize,
-    leak: f64,
-    dark: f64,
-    non_finite: usize,
-}
-
-impl Acc {
-    fn add(&mut self, e: f64) {
-        self.n += 1;
-        if !e.is_finite() {
-            self.non_finite += 1;
-        } else if e < 0.0 {
-            self.leak -= e;
-        } else {
-            self.dark += e;
-        }
-    }
-    fn merge(&mut self, o: &Acc) {
-        self.n += o.n;
-        self.leak += o.leak;
-        self.dark += o.dark;
-        self.non_finite += o.non_finite;
-    }
-    fn error(&self) -> f64 {
-        (self.leak + self.dark + self.non_finite as f64) / self.n.max(1) as f64
-    }
-}
-
-/// Signed errors G − PCF (NaN where G is not finite) of a setting on fragments `idx`.
-fn signed_errors(
-    s: &Setting,
-    t: &dyn Technique,
-    mom: &Moments,
-    sample: &Sample,
-    idx: &[usize],
-) -> Vec<f64> {
-    let m = t.moment_count();
-    let mut ev: Box<dyn Evaluator + '_> = t.evaluator();
-    idx.iter()
-        .map(|&i| {
-            let zf =
-                sample.z[i] - (s.depth_bias.constant + s.depth_bias.slope_scale * sample.slope[i]);
-            let g = ev.shadow(&mom.values[i * m..(i + 1) * m], zf);
-            if g.is_finite() {
-                g - sample.pcf[i]
-            } else {
-                f64::NAN
-            }
-        })
-        .collect()
-}
-
-/// |e| with a non-finite G counted as 1.
-fn abs_err(e: f64) -> f64 {
-    if e.is_finite() {
-        e.abs()
-    } else {
-        1.0
-    }
-}
-
-/// Per-scene accumulators of each setting on fragments `idx` (parallel over settings).
+/// Per-scene accumulators of each setting on fragments `idx` (parallel over settings); `keep`
+/// keeps every fragment's noise for quantiles.
 fn score_all(
     settings: &[(usize, Setting)],
     moments: &[Moments],
     sample: &Sample,
     idx: &[usize],
-    bar: &Bar,
+    (bar, keep): (&Bar, bool),
 ) -> Result<Vec<Vec<Acc>>> {
-    let ns = sample.scenes.len();
     settings
         .par_iter()
         .map(|(fi, s)| {
-            let t = s.family.build(s.alpha)?;
-            let e = signed_errors(s, t.as_ref(), &moments[*fi], sample, idx);
-            let mut acc = vec![Acc::default(); ns];
-            for (&i, &x) in idx.iter().zip(&e) {
-                acc[sample.scene[i]].add(x);
-            }
+            let m = &moments[*fi];
+            let o = score::outcomes(s, (&m.stored, &m.exact), sample, idx)?;
             bar.inc(1);
-            Ok(acc)
+            Ok(score::accumulate(&o, sample, idx, keep))
         })
         .collect()
+}
+
+/// Per-fragment scores (leak + darkening + noise, 1 where not finite) of `s` on `idx`.
+fn fragment_scores(s: &Setting, m: &Moments, sample: &Sample, idx: &[usize]) -> Result<Vec<f64>> {
+    Ok(score::outcomes(s, (&m.stored, &m.exact), sample, idx)?
+        .iter()
+        .map(Outcome::score)
+        .collect())
+}
+
+/// The smallest α at which family `m.family` keeps the noise bound on fragments `idx`, at the
+/// default depth bias (ε = 10⁻⁴, s = 2; the depth bias moves z_f, not the moments): the first
+/// feasible α of the grid, refined by four bisection steps in log α towards the grid value
+/// below it (when that is > 0). None when no α of the grid is feasible.
+fn smallest_feasible_alpha(
+    m: &Moments,
+    sample: &Sample,
+    idx: &[usize],
+    max_noise: f64,
+) -> Result<Option<f64>> {
+    let share = |alpha: f64| -> Result<f64> {
+        let s = Setting {
+            family: m.family,
+            alpha,
+            depth_bias: DepthBias {
+                constant: 1e-4,
+                slope_scale: 2.0,
+            },
+        };
+        let o = score::outcomes(&s, (&m.stored, &m.exact), sample, idx)?;
+        let mut a = Acc::new(false);
+        o.iter().for_each(|x| a.add(x));
+        Ok(a.noise_share())
+    };
+    let grid = m.family.technique.alphas();
+    let mut below = None;
+    for &alpha in grid {
+        if share(alpha)? <= max_noise {
+            let Some(lo) = below.filter(|&lo: &f64| lo > 0.0) else {
+                return Ok(Some(alpha));
+            };
+            let (mut lo, mut hi) = (lo, alpha);
+            for _ in 0..4 {
+                let mid: f64 = (lo * hi).sqrt();
+                if share(mid)? <= max_noise {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            // three significant digits, rounded up so the bound still holds on the grid value
+            let e = hi.log10().floor() as i32 - 2;
+            let k = (hi / 10f64.powi(e)).ceil();
+            let rounded: f64 = format!("{k}e{e}").parse().unwrap_or(hi);
+            return Ok(Some(if share(rounded)? <= max_noise {
+                rounded
+            } else {
+                hi
+            }));
+        }
+        below = Some(alpha);
+    }
+    Ok(None)
 }
 
 /// Evaluator of stored (filtered, still encoded) values: θ⁻¹ in f32, then the technique.
@@ -450,7 +449,7 @@ fn speed_of(mom: &Moments, sample: &Sample, n: usize) -> Result<f64> {
     let mut stored = vec![0.0; n * m];
     for i in 0..n {
         theta.encode(
-            &mom.values[i * m..(i + 1) * m],
+            &mom.stored[i * m..(i + 1) * m],
             &mut stored[i * m..(i + 1) * m],
         );
     }
@@ -460,16 +459,20 @@ fn speed_of(mom: &Moments, sample: &Sample, n: usize) -> Result<f64> {
     Ok(timing::speed(&d, &stored, &zfs, 5).median)
 }
 
-fn scored(s: &Setting, acc: &Acc, ns: f64) -> Scored {
+fn scored(s: &Setting, acc: &Acc, ns: f64, max_noise: f64) -> Scored {
     let n = acc.n.max(1) as f64;
     Scored {
         setting: *s,
         label: s.label(),
         bits_per_texel: s.family.bits_per_texel(),
         ns_per_fragment: ns,
-        error: acc.error(),
+        error: acc.score(),
         leak: acc.leak / n,
         darkening: acc.dark / n,
+        noise: acc.noise / n,
+        noise_p999: acc.noise_quantile(0.999),
+        noise_share: acc.noise_share(),
+        feasible: acc.noise_share() <= max_noise,
         non_finite: acc.non_finite,
         fragments: acc.n,
     }
@@ -542,7 +545,7 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
     bar.phase("tune: storing and filtering moments", fams.len() as u64);
     let mut moments = Vec::with_capacity(fams.len());
     for f in &fams {
-        moments.push(decode_family(f, &sample)?);
+        moments.push(Moments::compute(f, &sample)?);
         bar.inc(1);
     }
     bar.phase("tune: speed per technique and storage", fams.len() as u64);
@@ -552,7 +555,37 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         bar.inc(1);
     }
 
-    // Screening: the whole grid on every k-th fragment of each scene.
+    // The noise floor of α per target and family, on the target's whole sample.
+    let all: Vec<usize> = (0..sample.len()).collect();
+    let target_idx = |t: usize| -> Vec<usize> {
+        if t == nscenes {
+            all.clone()
+        } else {
+            sample.of_scene(t)
+        }
+    };
+    bar.phase(
+        "tune: smallest α within the noise bound",
+        ((nscenes + 1) * families.len()) as u64,
+    );
+    let mut floor: Vec<Vec<Option<f64>>> = Vec::new();
+    for t in 0..=nscenes {
+        let idx = target_idx(t);
+        let mut row = Vec::new();
+        for f in &families {
+            row.push(smallest_feasible_alpha(
+                &moments[fam_index(f)],
+                &sample,
+                &idx,
+                opts.max_noise,
+            )?);
+            bar.inc(1);
+        }
+        floor.push(row);
+    }
+
+    // Screening: the whole grid, plus each family's α floors, on every k-th fragment of each
+    // scene.
     let mut screen = Vec::new();
     for s in 0..nscenes {
         let of = sample.of_scene(s);
@@ -561,32 +594,42 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
             .div_ceil(opts.screen_per_scene.min(of.len()).max(1));
         screen.extend(of.into_iter().step_by(k.max(1)));
     }
-    let grid: Vec<(usize, Setting)> = families
-        .iter()
-        .flat_map(|f| space::grid(f).into_iter().map(|s| (fam_index(f), s)))
-        .collect();
+    let mut grid: Vec<(usize, Setting)> = Vec::new();
+    for (k, f) in families.iter().enumerate() {
+        let mut alphas: Vec<f64> = f.technique.alphas().to_vec();
+        alphas.extend(floor.iter().filter_map(|row| row[k]));
+        alphas.sort_by(f64::total_cmp);
+        alphas.dedup();
+        for s in space::grid_at(f, &alphas) {
+            grid.push((fam_index(f), s));
+        }
+    }
     bar.phase("tune: screening the grid", grid.len() as u64);
-    let screened = score_all(&grid, &moments, &sample, &screen, bar)?;
+    let screened = score_all(&grid, &moments, &sample, &screen, (bar, false))?;
 
-    // Per target and family, the `keep` best settings of the screen.
+    // Per target and family, the `keep` best settings of the screen at or above the α floor.
     let mut confirm: Vec<(usize, Setting)> = Vec::new();
     let push = |c: &mut Vec<(usize, Setting)>, x: (usize, Setting)| {
         if !c.iter().any(|y| y.1 == x.1) {
             c.push(x);
         }
     };
-    for target in 0..=nscenes {
+    for (target, floors) in floor.iter().enumerate() {
         let err = |accs: &Vec<Acc>| {
             if target == nscenes {
-                let mut a = Acc::default();
+                let mut a = Acc::new(false);
                 accs.iter().for_each(|x| a.merge(x));
-                a.error()
+                a.score()
             } else {
-                accs[target].error()
+                accs[target].score()
             }
         };
-        for fi in 0..families.len() {
-            let mut rows: Vec<usize> = (0..grid.len()).filter(|&g| grid[g].0 == fi).collect();
+        for (k, f) in families.iter().enumerate() {
+            let Some(least) = floors[k] else { continue };
+            let fi = fam_index(f);
+            let mut rows: Vec<usize> = (0..grid.len())
+                .filter(|&g| grid[g].0 == fi && grid[g].1.alpha >= least)
+                .collect();
             rows.sort_by(|&a, &b| err(&screened[a]).total_cmp(&err(&screened[b])));
             for &g in rows.iter().take(opts.keep) {
                 push(&mut confirm, grid[g]);
@@ -597,46 +640,63 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
     for (_, r) in &refs {
         push(&mut confirm, (fam_index(&r.family), *r));
     }
-    let all: Vec<usize> = (0..sample.len()).collect();
     bar.phase("tune: confirming on the whole sample", confirm.len() as u64);
-    let confirmed = score_all(&confirm, &moments, &sample, &all, bar)?;
+    let confirmed = score_all(&confirm, &moments, &sample, &all, (bar, true))?;
     bar.finish();
 
     let target = |t: usize| -> Result<Target> {
-        let idx: Vec<usize> = if t == nscenes {
-            all.clone()
-        } else {
-            sample.of_scene(t)
-        };
+        let idx = target_idx(t);
         let acc_of = |accs: &Vec<Acc>| {
             if t == nscenes {
-                let mut a = Acc::default();
+                let mut a = Acc::new(true);
                 accs.iter().for_each(|x| a.merge(x));
                 a
             } else {
-                accs[t]
+                accs[t].clone()
             }
         };
-        let rows: Vec<Scored> = (0..n_searched)
-            .map(|k| scored(&confirm[k].1, &acc_of(&confirmed[k]), ns[confirm[k].0]))
-            .collect();
+        let row = |k: usize| {
+            scored(
+                &confirm[k].1,
+                &acc_of(&confirmed[k]),
+                ns[confirm[k].0],
+                opts.max_noise,
+            )
+        };
+        let all_rows: Vec<Scored> = (0..n_searched).map(row).collect();
+        // Only settings within the noise bound compete.
+        let ok: Vec<usize> = (0..n_searched).filter(|&k| all_rows[k].feasible).collect();
+        let rows: Vec<Scored> = ok.iter().map(|&k| all_rows[k].clone()).collect();
+        let name = if t == nscenes {
+            "all".to_string()
+        } else {
+            sample.scenes[t].clone()
+        };
         let Some(c) = cheapest_within(&rows, opts.tolerance) else {
-            bail!("no setting with a finite error");
+            let least = all_rows
+                .iter()
+                .min_by(|a, b| a.noise_share.total_cmp(&b.noise_share))
+                .map(|r| {
+                    format!(
+                        "; the least noisy is {} at {:.3} %",
+                        r.label,
+                        100.0 * r.noise_share
+                    )
+                })
+                .unwrap_or_default();
+            bail!(
+                "{name}: no setting keeps the noise bound (at most {:.3} % of fragments more than 1/255 from exact moments){least}; raise --max-noise or allow 32-bit storage",
+                100.0 * opts.max_noise
+            );
         };
         let b = (0..rows.len())
             .min_by(|&i, &j| rows[i].error.total_cmp(&rows[j].error))
             .expect("rows");
         let errs = |k: usize| -> Result<Vec<f64>> {
             let (fi, s) = &confirm[k];
-            let tech = s.family.build(s.alpha)?;
-            Ok(
-                signed_errors(s, tech.as_ref(), &moments[*fi], &sample, &idx)
-                    .into_iter()
-                    .map(abs_err)
-                    .collect(),
-            )
+            fragment_scores(s, &moments[*fi], &sample, &idx)
         };
-        let chosen_errs = errs(c)?;
+        let chosen_errs = errs(ok[c])?;
         let same = |k: usize| {
             rows[k].setting.family.technique == rows[c].setting.family.technique
                 && rows[k].setting.family.storage == rows[c].setting.family.storage
@@ -645,7 +705,7 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         let sub: Vec<Scored> = others.iter().map(|&k| rows[k].clone()).collect();
         let runner = cheapest_within(&sub, opts.tolerance).map(|k| others[k]);
         let runner_pair = match runner {
-            Some(r) => Some(Paired::of(&chosen_errs, &errs(r)?)),
+            Some(r) => Some(Paired::of(&chosen_errs, &errs(ok[r])?)),
             None => None,
         };
         let mut references = Vec::new();
@@ -656,30 +716,36 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
                 .expect("reference confirmed");
             references.push(Reference {
                 name: name.clone(),
-                scored: scored(r, &acc_of(&confirmed[k]), ns[confirm[k].0]),
+                scored: row(k),
                 gain: Paired::of(&errs(k)?, &chosen_errs),
             });
         }
         Ok(Target {
-            scene: if t == nscenes {
-                "all".into()
-            } else {
-                sample.scenes[t].clone()
-            },
+            scene: name,
             fragments: idx.len(),
             best: rows[b].clone(),
             chosen: rows[c].clone(),
-            chosen_minus_best: Paired::of(&chosen_errs, &errs(b)?),
+            chosen_minus_best: Paired::of(&chosen_errs, &errs(ok[b])?),
             runner_up: runner.map(|r| rows[r].clone()),
             chosen_minus_runner_up: runner_pair,
             pareto: pareto(&rows).into_iter().map(|k| rows[k].clone()).collect(),
             references,
+            alpha_floor: families
+                .iter()
+                .zip(&floor[t])
+                .map(|(f, a)| AlphaFloor {
+                    family: f.label(),
+                    alpha: *a,
+                })
+                .collect(),
+            infeasible: n_searched - ok.len(),
         })
     };
     let scenes = (0..nscenes).map(target).collect::<Result<Vec<_>>>()?;
     let overall = target(nscenes)?;
     Ok(Tuning {
         tolerance: opts.tolerance,
+        max_noise: opts.max_noise,
         fragments_per_scene: opts.fragments_per_scene,
         screen_per_scene: opts.screen_per_scene,
         seed: opts.seed,
@@ -717,6 +783,10 @@ mod tests {
             error,
             leak: error,
             darkening: 0.0,
+            noise: 0.0,
+            noise_p999: 0.0,
+            noise_share: 0.0,
+            feasible: true,
             non_finite: 0,
             fragments: 1,
         }

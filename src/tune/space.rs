@@ -351,10 +351,15 @@ pub fn families(techniques: &[TechniqueKind], storages: &[StorageKind]) -> Resul
     Ok(out)
 }
 
-/// Every setting of a family (α × ε × s).
+/// Every setting of a family (α × ε × s) on the technique's α grid.
 pub fn grid(f: &Family) -> Vec<Setting> {
+    grid_at(f, f.technique.alphas())
+}
+
+/// Every setting of a family at the moment biases `alphas` (α × ε × s).
+pub fn grid_at(f: &Family, alphas: &[f64]) -> Vec<Setting> {
     let mut out = Vec::new();
-    for &alpha in f.technique.alphas() {
+    for &alpha in alphas {
         for &constant in &CONSTANTS {
             for &slope_scale in &SLOPE_SCALES {
                 out.push(Setting {

@@ -1,4 +1,6 @@
-//! The text table of a tuning, printed by `momentlab tune`.
+//! The text table of a tuning (`momentlab tune`'s output): per target the chosen setting, the
+//! best, the runner-up and the gain over the published defaults, each with its error split
+//! into leak, darkening and noise.
 
 use super::{Scored, Tuning};
 
@@ -8,14 +10,16 @@ fn pct(x: f64) -> String {
 
 fn row(scene: &str, s: &Scored) -> String {
     format!(
-        "{:<8} {:<48} {:>5} {:>8.1} {:>8} {:>8} {:>8}",
+        "{:<8} {:<48} {:>5} {:>8.1} {:>8} {:>8} {:>8} {:>8} {:>8}",
         scene,
         s.label,
         s.bits_per_texel,
         s.ns_per_fragment,
         pct(s.error),
         pct(s.leak),
-        pct(s.darkening)
+        pct(s.darkening),
+        pct(s.noise),
+        pct(s.noise_share)
     )
 }
 
@@ -23,8 +27,8 @@ fn row(scene: &str, s: &Scored) -> String {
 /// gain over the published defaults.
 pub fn table(t: &Tuning) -> String {
     let mut out = format!(
-        "{:<8} {:<48} {:>5} {:>8} {:>8} {:>8} {:>8}\n",
-        "scene", "setting", "bits", "ns/frag", "error", "leak", "darken"
+        "{:<8} {:<48} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
+        "scene", "setting", "bits", "ns/frag", "error", "leak", "darken", "noise", ">1/255"
     );
     for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
         out += &row(&target.scene, &target.chosen);
@@ -45,17 +49,23 @@ pub fn table(t: &Tuning) -> String {
         }
         for r in &target.references {
             out += &format!(
-                "{:<8}   vs {:<40} error {:>8}: tuned gains {:+.3} ± {:.3} pp\n",
+                "{:<8}   vs {:<40} error {:>8}{}: tuned gains {:+.3} ± {:.3} pp\n",
                 "",
                 r.name,
                 pct(r.scored.error),
+                if r.scored.feasible {
+                    String::new()
+                } else {
+                    format!(" (noise above 1/255 on {})", pct(r.scored.noise_share))
+                },
                 100.0 * r.gain.mean,
                 100.0 * r.gain.half_width
             );
         }
     }
     out += &format!(
-        "(tolerance {} absolute; {} fragments per scene, {} settings screened on {} per scene, {} confirmed; 95 % paired intervals; {:.1} s)\n",
+        "(error = leak + darkening + noise against exact moments; feasible: noise above 1/255 on at most {} of fragments; tolerance {} absolute; {} fragments per scene, {} settings screened on {} per scene, {} confirmed; 95 % paired intervals; {:.1} s)\n",
+        pct(t.max_noise),
         pct(t.tolerance),
         t.fragments_per_scene,
         t.settings_screened,

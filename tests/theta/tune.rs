@@ -88,7 +88,7 @@ fn picks_16_bit_when_the_tolerance_allows_and_32_bit_when_not() {
     assert_eq!(far.chosen.bits_per_texel, 64);
     assert!(far.chosen.error <= far.best.error + 0.002);
     // Near: every 16-bit setting misses the shadow; the choice is 32-bit.
-    assert!(near.best.error < 0.01, "{:?}", near.best);
+    assert!(near.best.error < 0.1, "{:?}", near.best);
     assert_eq!(
         near.chosen.setting.family.storage.bits(),
         32,
@@ -116,18 +116,46 @@ fn picks_16_bit_when_the_tolerance_allows_and_32_bit_when_not() {
         best16.best
     );
     // A tolerance above the gap lets 16 bits back in.
-    let loose = tune(&stacks[1..], &options(0.01), &Bar::hidden()).unwrap();
+    let gap = best16.best.error - near.best.error;
+    let loose = tune(&stacks[1..], &options(gap + 0.005), &Bar::hidden()).unwrap();
     assert_eq!(
         loose.scenes[0].chosen.bits_per_texel, 64,
         "{:?}",
         loose.scenes[0].chosen
     );
+    // The noise bound: what competes keeps it, and near's tight cluster rejects settings.
+    for s in t
+        .scenes
+        .iter()
+        .chain([&t.overall])
+        .flat_map(|s| [&s.chosen, &s.best].into_iter().chain(&s.pareto))
+    {
+        assert!(s.feasible && s.noise_share <= 0.001, "{s:?}");
+        assert!(s.noise_p999.is_finite(), "{s:?}");
+    }
+    assert!(near.infeasible > 0, "near rejected nothing");
+    let paper16 = &near.references[0];
+    assert!(paper16.name.contains("16-bit") && !paper16.scored.feasible);
+    // Without the bound the noisy small-α settings compete again, and look better.
+    let unbounded = tune(
+        &stacks[1..],
+        &Options {
+            max_noise: 1.0,
+            ..options(0.002)
+        },
+        &Bar::hidden(),
+    )
+    .unwrap();
+    let u = &unbounded.scenes[0];
+    assert_eq!(u.infeasible, 0);
+    assert!(u.best.noise_share > 0.001, "{:?}", u.best);
+    assert!(u.best.error < near.best.error, "{:?}", u.best);
     // The runner-up of Far is another family, with a paired interval.
     let p = far.chosen_minus_runner_up.unwrap();
     assert!(p.half_width.is_finite() && p.fragments == far.fragments);
-    // Leak + darkening + non-finite = error, everywhere.
+    // Leak + darkening + noise + non-finite = error, everywhere.
     for s in t.scenes.iter().flat_map(|s| s.pareto.iter()) {
-        let sum = s.leak + s.darkening + s.non_finite as f64 / s.fragments as f64;
+        let sum = s.leak + s.darkening + s.noise + s.non_finite as f64 / s.fragments as f64;
         assert!((sum - s.error).abs() < 1e-12, "{s:?}");
     }
     // With a huge tolerance the cheapest setting wins everywhere (16 bits, one moment: ESM).
@@ -295,4 +323,78 @@ fn an_existing_export_file_stops_tune_before_any_output_or_work() {
         "mine"
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Noise never lowers a score: zero-mean noise added to the stored moments leaves the
+/// technique's own error (leak + darkening, from exact moments) bit for bit as it was, and the
+/// score averaged over seeded realisations does not fall (Jensen: E|ν + δ| ≥ |ν|); at amplitudes
+/// of a storage step and more it rises.
+#[test]
+fn adding_zero_mean_noise_to_the_moments_never_lowers_a_score() {
+    use momentlab::tune::sample;
+    use momentlab::tune::score::{accumulate, outcomes, Moments};
+    use momentlab::tune::space::{DepthBias, Family, Own, Setting};
+    let stacks = vec![scene("far", 0.25, 40), scene("near", 5e-4, 40)];
+    let s = sample::draw(&stacks, 1500, 11, &|_| {}).unwrap();
+    let idx: Vec<usize> = (0..s.len()).collect();
+    let score = |setting: &Setting, stored: &[f64], exact: &[f64]| {
+        let o = outcomes(setting, (stored, exact), &s, &idx).unwrap();
+        let mut a = accumulate(&o, &s, &idx, false);
+        let first = a.remove(0);
+        a.iter().fold(first, |mut x, y| {
+            x.merge(y);
+            x
+        })
+    };
+    let mut x = 0x9e3779b97f4a7c15u64;
+    let mut uniform = move || {
+        x ^= x << 13;
+        x ^= x >> 7;
+        x ^= x << 17;
+        (x >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+    };
+    for (technique, storage, alpha) in [
+        (TechniqueKind::Hamburger4, StorageKind::F32, 6e-6),
+        (TechniqueKind::Hamburger4, StorageKind::Unorm16Theta, 3e-5),
+        (TechniqueKind::Hausdorff4, StorageKind::F32, 2e-6),
+        (TechniqueKind::Vsm, StorageKind::F32, 1e-5),
+    ] {
+        let family = Family {
+            technique,
+            storage,
+            own: Own::None,
+        };
+        let m = Moments::compute(&family, &s).unwrap();
+        let setting = Setting {
+            family,
+            alpha,
+            depth_bias: DepthBias {
+                constant: 1e-4,
+                slope_scale: 2.0,
+            },
+        };
+        let base = score(&setting, &m.stored, &m.exact);
+        for amp in [1e-7, 1e-6, 1e-5, 1e-4] {
+            let runs = 12;
+            let mut scores = Vec::new();
+            for _ in 0..runs {
+                let noisy: Vec<f64> = m.stored.iter().map(|v| v + amp * uniform()).collect();
+                let a = score(&setting, &noisy, &m.exact);
+                // the technique's own error does not move
+                assert_eq!((a.leak, a.dark), (base.leak, base.dark), "{technique:?}");
+                scores.push(a.score());
+            }
+            let mean = scores.iter().sum::<f64>() / runs as f64;
+            let sd =
+                (scores.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (runs - 1) as f64).sqrt();
+            assert!(
+                mean >= base.score() - 2.0 * sd / (runs as f64).sqrt() - 1e-12,
+                "{technique:?} {storage:?} amp {amp}: {mean} < {}",
+                base.score()
+            );
+            if amp >= 1e-5 {
+                assert!(mean > base.score(), "{technique:?} {storage:?} amp {amp}");
+            }
+        }
+    }
 }
