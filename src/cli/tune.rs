@@ -75,6 +75,7 @@ pub fn options(args: &Args) -> Result<Options> {
         storages: parse_list("--storages", &args.storages, StorageKind::parse, &snames)?,
         tolerance: args.tolerance,
         max_noise: args.max_noise,
+        cost: Some(momentlab::gpu::cost::tune_cost),
         fragments_per_scene: args.fragments,
         screen_per_scene: args.screen.min(args.fragments),
         keep: args.keep,

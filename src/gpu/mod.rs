@@ -10,6 +10,7 @@
 pub mod bench;
 pub mod call;
 pub mod check;
+pub mod cost;
 pub mod device;
 pub mod passes;
 pub mod pipeline;

@@ -86,6 +86,7 @@ pub fn tuning(
         tolerance,
         fragments_per_scene: plan.tune_fragments,
         screen_per_scene: plan.tune_screen.min(plan.tune_fragments),
+        cost: Some(crate::gpu::cost::tune_cost),
         ..Options::default()
     };
     let bar = Bar::new("tune", 0);

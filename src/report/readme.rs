@@ -70,7 +70,7 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "quantize-alpha" => super::docs_figures::quantize_alpha(reports),
         "quantize-usable" => super::docs_figures::quantize_usable(reports),
         "theta-fig5" => super::docs_figures::theta_fig5(reports),
-        "gpu-cost" => crate::tune::cost::docs_block(reports),
+        "gpu-cost" => crate::gpu::cost::docs_block(reports),
         _ => bail!("unknown README block '{name}'"),
     }
 }

@@ -3,21 +3,22 @@
 //! own parameters ([`space`]) for the cheapest setting whose error is within a tolerance of the
 //! best one, and compare it with the paper's and the engines' published defaults.
 //!
-//! Score of a setting: mean |G − PCF| over a seeded fragment sample ([`sample`]) — G from the
-//! moments each texel stores in the setting's format (the quantization study's storage
-//! simulation, `quantize::study::decoded_window`), filtered with the paper's 9×9 Gaussian,
-//! decoded, biased, and evaluated in f32 at z_f − ε′ — split into light leaking (G < PCF) and
-//! over-darkening (G > PCF). Non-finite G counts as error 1.
+//! Score of a setting ([`score`]): over a seeded fragment sample ([`sample`]), the moments a
+//! GPU pipeline gives the lookup (texels stored in the setting's format, the separable filter
+//! accumulated in f32 with each pass stored in the format, θ⁻¹ in f32) and G in f32 at z_f − ε′,
+//! against G_exact, the same technique in f64 on exact moments. The score is leak + darkening
+//! (of G_exact against PCF) + noise (|G − G_exact|); a setting whose share of fragments with
+//! noise above 1/255 exceeds `max_noise` is infeasible, and the α grid of each family is
+//! refined to the smallest α that keeps that bound.
 //!
 //! Coarse to fine: every setting of the grid is scored on a screening subsample; per target
-//! (scene or all) and family the `keep` best are re-scored on the whole sample. On that sample
-//! the chosen setting is the cheapest within `tolerance` of the best (bits per texel first, as
-//! in the paper's cost model, then ns per fragment, then error); the runner-up is the setting
-//! chosen when the chosen one's technique and storage are left out. Differences to the
-//! runner-up and to the published defaults are paired (same fragments) with a 95 % normal
+//! (scene or all) and family the `keep` best at or above the α floor are re-scored on the whole
+//! sample. On that sample the chosen setting is the feasible one that is cheapest within
+//! `tolerance` of the best (bits per texel first, as in the paper's cost model, then the GPU
+//! cost per lookup of [`Options::cost`], then error); the runner-up is the setting chosen when the
+//! chosen one's technique and storage are left out. Differences to the runner-up and to the published defaults are paired (same fragments) with a 95 % normal
 //! confidence interval: mean ± 1.96·sd/√n.
 
-pub mod cost;
 pub mod export;
 pub mod sample;
 pub mod score;
@@ -26,8 +27,6 @@ pub mod table;
 
 use crate::progress::Bar;
 use crate::stack::DepthStack;
-use crate::technique::timing;
-use crate::technique::{Evaluator, Technique};
 use anyhow::{bail, Result};
 use rayon::prelude::*;
 use sample::Sample;
@@ -55,7 +54,14 @@ pub struct Options {
     pub seed: u64,
     /// Fragments of the speed measurement per family.
     pub speed_inputs: usize,
+    /// GPU ns per lookup of a technique × storage, the second cost after bits per texel
+    /// (`crate::gpu::cost::gpu_cost` in the command line and the pipeline; None: bits only,
+    /// then error).
+    pub cost: Option<CostFn>,
 }
+
+/// GPU ns per lookup of a technique × storage.
+pub type CostFn = fn(TechniqueKind, StorageKind) -> Result<f64>;
 
 impl Default for Options {
     fn default() -> Options {
@@ -69,6 +75,7 @@ impl Default for Options {
             keep: 2,
             seed: 2015,
             speed_inputs: 4096,
+            cost: None,
         }
     }
 }
@@ -104,6 +111,8 @@ pub struct Scored {
     pub setting: Setting,
     pub label: String,
     pub bits_per_texel: u32,
+    /// GPU time per lookup in ns (`crate::gpu::cost::gpu_cost`: the shader-IR model calibrated on the
+    /// committed GPU benches), not CPU time.
     pub ns_per_fragment: f64,
     /// The score ([`score`]): leak + darkening + noise + non_finite/fragments, an upper bound
     /// of mean |G − PCF| that noise cannot lower.
@@ -378,87 +387,6 @@ fn smallest_feasible_alpha(
     Ok(None)
 }
 
-/// Evaluator of stored (filtered, still encoded) values: θ⁻¹ in f32, then the technique.
-struct Decoding<'a> {
-    inner: &'a dyn Technique,
-    /// (m × m inverse, offset), None for θ = identity (nothing to decode).
-    theta: Option<(Vec<f32>, Vec<f32>)>,
-}
-
-impl Technique for Decoding<'_> {
-    fn name(&self) -> String {
-        self.inner.name()
-    }
-    fn moment_count(&self) -> usize {
-        self.inner.moment_count()
-    }
-    fn basis(&self, z: f64, out: &mut [f64]) {
-        self.inner.basis(z, out)
-    }
-    fn evaluator(&self) -> Box<dyn Evaluator + '_> {
-        Box::new(DecodingEval {
-            d: self,
-            inner: self.inner.evaluator(),
-            buf: vec![0.0; self.moment_count()],
-        })
-    }
-}
-
-struct DecodingEval<'a> {
-    d: &'a Decoding<'a>,
-    inner: Box<dyn Evaluator + 'a>,
-    buf: Vec<f64>,
-}
-
-impl Evaluator for DecodingEval<'_> {
-    fn shadow(&mut self, s: &[f64], zf: f64) -> f64 {
-        let Some((inv, off)) = &self.d.theta else {
-            return self.inner.shadow(s, zf);
-        };
-        let m = self.buf.len();
-        for r in 0..m {
-            let mut acc = 0.0f32;
-            for c in 0..m {
-                acc += inv[r * m + c] * (s[c] as f32 - off[c]);
-            }
-            self.buf[r] = acc as f64;
-        }
-        self.inner.shadow(&self.buf, zf)
-    }
-}
-
-/// ns per fragment of a family: decode θ⁻¹ (f32) and reconstruct, on the stored values of the
-/// first `n` sample fragments (one core; the median over batches of 5 passes, robust to a
-/// loaded machine).
-fn speed_of(mom: &Moments, sample: &Sample, n: usize) -> Result<f64> {
-    let f = &mom.family;
-    let t = f.build(f.technique.alphas()[0])?;
-    let m = t.moment_count();
-    let theta = f.technique.theta(f.storage);
-    let identity = f.storage != StorageKind::Unorm16Theta;
-    let d = Decoding {
-        inner: t.as_ref(),
-        theta: (!identity).then(|| {
-            (
-                theta.inverse.iter().flatten().map(|&v| v as f32).collect(),
-                theta.offset.iter().map(|&v| v as f32).collect(),
-            )
-        }),
-    };
-    let n = n.min(sample.len());
-    let mut stored = vec![0.0; n * m];
-    for i in 0..n {
-        theta.encode(
-            &mom.stored[i * m..(i + 1) * m],
-            &mut stored[i * m..(i + 1) * m],
-        );
-    }
-    let zfs: Vec<f64> = (0..n)
-        .map(|i| sample.z[i] - 1e-4 - 2.0 * sample.slope[i])
-        .collect();
-    Ok(timing::speed(&d, &stored, &zfs, 5).median)
-}
-
 fn scored(s: &Setting, acc: &Acc, ns: f64, max_noise: f64) -> Scored {
     let n = acc.n.max(1) as f64;
     Scored {
@@ -478,7 +406,7 @@ fn scored(s: &Setting, acc: &Acc, ns: f64, max_noise: f64) -> Scored {
     }
 }
 
-/// Cheapest first: bits per texel, then ns per fragment, then error.
+/// Cheapest first: bits per texel, then GPU ns per lookup, then error.
 fn cheaper(a: &Scored, b: &Scored) -> std::cmp::Ordering {
     a.bits_per_texel
         .cmp(&b.bits_per_texel)
@@ -548,11 +476,13 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         moments.push(Moments::compute(f, &sample)?);
         bar.inc(1);
     }
-    bar.phase("tune: speed per technique and storage", fams.len() as u64);
+    // GPU cost per lookup (0 without a cost model).
     let mut ns = Vec::with_capacity(fams.len());
-    for m in &moments {
-        ns.push(speed_of(m, &sample, opts.speed_inputs)?);
-        bar.inc(1);
+    for f in &fams {
+        ns.push(match opts.cost {
+            Some(c) => c(f.technique, f.storage)?,
+            None => 0.0,
+        });
     }
 
     // The noise floor of α per target and family, on the target's whole sample.

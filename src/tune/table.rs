@@ -28,7 +28,7 @@ fn row(scene: &str, s: &Scored) -> String {
 pub fn table(t: &Tuning) -> String {
     let mut out = format!(
         "{:<8} {:<48} {:>5} {:>8} {:>8} {:>8} {:>8} {:>8} {:>8}\n",
-        "scene", "setting", "bits", "ns/frag", "error", "leak", "darken", "noise", ">1/255"
+        "scene", "setting", "bits", "GPU ns", "error", "leak", "darken", "noise", ">1/255"
     );
     for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
         out += &row(&target.scene, &target.chosen);

@@ -1,7 +1,7 @@
-//! `tune::cost::measured_costs` on a real driver: the lookup pass timed by `gpu bench`.
+//! `gpu::cost::measured_costs` on a real driver: the lookup pass timed by `gpu bench`.
 
 use crate::common::gpu::gpu_or_skip;
-use momentlab::tune::cost::{gpu_cost, measured_costs, CostSource};
+use momentlab::gpu::cost::{gpu_cost, measured_costs, CostSource};
 use momentlab::tune::space::{StorageKind, TechniqueKind};
 
 #[test]

@@ -545,6 +545,11 @@ pub fn docs_block(reports: &Path) -> Result<String> {
     Ok(s)
 }
 
+/// `tune`'s cost of a technique × storage: the model's ns per lookup ([`gpu_cost`]).
+pub fn tune_cost(t: TechniqueKind, s: StorageKind) -> anyhow::Result<f64> {
+    Ok(gpu_cost(t, s)?.ns_per_lookup)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
