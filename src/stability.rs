@@ -44,6 +44,7 @@ pub enum Scenario {
 }
 
 impl Scenario {
+    /// Every scenario, in report order.
     pub const ALL: [Scenario; 10] = [
         Scenario::Random,
         Scenario::OneDirac,
@@ -56,6 +57,7 @@ impl Scenario {
         Scenario::C3Zero,
         Scenario::ShortRange,
     ];
+    /// The snake_case name used in reports and on the command line.
     pub fn name(self) -> &'static str {
         match self {
             Scenario::Random => "random",
@@ -89,6 +91,7 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// Every mode, in report order.
     pub const ALL: [Mode; 5] = [
         Mode::F64,
         Mode::F32,
@@ -96,6 +99,7 @@ impl Mode {
         Mode::U16,
         Mode::U16Theta,
     ];
+    /// The name used in reports ("f64", "f32", "f32_theta", …).
     pub fn name(self) -> &'static str {
         match self {
             Mode::F64 => "f64",
@@ -110,16 +114,20 @@ impl Mode {
 /// One input: a depth distribution (Diracs) and a fragment depth.
 #[derive(Clone, Debug, Serialize)]
 pub struct Sample {
+    /// The scenario that generated the sample.
     pub scenario: Scenario,
     /// (depth, weight), weights sum to 1.
     pub atoms: Vec<(f64, f64)>,
+    /// Fragment depth z_f in [0,1].
     pub zf: f64,
 }
 
 impl Sample {
+    /// Mean depth Σ w_i z_i of the Diracs.
     pub fn mean(&self) -> f64 {
         self.atoms.iter().map(|a| a.0 * a.1).sum()
     }
+    /// Depth variance Σ w_i (z_i − mean)².
     pub fn variance(&self) -> f64 {
         let m = self.mean();
         self.atoms.iter().map(|a| a.1 * (a.0 - m).powi(2)).sum()
@@ -129,7 +137,9 @@ impl Sample {
 /// Harness settings.
 #[derive(Clone, Debug, Serialize)]
 pub struct Config {
+    /// Number of random samples drawn per scenario.
     pub samples: usize,
+    /// Seed of the sample generator (same seed, same samples).
     pub seed: u64,
     /// Uniform points of the oracle's grid on [0,1] (plus the sample's Diracs and z_f).
     pub grid_points: usize,
@@ -326,9 +336,13 @@ pub struct Summary {
     pub count: usize,
     /// Inputs where the oracle itself failed (excluded from the deviation statistics).
     pub oracle_failures: usize,
+    /// Share of inputs where G is NaN or infinite.
     pub nan_share: f64,
+    /// Share of inputs where G is finite but outside [0,1].
     pub outside_share: f64,
+    /// Largest |G − sharp bound| over inputs with a finite G and oracle.
     pub max_abs_dev: f64,
+    /// Mean |G − sharp bound| over inputs with a finite G and oracle (NaN when none).
     pub mean_abs_dev: f64,
     /// Share of G above the sharp bound by more than `over_tolerance` (too dark: the lower-bound
     /// property is violated).
@@ -374,26 +388,36 @@ impl Summary {
 /// One evaluated point (for plots): technique index, mode, log₁₀ variance, z_f − mean, G − sharp.
 #[derive(Clone, Debug, Serialize)]
 pub struct Point {
+    /// Index of the technique in [`Report::techniques`].
     pub technique: usize,
+    /// Moment precision the point was evaluated in.
     pub mode: Mode,
+    /// Scenario that generated the input.
     pub scenario: Scenario,
+    /// log₁₀ of the depth variance of the input.
     pub log10_variance: f64,
+    /// z_f minus the mean depth of the input.
     pub zf_minus_mean: f64,
     /// G − sharp bound; NaN when G is NaN/inf or the oracle failed.
     pub dev: f64,
+    /// Whether G was finite.
     pub g_finite: bool,
 }
 
 /// Everything `momentlab stability` reports.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
+    /// The harness settings.
     pub config: Config,
+    /// Name of the LP solver that computed the sharp bound.
     pub lp_solver: String,
+    /// Technique spec names, indexed as in `by_mode`, `by_scenario` and [`Point::technique`].
     pub techniques: Vec<String>,
     /// by_mode[t] = (mode, summary) for the modes that apply to technique t.
     pub by_mode: Vec<Vec<(Mode, Summary)>>,
     /// by_scenario[t] = (scenario, summary) over all modes of technique t.
     pub by_scenario: Vec<Vec<(Scenario, Summary)>>,
+    /// Every evaluated point, for the plots (not serialized).
     #[serde(skip)]
     pub points: Vec<Point>,
 }
@@ -526,8 +550,11 @@ pub type Cells = Vec<Vec<Option<f64>>>;
 /// A technique under test: its name, the instance for f64/f32 moments and the instance for
 /// 16-bit moments (e.g. a stronger default bias).
 pub struct Entry {
+    /// The technique's spec name.
     pub name: String,
+    /// Instance used for f64 and f32 moments.
     pub t32: Box<dyn Technique>,
+    /// Instance used for 16-bit moments.
     pub t16: Box<dyn Technique>,
 }
 

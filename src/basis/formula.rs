@@ -27,24 +27,43 @@ use anyhow::{bail, Result};
 /// A unary function callable in formulas.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Func {
+    /// `exp(x)`
     Exp,
+    /// `ln(x)` (also spelled `log`)
     Ln,
+    /// `log2(x)`
     Log2,
+    /// `log10(x)`
     Log10,
+    /// `sqrt(x)`
     Sqrt,
+    /// `cbrt(x)`, the real cube root
     Cbrt,
+    /// `sin(x)`
     Sin,
+    /// `cos(x)`
     Cos,
+    /// `tan(x)`
     Tan,
+    /// `asin(x)`
     Asin,
+    /// `acos(x)`
     Acos,
+    /// `atan(x)`
     Atan,
+    /// `sinh(x)`
     Sinh,
+    /// `cosh(x)`
     Cosh,
+    /// `tanh(x)`
     Tanh,
+    /// `asinh(x)`
     Asinh,
+    /// `abs(x)`
     Abs,
+    /// `sigmoid(x) = 1 / (1 + e^(−x))`
     Sigmoid,
+    /// `gauss(x) = e^(−x²)`
     Gauss,
 }
 
@@ -104,16 +123,25 @@ impl Func {
 /// A compiled formula.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Expr {
+    /// A numeric literal.
     Const(f64),
+    /// The depth variable z.
     Z,
+    /// −a
     Neg(Box<Expr>),
+    /// a + b
     Add(Box<Expr>, Box<Expr>),
+    /// a − b
     Sub(Box<Expr>, Box<Expr>),
+    /// a · b
     Mul(Box<Expr>, Box<Expr>),
+    /// a / b
     Div(Box<Expr>, Box<Expr>),
+    /// a^b (f64::powf)
     Pow(Box<Expr>, Box<Expr>),
     /// Integer power with a constant exponent (f64::powi).
     Powi(Box<Expr>, i32),
+    /// A unary function applied to an expression.
     Call(Func, Box<Expr>),
 }
 

@@ -63,9 +63,11 @@ impl Function {
         Function::new(formula_src.trim(), formula_src.trim())
     }
 
+    /// The function's name (its formula for ad-hoc functions).
     pub fn name(&self) -> &str {
         &self.name
     }
+    /// The formula source text.
     pub fn formula(&self) -> &str {
         &self.formula
     }
@@ -175,14 +177,17 @@ impl Catalog {
         Ok(Catalog { functions })
     }
 
+    /// The functions in catalog order.
     pub fn functions(&self) -> &[Function] {
         &self.functions
     }
 
+    /// Number of functions.
     pub fn len(&self) -> usize {
         self.functions.len()
     }
 
+    /// True when the catalog has no functions (never, once built).
     pub fn is_empty(&self) -> bool {
         self.functions.is_empty()
     }
@@ -247,18 +252,23 @@ pub struct Basis {
 }
 
 impl Basis {
+    /// The basis b = (functions[0], …, functions[m−1]).
     pub fn new(functions: Vec<Function>) -> Basis {
         Basis { functions }
     }
+    /// m, the number of functions.
     pub fn len(&self) -> usize {
         self.functions.len()
     }
+    /// True when m = 0.
     pub fn is_empty(&self) -> bool {
         self.functions.is_empty()
     }
+    /// b_1, …, b_m in order.
     pub fn functions(&self) -> &[Function] {
         &self.functions
     }
+    /// The names of b_1, …, b_m.
     pub fn names(&self) -> Vec<String> {
         self.functions.iter().map(|f| f.name.clone()).collect()
     }

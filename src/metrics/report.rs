@@ -5,10 +5,15 @@ use super::*;
 /// Result for one view.
 #[derive(Clone, Debug, Serialize)]
 pub struct ViewReport {
+    /// Scene name.
     pub scene: String,
+    /// View name within the scene.
     pub view: String,
+    /// Stack width in texels.
     pub width: usize,
+    /// Stack height in texels.
     pub height: usize,
+    /// Depth layers of the stack.
     pub layers: usize,
     /// All fragments of the view.
     pub fragments_total: usize,
@@ -42,6 +47,7 @@ pub struct ViewReport {
     pub seconds: f64,
     /// Wall time of the shading loop alone, seconds.
     pub shade_seconds: f64,
+    /// Per-fragment values, kept when asked for (not serialized).
     #[serde(skip)]
     pub values: Option<Vec<FragmentValue>>,
 }
@@ -49,16 +55,25 @@ pub struct ViewReport {
 /// Result over all views.
 #[derive(Clone, Debug, Serialize)]
 pub struct EvalReport {
+    /// Technique spec name.
     pub technique: String,
+    /// Depth bias applied to the fragments.
     pub bias: Bias,
+    /// Which fragments were evaluated.
     pub subsample: Subsample,
+    /// All fragments of all views.
     pub fragments_total: usize,
+    /// Evaluated fragments (after subsampling).
     pub fragments: usize,
+    /// Evaluated fragments with F_Z(z_f − ε′) = 0.
     pub trivial: usize,
+    /// Fragments for which the technique was called (not skipped as trivial).
     pub solved: usize,
+    /// Fragments with non-finite G (excluded from the mean).
     pub non_finite: usize,
     /// LP answers scored as the trivial bound because the solver settled neither verdict.
     pub unsettled: usize,
+    /// Fragments with finite G outside [0,1] by more than 1e-9.
     pub out_of_range: usize,
     /// Mean |G − PCF| over all finite evaluated fragments of all views.
     pub error: f64,
@@ -68,12 +83,14 @@ pub struct EvalReport {
     /// Mean max(0, PCF − G): the light-leaking part of `error` (the rest, mean
     /// max(0, G − PCF), is over-darkening).
     pub leak: f64,
+    /// Wall time of all views, seconds.
     pub seconds: f64,
     /// Technique calls per second of shading time (throughput over real, non-trivial fragments
     /// when trivial ones are skipped).
     pub solves_per_second: f64,
     /// Evaluated fragments per second of total wall time.
     pub fragments_per_second: f64,
+    /// Per-view results.
     pub views: Vec<ViewReport>,
 }
 

@@ -14,6 +14,7 @@ pub struct LTri {
     pub w0: f64,
     /// Plane slopes ∂w/∂u = −n_u/n_w and ∂w/∂v = −n_v/n_w from the geometric normal.
     pub su: f64,
+    /// ∂w/∂v (see `su`).
     pub sv: f64,
 }
 

@@ -35,15 +35,21 @@ pub use crate::stack::{DEDUP_EPS, MARGIN};
 /// The orthographic light frame of one view.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightFrame {
+    /// Unit direction the light travels (the depth axis w).
     pub dir: V3,
+    /// Unit texel x axis (u), orthogonal to `dir`.
     pub u_axis: V3,
+    /// Unit texel y axis (v), orthogonal to `dir` and `u_axis`.
     pub v_axis: V3,
+    /// w of depth 0.
     pub near: f64,
+    /// w of depth 1.
     pub far: f64,
     /// (u, v) of the corner of texel (0, 0).
     pub uv_origin: [f64; 2],
     /// Texel edge length (world units).
     pub texel: f64,
+    /// Texels per side (square shadow map).
     pub resolution: usize,
 }
 
@@ -109,8 +115,11 @@ impl LightFrame {
 /// One surface along a texel's ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Depth (w − near)/(far − near) ∈ [0,1].
     pub z: f32,
+    /// Slope dz/du per texel step in x.
     pub dzdu: f32,
+    /// Slope dz/dv per texel step in y.
     pub dzdv: f32,
 }
 

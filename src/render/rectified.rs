@@ -19,11 +19,17 @@ use std::f64::consts::{PI, TAU};
 /// phi_width ∈ [0, 2π]; the full circle when the z axis is inside the frustum).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RectifiedBounds {
+    /// Smallest distance from the light's z axis (0: the cone contains the origin).
     pub r_min: f64,
+    /// Largest distance from the light's z axis, over the far-plane vertices.
     pub r_max: f64,
+    /// Start of the azimuth arc, radians in (−π, π].
     pub phi_start: f64,
+    /// Width of the azimuth arc, radians in [0, 2π].
     pub phi_width: f64,
+    /// Smallest inclination θ against +z, radians.
     pub theta_min: f64,
+    /// Largest inclination θ against +z, radians.
     pub theta_max: f64,
 }
 

@@ -8,7 +8,9 @@ use std::fmt::Write as _;
 /// One block of content.
 #[derive(Clone, Debug)]
 pub enum Block {
+    /// A section heading (`<h2>`, `##`).
     Heading(String),
+    /// A paragraph of text.
     Paragraph(String),
     /// Column headers and rows of cells.
     Table(Vec<String>, Vec<Vec<String>>),
@@ -29,7 +31,9 @@ pub enum Block {
 /// A report: a title and a flat list of blocks.
 #[derive(Clone, Debug, Default)]
 pub struct Document {
+    /// Title (`<h1>`, `#`).
     pub title: String,
+    /// Content, in order.
     pub blocks: Vec<Block>,
 }
 
@@ -95,33 +99,41 @@ fn md_cell(s: &str) -> String {
 }
 
 impl Document {
+    /// An empty document titled `title`.
     pub fn new(title: &str) -> Document {
         Document {
             title: title.to_string(),
             blocks: Vec::new(),
         }
     }
+    /// Appends a [`Block::Heading`].
     pub fn heading(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Heading(s.into()));
     }
+    /// Appends a [`Block::Paragraph`].
     pub fn paragraph(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Paragraph(s.into()));
     }
+    /// Appends a [`Block::Table`].
     pub fn table(&mut self, headers: &[&str], rows: Vec<Vec<String>>) {
         self.blocks.push(Block::Table(
             headers.iter().map(|s| s.to_string()).collect(),
             rows,
         ));
     }
+    /// Appends a [`Block::Figure`].
     pub fn figure(&mut self, file: impl Into<String>, caption: impl Into<String>) {
         self.blocks.push(Block::Figure(file.into(), caption.into()));
     }
+    /// Appends a [`Block::Code`].
     pub fn code(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Code(s.into()));
     }
+    /// Appends a [`Block::Toc`].
     pub fn toc(&mut self) {
         self.blocks.push(Block::Toc);
     }
+    /// Appends a [`Block::Panels`].
     pub fn panels(&mut self, file: impl Into<String>, labels: &[&str], caption: impl Into<String>) {
         self.blocks.push(Block::Panels(
             file.into(),
@@ -129,6 +141,7 @@ impl Document {
             caption.into(),
         ));
     }
+    /// Appends a [`Block::Markdown`].
     pub fn markdown(&mut self, s: impl Into<String>) {
         self.blocks.push(Block::Markdown(s.into()));
     }
@@ -144,6 +157,7 @@ impl Document {
             .collect()
     }
 
+    /// The document as one HTML page; figures are linked by file name, each image shown once.
     pub fn to_html(&self) -> String {
         let mut h = String::new();
         let _ = write!(
@@ -232,6 +246,7 @@ impl Document {
         embed_images_once(&h)
     }
 
+    /// The document as Markdown.
     pub fn to_markdown(&self) -> String {
         let mut m = format!("# {}\n\n", self.title);
         for b in &self.blocks {

@@ -8,18 +8,27 @@ use serde::{Deserialize, Serialize};
 /// One evaluated technique configuration (as stored in `reports/<run>/evaluate/*.json`).
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Measured {
+    /// Technique spec name.
     pub name: String,
+    /// Moment storage precision ("f64", "f32", "u16", …).
     pub precision: String,
+    /// Bits stored per shadow-map texel at that precision.
     pub bits_per_texel: u32,
+    /// Mean CPU time of one shading call, nanoseconds.
     pub ns_per_fragment: f64,
+    /// Mean |G − PCF| over the evaluated fragments.
     pub error: f64,
+    /// Evaluated fragments.
     pub fragments: usize,
+    /// Evaluated fragments with F_Z(z_f − ε′) = 0.
     pub trivial: usize,
+    /// Fragments with non-finite G (excluded from `error`).
     pub non_finite: usize,
     /// LP answers the solver settled neither way, scored as the trivial bound G = 0
     /// (`lp::UNSETTLED_G`); 0 for closed forms and in artefacts of older runs.
     #[serde(default)]
     pub unsettled: usize,
+    /// Wall time of the evaluation, seconds.
     pub seconds: f64,
     /// Per scene: (scene, mean error over its fragments, fragments).
     pub scenes: Vec<(String, f64, usize)>,
@@ -63,6 +72,7 @@ pub fn histogram_of(r: &EvalReport) -> Vec<u64> {
     error_histogram(values.map(|f| (f.g - f.pcf).abs()))
 }
 
+/// Per scene of an evaluation: (scene, mean |G − PCF| over its finite fragments, finite fragments).
 pub fn per_scene(r: &EvalReport) -> Vec<(String, f64, usize)> {
     let mut out: Vec<(String, f64, usize)> = Vec::new();
     for v in &r.views {
@@ -84,14 +94,23 @@ pub fn per_scene(r: &EvalReport) -> Vec<(String, f64, usize)> {
 /// The recommendation for one scene.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Recommendation {
+    /// The scene.
     pub scene: String,
+    /// The recommended technique's spec name.
     pub name: String,
+    /// Its storage precision.
     pub precision: String,
+    /// Its bits per texel.
     pub bits_per_texel: u32,
+    /// Its CPU time per shading call, nanoseconds.
     pub ns_per_fragment: f64,
+    /// Its mean |G − PCF| on the scene.
     pub error: f64,
+    /// The most accurate closed form on the scene, "name (precision)".
     pub best_name: String,
+    /// That technique's mean |G − PCF|.
     pub best_error: f64,
+    /// Allowed excess error over the best: the recommendation is within it.
     pub tolerance: f64,
     /// The alternative ([`pareto::runner_up`]): "name (precision)", its error and ns/fragment.
     #[serde(default)]

@@ -31,6 +31,7 @@ impl Shape {
         }
     }
 
+    /// True when the shape has no components (`Array(0)`).
     pub fn is_empty(self) -> bool {
         self.len() == 0
     }
@@ -39,9 +40,13 @@ impl Shape {
 /// Comparison of a [`Op::Select`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Cmp {
+    /// `a < b`
     Lt,
+    /// `a <= b`
     Le,
+    /// `a > b`
     Gt,
+    /// `a >= b`
     Ge,
 }
 
@@ -50,25 +55,39 @@ pub enum Cmp {
 /// it there; elsewhere they may, which the interpreter's fused order computes).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Op {
+    /// a + b
     Add(V, V),
+    /// a − b
     Sub(V, V),
+    /// a · b
     Mul(V, V),
+    /// a / b
     Div(V, V),
+    /// −a
     Neg(V),
+    /// |a|
     Abs(V),
+    /// √a
     Sqrt(V),
+    /// min(a, b)
     Min(V, V),
+    /// max(a, b)
     Max(V, V),
     /// clamp(x, lo, hi) = min(max(x, lo), hi)
     Clamp(V, V, V),
     /// `(a cmp b) ? x : y`
     Select(Cmp, V, V, V, V),
+    /// cos(a)
     Cos(V),
+    /// sin(a)
     Sin(V),
+    /// acos(a)
     Acos(V),
     /// atan2(y, x)
     Atan2(V, V),
+    /// exp(a)
     Exp(V),
+    /// log(a) (natural logarithm)
     Log(V),
 }
 
@@ -117,13 +136,16 @@ pub(crate) enum Node {
 /// A parameter: name and shape.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Param {
+    /// Identifier in the printed source.
     pub name: String,
+    /// Scalar, array or vector.
     pub shape: Shape,
 }
 
 /// One shader function, built statement by statement.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Func {
+    /// Function name (an identifier, unique within a [`Module`]).
     pub name: String,
     /// Comment lines printed above the function.
     pub doc: Vec<String>,
@@ -141,6 +163,7 @@ fn valid_ident(s: &str) -> bool {
 }
 
 impl Func {
+    /// An empty function called `name`: no inputs, no statements, no doc lines.
     pub fn new(name: &str) -> Func {
         Func {
             name: name.to_string(),
@@ -190,33 +213,43 @@ impl Func {
         self.push(Node::Op(op))
     }
 
+    /// Statement `a + b`.
     pub fn add(&mut self, a: V, b: V) -> V {
         self.op(Op::Add(a, b))
     }
+    /// Statement `a − b`.
     pub fn sub(&mut self, a: V, b: V) -> V {
         self.op(Op::Sub(a, b))
     }
+    /// Statement `a · b`.
     pub fn mul(&mut self, a: V, b: V) -> V {
         self.op(Op::Mul(a, b))
     }
+    /// Statement `a / b`.
     pub fn div(&mut self, a: V, b: V) -> V {
         self.op(Op::Div(a, b))
     }
+    /// Statement `−a`.
     pub fn neg(&mut self, a: V) -> V {
         self.op(Op::Neg(a))
     }
+    /// Statement `|a|`.
     pub fn abs(&mut self, a: V) -> V {
         self.op(Op::Abs(a))
     }
+    /// Statement `√a`.
     pub fn sqrt(&mut self, a: V) -> V {
         self.op(Op::Sqrt(a))
     }
+    /// Statement `min(a, b)`.
     pub fn min(&mut self, a: V, b: V) -> V {
         self.op(Op::Min(a, b))
     }
+    /// Statement `max(a, b)`.
     pub fn max(&mut self, a: V, b: V) -> V {
         self.op(Op::Max(a, b))
     }
+    /// Statement `clamp(x, lo, hi) = min(max(x, lo), hi)`.
     pub fn clamp(&mut self, x: V, lo: V, hi: V) -> V {
         self.op(Op::Clamp(x, lo, hi))
     }
@@ -224,21 +257,27 @@ impl Func {
     pub fn select(&mut self, cmp: Cmp, a: V, b: V, x: V, y: V) -> V {
         self.op(Op::Select(cmp, a, b, x, y))
     }
+    /// Statement `cos(a)`.
     pub fn cos(&mut self, a: V) -> V {
         self.op(Op::Cos(a))
     }
+    /// Statement `sin(a)`.
     pub fn sin(&mut self, a: V) -> V {
         self.op(Op::Sin(a))
     }
+    /// Statement `acos(a)`.
     pub fn acos(&mut self, a: V) -> V {
         self.op(Op::Acos(a))
     }
+    /// Statement `atan2(y, x)`.
     pub fn atan2(&mut self, y: V, x: V) -> V {
         self.op(Op::Atan2(y, x))
     }
+    /// Statement `exp(a)`.
     pub fn exp(&mut self, a: V) -> V {
         self.op(Op::Exp(a))
     }
+    /// Statement `log(a)` (natural logarithm).
     pub fn log(&mut self, a: V) -> V {
         self.op(Op::Log(a))
     }
@@ -493,10 +532,12 @@ impl Func {
 pub struct Module {
     /// Comment lines printed at the top.
     pub header: Vec<String>,
+    /// The functions, printed in this order.
     pub funcs: Vec<Func>,
 }
 
 impl Module {
+    /// Validates every function and rejects two functions with the same name.
     pub fn validate(&self) -> Result<()> {
         let mut names = std::collections::HashSet::new();
         for f in &self.funcs {

@@ -23,7 +23,9 @@ use std::fmt::Write;
 /// Shader dialect.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Lang {
+    /// GLSL (Vulkan/OpenGL).
     Glsl,
+    /// HLSL (Direct3D).
     Hlsl,
 }
 

@@ -20,8 +20,11 @@ pub const MAX_SAMPLES_PER_PIXEL: usize = 1 << 16;
 /// A channel's pixel type.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PixelType {
+    /// 32-bit unsigned integer.
     Uint,
+    /// 16-bit float.
     Half,
+    /// 32-bit float.
     Float,
 }
 
@@ -37,8 +40,11 @@ impl PixelType {
 /// The compressions OpenEXR allows for deep data that are read here.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum DeepCompression {
+    /// Uncompressed.
     None,
+    /// Run-length encoded.
     Rle,
+    /// zlib, one scan line per block.
     Zips,
 }
 
@@ -46,8 +52,11 @@ pub enum DeepCompression {
 /// its samples; `values[c]` holds channel c's samples of all pixels in pixel order.
 #[derive(Clone, Debug)]
 pub struct DeepImage {
+    /// Data-window width in pixels.
     pub width: usize,
+    /// Data-window height in pixels.
     pub height: usize,
+    /// Compression the file used.
     pub compression: DeepCompression,
     /// Channel names and types in file order.
     pub channels: Vec<(String, PixelType)>,
@@ -55,6 +64,7 @@ pub struct DeepImage {
     pub counts: Vec<u32>,
     /// Start of each pixel's samples in `values[c]` (prefix sums of `counts`, one extra).
     pub starts: Vec<usize>,
+    /// `values[c][starts[p] + k]`: channel c of sample k of pixel p.
     pub values: Vec<Vec<f32>>,
     /// How many of the pixel offset tables and sample blocks were stored compressed.
     pub compressed_blocks: usize,
@@ -481,21 +491,33 @@ pub fn read_deep(b: &[u8]) -> Result<DeepImage> {
 #[derive(serde::Deserialize, Clone, Debug, Default)]
 #[serde(deny_unknown_fields)]
 pub struct DeepSidecar {
+    /// Scene name of the stack (default: the file stem).
     pub scene: Option<String>,
+    /// View name of the stack (default "light0").
     pub view: Option<String>,
+    /// Direction the light travels (world space).
     pub light_dir: [f64; 3],
+    /// Z of depth 0 (default: from the image's Z range).
     pub near: Option<f64>,
+    /// Z of depth 1 (default: from the image's Z range).
     pub far: Option<f64>,
+    /// Must equal the image width when given.
     pub width: Option<usize>,
+    /// Must equal the image height when given.
     pub height: Option<usize>,
+    /// Accepted and ignored: the layer count is recomputed from the samples.
     #[allow(dead_code)]
     pub layers: Option<usize>,
+    /// See [`super::StackMeta::u_axis`].
     #[serde(default)]
     pub u_axis: [f64; 3],
+    /// See [`super::StackMeta::v_axis`].
     #[serde(default)]
     pub v_axis: [f64; 3],
+    /// See [`super::StackMeta::uv_origin`].
     #[serde(default)]
     pub uv_origin: [f64; 2],
+    /// See [`super::StackMeta::texel_size`].
     #[serde(default)]
     pub texel_size: f64,
 }

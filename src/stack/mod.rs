@@ -69,9 +69,13 @@ pub struct StackMeta {
     pub light_dir: [f64; 3],
     /// Near and far plane distances along the light direction (depth 0 and 1).
     pub near: f64,
+    /// Far plane distance along the light direction (depth 1).
     pub far: f64,
+    /// Texels per row.
     pub width: usize,
+    /// Rows of texels.
     pub height: usize,
+    /// Number of depth layers (the most surfaces any texel has, at least 1).
     pub layers: usize,
     /// World-space unit vector of the texel x axis (+x texel step); optional (0 = unknown).
     #[serde(default)]
@@ -90,6 +94,7 @@ pub struct StackMeta {
 /// A depth stack in memory.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DepthStack {
+    /// The sidecar: scene, view, light frame and size.
     pub meta: StackMeta,
     /// `depth[l][y * width + x]`: depth of the l-th surface hit (front first) in [0,1];
     /// `f32::INFINITY` where the texel has fewer than l+1 surfaces. Strictly increasing in l.
@@ -101,6 +106,7 @@ pub struct DepthStack {
 }
 
 impl DepthStack {
+    /// width · height.
     pub fn texel_count(&self) -> usize {
         self.meta.width * self.meta.height
     }

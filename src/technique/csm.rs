@@ -35,7 +35,9 @@ pub fn csm_expectation<T: Real>(b: &[T], zf: T) -> T {
 pub struct Csm {
     /// Length 2M.
     pub b_star: Vec<f64>,
+    /// Bias weight α of b' = (1 − α)·b + α·b*.
     pub alpha: f64,
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 

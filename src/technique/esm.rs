@@ -15,9 +15,13 @@ pub fn esm<T: Real>(b: T, zf: T, c: T) -> T {
 /// ESM with exponent c, bias (α, b*) and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Esm {
+    /// Exponent c of the basis b(z) = e^{c·z}.
     pub c: f64,
+    /// Bias weight α of b' = (1 − α)·b + α·b*.
     pub alpha: f64,
+    /// Bias target b*.
     pub b_star: f64,
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 

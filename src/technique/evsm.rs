@@ -29,11 +29,17 @@ pub fn evsm<T: Real>(b: [T; 4], zf: T, cp: T, cn: T, min_variance: T) -> T {
 /// EVSM with exponents, bias (α, b*), minimum variance and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Evsm {
+    /// Positive exponent c₊ of the warp w₊(z) = e^{c₊ z}.
     pub c_pos: f64,
+    /// Negative exponent c₋ of the warp w₋(z) = −e^{−c₋ z}.
     pub c_neg: f64,
+    /// Bias weight α of b' = (1 − α)·b + α·b*.
     pub alpha: f64,
+    /// Bias target b* (in the basis order of the module doc).
     pub b_star: [f64; 4],
+    /// Depth-space minimum variance σ²_min (scaled by w'(z_f)² in each warp).
     pub min_variance: f64,
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 

@@ -70,9 +70,11 @@ fn solve_size<T: Real>(b: &[T], zf: T, n: usize) -> Result<(T, Vec<T>), usize> {
 /// Hamburger MSM with m (even) moments, bias (α, b*) and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Hamburger {
+    /// Bias weight α of b' = (1 − α)·b + α·b* (Section 4.2).
     pub alpha: f64,
     /// Length m.
     pub b_star: Vec<f64>,
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 

@@ -20,9 +20,11 @@ pub(crate) fn pivot_floor<T: Real>() -> T {
 /// Result of the three-Dirac solution: G (unclamped) and the support (z_f, z₂, z₃).
 #[derive(Clone, Copy, Debug)]
 pub struct Msm4<T> {
+    /// Shadow intensity G of Algorithm 3 step 4, unclamped.
     pub g: T,
     /// z₂ ≤ z₃: roots of the quadratic; with z_f they support the minimising distribution.
     pub z2: T,
+    /// The larger root (see `z2`).
     pub z3: T,
 }
 
@@ -103,12 +105,16 @@ pub const ALPHA_16BIT: f64 = 3e-5;
 /// Hamburger 4MSM with bias (α, b*) and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Hamburger4 {
+    /// Bias weight α of b' = (1 − α)·b + α·b* (Section 4.2).
     pub alpha: f64,
+    /// Bias target b* (Section 4.2).
     pub b_star: [f64; 4],
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 
 impl Hamburger4 {
+    /// Hamburger 4MSM with the given bias and precision.
     pub fn new(alpha: f64, b_star: [f64; 4], precision: Precision) -> Hamburger4 {
         Hamburger4 {
             alpha,

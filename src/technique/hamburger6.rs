@@ -57,12 +57,16 @@ pub fn msm6<T: Real>(b: [T; 6], zf: T) -> (T, [T; 3]) {
 /// 6MSM with bias (α, b*) and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Hamburger6 {
+    /// Bias weight α of b' = (1 − α)·b + α·b* (Section 4.2).
     pub alpha: f64,
+    /// Bias target b*.
     pub b_star: [f64; 6],
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 
 impl Hamburger6 {
+    /// Hamburger 6MSM with the given bias and precision.
     pub fn new(alpha: f64, b_star: [f64; 6], precision: Precision) -> Hamburger6 {
         Hamburger6 {
             alpha,

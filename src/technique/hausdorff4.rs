@@ -40,12 +40,16 @@ pub fn msm4_hausdorff<T: Real>(b: [T; 4], zf: T) -> T {
 /// Hausdorff 4MSM with bias (α, b*) and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Hausdorff4 {
+    /// Bias weight α of b' = (1 − α)·b + α·b* (Section 4.2).
     pub alpha: f64,
+    /// Bias target b*.
     pub b_star: [f64; 4],
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 
 impl Hausdorff4 {
+    /// Hausdorff 4MSM with the given bias and precision.
     pub fn new(alpha: f64, b_star: [f64; 4], precision: Precision) -> Hausdorff4 {
         Hausdorff4 {
             alpha,

@@ -21,22 +21,37 @@ pub trait Real:
     + MulAssign
     + DivAssign
 {
+    /// 0
     const ZERO: Self;
+    /// 1
     const ONE: Self;
     /// Machine epsilon of the type.
     const EPS: Self;
+    /// The nearest value of this type to `x`.
     fn of(x: f64) -> Self;
+    /// The value as f64 (exact).
     fn to_f64(self) -> f64;
+    /// √x
     fn sqrt(self) -> Self;
+    /// |x|
     fn abs(self) -> Self;
+    /// e^x
     fn exp(self) -> Self;
+    /// cos(x)
     fn cos(self) -> Self;
+    /// sin(x)
     fn sin(self) -> Self;
+    /// acos(x)
     fn acos(self) -> Self;
+    /// atan2(self, x): the angle of the point (x, self).
     fn atan2(self, x: Self) -> Self;
+    /// True unless NaN or ±∞.
     fn is_finite(self) -> bool;
+    /// True for NaN.
     fn is_nan(self) -> bool;
+    /// The larger of the two (the other one when one is NaN).
     fn max(self, o: Self) -> Self;
+    /// The smaller of the two (the other one when one is NaN).
     fn min(self, o: Self) -> Self;
 }
 
@@ -116,6 +131,7 @@ pub enum Precision {
 }
 
 impl Precision {
+    /// "f32" or "f64".
     pub fn name(self) -> &'static str {
         match self {
             Precision::F32 => "f32",

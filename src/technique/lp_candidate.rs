@@ -60,14 +60,17 @@ impl LpCandidate {
         }
     }
 
+    /// Name of the LP solver ("fast" or "reference").
     pub fn solver_kind(&self) -> &str {
         self.solver_kind.name()
     }
 
+    /// The basis tabulated on the grid, as the solver reads it.
     pub fn table(&self) -> &GridTable {
         &self.table
     }
 
+    /// The basis b_1, …, b_m.
     pub fn basis_functions(&self) -> &Basis {
         &self.basis
     }

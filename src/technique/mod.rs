@@ -77,6 +77,7 @@ pub trait Evaluator {
 
 /// Closed-form techniques: a pure function of (b, z_f).
 pub trait ClosedForm: Send + Sync {
+    /// The shadow intensity G(b, z_f) for the stored moments b (the technique applies its bias) at fragment depth z_f.
     fn shadow(&self, moments: &[f64], zf: f64) -> f64;
 }
 

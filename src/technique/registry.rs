@@ -109,6 +109,7 @@ pub struct Params {
     pub esm_c: f64,
     /// EVSM exponents c₊, c₋ (default 40, 5).
     pub evsm_c_pos: f64,
+    /// EVSM negative exponent c₋ (default 5).
     pub evsm_c_neg: f64,
     /// CSM Fourier terms M (default 4, m = 2M; at most 32).
     pub csm_terms: usize,

@@ -13,7 +13,9 @@ use super::linalg::Real;
 /// Two Diracs at `z[0] < z[1]` with weights `w` (w ≥ 0, w[0] + w[1] = 1).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TwoDiracs<T> {
+    /// Depths, z[0] < z[1].
     pub z: [T; 2],
+    /// Weights, w ≥ 0 with w[0] + w[1] = 1.
     pub w: [T; 2],
 }
 

@@ -13,7 +13,9 @@ use std::time::Instant;
 /// Depth distributions (depth, weight) and a fragment depth z_f for each.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Corpus {
+    /// Each distribution as (depth, weight) pairs; weights sum to 1.
     pub dists: Vec<Vec<(f64, f64)>>,
+    /// Fragment depth z_f of each distribution.
     pub zfs: Vec<f64>,
 }
 
@@ -63,7 +65,9 @@ pub struct Speed {
     pub mean: f64,
     /// Median, 99th percentile and maximum over the batches.
     pub median: f64,
+    /// 99th percentile over the batches.
     pub p99: f64,
+    /// Maximum over the batches.
     pub max: f64,
     /// Mean G of the last pass (keeps the work observable; a cheap sanity figure).
     pub mean_g: f64,

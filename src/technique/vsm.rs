@@ -27,9 +27,13 @@ pub fn vsm<T: Real>(b1: T, b2: T, zf: T, min_variance: T) -> T {
 /// VSM with bias (α, b*), minimum variance and arithmetic precision.
 #[derive(Clone, Debug)]
 pub struct Vsm {
+    /// Bias weight α of b' = (1 − α)·b + α·b*.
     pub alpha: f64,
+    /// Bias target b* = (b*₁, b*₂).
     pub b_star: [f64; 2],
+    /// Lower limit σ²_min on the variance b₂ − b₁².
     pub min_variance: f64,
+    /// Arithmetic precision of the solve.
     pub precision: Precision,
 }
 

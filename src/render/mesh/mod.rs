@@ -36,16 +36,20 @@ pub(crate) fn check_triangles(what: &dyn Fn() -> String, have: usize, more: usiz
 /// The mesh formats read.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum MeshFormat {
+    /// Wavefront OBJ.
     Obj,
     /// glTF 2.0 JSON (`.gltf`; buffers embedded as data URIs or external files).
     Gltf,
     /// glTF 2.0 binary container (`.glb`).
     Glb,
+    /// Stanford PLY (ASCII or binary).
     Ply,
+    /// STL (ASCII or binary).
     Stl,
 }
 
 impl MeshFormat {
+    /// Human-readable format name for messages.
     pub fn name(self) -> &'static str {
         match self {
             MeshFormat::Obj => "OBJ",

@@ -42,8 +42,11 @@ pub struct Light {
 /// A scene ready to render: world-space triangles and its lights.
 #[derive(Clone, Debug)]
 pub struct Scene {
+    /// Scene name.
     pub name: String,
+    /// Its views, one per light.
     pub lights: Vec<Light>,
+    /// World-space triangles.
     pub triangles: Vec<Tri>,
 }
 

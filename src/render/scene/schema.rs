@@ -13,12 +13,17 @@ use serde::Deserialize;
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct MeshSidecar {
+    /// Scene name (default: the mesh file stem).
     pub name: Option<String>,
+    /// The views' lights (replaced by lights given on the command line).
     #[serde(default)]
     pub lights: Vec<LightDesc>,
+    /// Which axis of the mesh points up.
     #[serde(default)]
     pub up_axis: UpAxis,
+    /// Euler rotation in degrees, X then Y then Z.
     pub rotate: Option<V3>,
+    /// Uniform scale so that the largest extent is `fit`.
     pub fit: Option<f64>,
 }
 
@@ -36,10 +41,15 @@ pub const MAX_AZIMUTH_DEG: f64 = 360.0;
 #[derive(Deserialize, Clone, Debug, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LightDesc {
+    /// View name (default `light<i>`, i the light's index).
     pub name: Option<String>,
+    /// Direction the light travels (world space, any length).
     pub dir: Option<V3>,
+    /// Azimuth the light comes from, degrees.
     pub azimuth_deg: Option<f64>,
+    /// Elevation above the horizon the light comes from, degrees (at least [`MIN_ELEVATION_DEG`]).
     pub elevation_deg: Option<f64>,
+    /// The eye-view camera of this view (default: derived from the light).
     pub camera: Option<CameraDesc>,
 }
 
@@ -49,8 +59,11 @@ pub struct LightDesc {
 #[derive(Deserialize, Clone, Debug, Default, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CameraDesc {
+    /// Direction the camera looks along (world space).
     pub dir: Option<V3>,
+    /// Azimuth the camera looks from, degrees.
     pub azimuth_deg: Option<f64>,
+    /// Elevation the camera looks from, degrees.
     pub elevation_deg: Option<f64>,
 }
 

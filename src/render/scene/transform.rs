@@ -47,11 +47,14 @@ pub(super) struct Transform {
 /// Affine map x ↦ A x + t.
 #[derive(Clone, Copy, Debug)]
 pub struct Affine {
+    /// Linear part A (row-major).
     pub a: [[f64; 3]; 3],
+    /// Translation t.
     pub t: V3,
 }
 
 impl Affine {
+    /// A p + t.
     pub fn apply(&self, p: V3) -> V3 {
         let mut r = self.t;
         for (i, ri) in r.iter_mut().enumerate() {
@@ -102,8 +105,10 @@ fn euler(r: V3) -> [[f64; 3]; 3] {
 #[derive(Deserialize, Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[serde(rename_all = "lowercase")]
 pub enum UpAxis {
+    /// y points up (momentlab's world convention).
     #[default]
     Y,
+    /// z points up; turned by −90° about X.
     Z,
 }
 

@@ -49,15 +49,19 @@ fn max<T: Real>(a: T, b: T) -> T {
 /// A complex number (only what the solver needs).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cx<T> {
+    /// Real part.
     pub re: T,
+    /// Imaginary part.
     pub im: T,
 }
 
 impl<T: Real> Cx<T> {
+    /// re + i·im
     #[inline(always)]
     pub fn new(re: T, im: T) -> Self {
         Cx { re, im }
     }
+    /// The real number re.
     #[inline(always)]
     pub fn real(re: T) -> Self {
         Cx { re, im: T::ZERO }
@@ -67,22 +71,27 @@ impl<T: Real> Cx<T> {
     pub fn unit(phi: T) -> Self {
         Cx::new(phi.cos(), phi.sin())
     }
+    /// Complex conjugate re − i·im.
     #[inline(always)]
     pub fn conj(self) -> Self {
         Cx::new(self.re, -self.im)
     }
+    /// |z|² = re² + im²
     #[inline(always)]
     pub fn norm2(self) -> T {
         self.re * self.re + self.im * self.im
     }
+    /// |z|
     #[inline(always)]
     pub fn abs(self) -> T {
         self.norm2().sqrt()
     }
+    /// arg z = atan2(im, re) ∈ (−π, π].
     #[inline]
     pub fn arg(self) -> T {
         self.im.atan2(self.re)
     }
+    /// s·z for real s.
     #[inline(always)]
     pub fn scale(self, s: T) -> Self {
         Cx::new(self.re * s, self.im * s)
@@ -274,8 +283,11 @@ pub enum Case {
 /// z = 0.0. Empty for [`Case::Trivial`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct Detail<T> {
+    /// The lower bound G.
     pub g: T,
+    /// The branch of the solver that produced G.
     pub case: Case,
+    /// Minimising distribution: (depth z ∈ [0,1], weight) per Dirac.
     pub support: Vec<(T, T)>,
 }
 
