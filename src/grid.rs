@@ -55,10 +55,12 @@ impl Grid {
         Ok(Grid { points: values })
     }
 
+    /// z_1 < … < z_n.
     pub fn points(&self) -> &[f64] {
         &self.points
     }
 
+    /// n, the number of points.
     pub fn len(&self) -> usize {
         self.points.len()
     }
@@ -82,6 +84,7 @@ impl Grid {
         self.points[self.nearest(z)]
     }
 
+    /// True when n = 0 (never, once built).
     pub fn is_empty(&self) -> bool {
         self.points.is_empty()
     }

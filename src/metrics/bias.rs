@@ -39,7 +39,9 @@ pub struct Bias {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Receiver {
+    /// Δ_l = ∇z_f·o_l: the fragment's own tangent plane.
     Fragment,
+    /// Δ_l = the lowest tangent plane met on the path to the tap (see above).
     #[default]
     Lower,
 }

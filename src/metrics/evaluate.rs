@@ -17,6 +17,7 @@ pub enum Subject<'a> {
 }
 
 impl<'a> Subject<'a> {
+    /// The technique's name, or "pcf" / "cdf" for the references.
     pub fn name(&self) -> String {
         match self {
             Subject::Technique(t) => t.name(),
@@ -50,7 +51,9 @@ pub type Progress = Arc<dyn Fn(usize, usize) + Send + Sync>;
 /// Options of [`evaluate`].
 #[derive(Clone, Default)]
 pub struct EvalOptions {
+    /// Depth biases of PCF and of the technique.
     pub bias: Bias,
+    /// Which fragments to evaluate.
     pub subsample: Subsample,
     /// Skip the evaluation of trivial fragments (G := 0). `None` = automatic: skip for grid
     /// techniques (LP candidates, sharp lower bounds by construction), evaluate closed forms
@@ -58,16 +61,22 @@ pub struct EvalOptions {
     pub skip_trivial: Option<bool>,
     /// Keep per-fragment values (G, PCF) in the report ([`ViewReport::values`]).
     pub keep_values: bool,
+    /// Called as fragments finish (done, planned).
     pub progress: Option<Progress>,
 }
 
 /// One evaluated fragment (kept with [`EvalOptions::keep_values`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct FragmentValue {
+    /// Texel index y·width + x.
     pub texel: usize,
+    /// Depth layer of the fragment (0 = front).
     pub layer: usize,
+    /// The PCF reference.
     pub pcf: f64,
+    /// The technique's G.
     pub g: f64,
+    /// Whether F_Z(z_f − ε′) = 0 (G := 0 when trivial fragments are skipped).
     pub trivial: bool,
 }
 
@@ -367,7 +376,9 @@ pub(super) fn shade_view(
 /// Front-layer shadow maps of one view for pictures: per texel the PCF and the subject's G of
 /// the front-layer fragment (NaN where the texel has no surface).
 pub struct FrontShadows {
+    /// PCF per texel, row-major.
     pub pcf: Vec<f64>,
+    /// The subject's G per texel, row-major.
     pub g: Vec<f64>,
 }
 

@@ -92,13 +92,17 @@ pub fn light_of<'a>(scenes: &'a [Scene], stack: &DepthStack) -> Result<Option<(&
 /// The surface point seen through one pixel: world position and unit normal facing the camera.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EyePoint {
+    /// World position.
     pub world: V3,
+    /// Unit normal, facing the camera.
     pub normal: V3,
 }
 
 /// The visible points of a `resolution`² orthographic camera fitted to the scene.
 pub struct EyeView {
+    /// Pixels per side.
     pub resolution: usize,
+    /// Direction the camera looks along (unit, world space).
     pub camera: V3,
     /// Row-major, `None` where the ray hits nothing.
     pub points: Vec<Option<EyePoint>>,
@@ -288,8 +292,11 @@ pub fn shadows(
 /// One view seen by its eye camera: the visible points and their PCF shadow, shared by the
 /// pictures of every technique of that view.
 pub struct EyeComparison {
+    /// The visible points.
     pub view: EyeView,
+    /// Direction the light travels (world space).
     pub light_dir: V3,
+    /// PCF shadow of each pixel's point, row-major (NaN where the ray hits nothing).
     pub pcf: Vec<f64>,
 }
 

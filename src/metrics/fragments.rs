@@ -89,6 +89,7 @@ pub enum Subsample {
     Stride(usize),
     /// Each fragment independently with probability `fraction`, decided by a hash of
     /// (seed, view, layer, texel): deterministic and independent of thread timing.
+    /// Each fragment with probability `fraction`, hashed with `seed`.
     Random { fraction: f64, seed: u64 },
 }
 

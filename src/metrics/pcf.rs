@@ -7,10 +7,15 @@ use super::*;
 /// receiver-plane slopes of the front surface (0 where there is none).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FrontMap {
+    /// Texels per row.
     pub width: usize,
+    /// Rows of texels.
     pub height: usize,
+    /// Front depth z0 per texel, row-major (background = 1).
     pub depth: Vec<f64>,
+    /// Receiver-plane slope dz/du per texel step in x.
     pub dzdu: Vec<f64>,
+    /// Receiver-plane slope dz/dv per texel step in y.
     pub dzdv: Vec<f64>,
 }
 

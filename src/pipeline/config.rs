@@ -16,6 +16,7 @@ pub enum Preset {
 }
 
 impl Preset {
+    /// The preset's name ("tiny", "default", "full").
     pub fn name(self) -> &'static str {
         match self {
             Preset::Tiny => "tiny",
@@ -30,6 +31,7 @@ impl Preset {
 pub struct Config {
     /// Name of the run: the report goes to `<reports>/<run>/`, bulky data to `<results>/<run>/`.
     pub run: String,
+    /// Sizes preset, see [`Plan`].
     pub preset: Preset,
     /// Shadow-map resolution of the rendered views (None: the preset's, 512 or 64 for tiny).
     pub resolution: Option<usize>,
@@ -103,6 +105,7 @@ impl Config {
 /// Sizes of one configuration.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Plan {
+    /// Shadow-map resolution of the rendered views.
     pub resolution: usize,
     /// Every k-th fragment for the LP candidates (closed forms see every fragment).
     pub lp_stride: usize,
@@ -111,9 +114,11 @@ pub struct Plan {
     /// Fragments (sampled from the stacks) of the speed measurement of closed forms and of LP
     /// candidates.
     pub speed_inputs: usize,
+    /// Fragments of the speed measurement of LP candidates.
     pub lp_speed_inputs: usize,
     /// θ_m computed for these m, with this many random starts.
     pub theta_moments: Vec<usize>,
+    /// Random starts of each θ_m search.
     pub theta_restarts: usize,
     /// θ_m by re-running only start k of the recorded seed-1 search with R starts (m, R, k):
     /// the start that reached the best basin (docs/theta.md), seconds instead of minutes,
@@ -135,6 +140,7 @@ pub struct Plan {
     pub pictures: usize,
     /// `tune`: fragments per scene, and per scene in the screening pass.
     pub tune_fragments: usize,
+    /// Fragments per scene in the screening pass of `tune`.
     pub tune_screen: usize,
 }
 

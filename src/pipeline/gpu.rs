@@ -15,9 +15,11 @@ use std::path::Path;
 /// What the step found.
 #[derive(Clone, Debug, Serialize)]
 pub struct Outcome {
+    /// The adapter the step ran on (None when there is none).
     pub adapter: Option<Adapter>,
     /// Why the step was skipped (no adapter), or empty.
     pub skipped: String,
+    /// The GPU check's comparison of each setting.
     pub verdicts: Vec<Verdict>,
     /// The bench's file stem under `gpu/` (charts `<stem>_{size,filter,output}.svg`).
     pub bench: Option<String>,

@@ -21,8 +21,11 @@ pub type Refinement = Vec<(usize, Vec<(String, f64)>)>;
 /// "chosen": {scene: n}}`.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GridChoice {
+    /// Allowed |e(n) − e(n_max)| of a chosen grid size.
     pub tolerance: f64,
+    /// Mean error per scene for each grid size n.
     pub grids: Refinement,
+    /// The chosen grid size n per scene.
     pub chosen: BTreeMap<String, usize>,
 }
 

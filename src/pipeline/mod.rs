@@ -50,10 +50,12 @@ pub struct Paths {
     pub out: PathBuf,
     /// `<results>/<run>`: stacks and sweep rows.
     pub data: PathBuf,
+    /// `<results>/<run>/stacks`: the rendered depth stacks.
     pub stacks: PathBuf,
 }
 
 impl Paths {
+    /// The folders of the run `cfg`.
     pub fn of(cfg: &Config) -> Paths {
         let data = cfg.data_dir();
         Paths {
@@ -69,7 +71,9 @@ impl Paths {
 pub struct Outcome {
     /// `<reports>/<run>/index.html`.
     pub report: PathBuf,
+    /// The recommendation per scene.
     pub recommendations: Vec<Recommendation>,
+    /// Wall time of the run, seconds.
     pub seconds: f64,
 }
 

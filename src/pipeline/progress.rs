@@ -17,6 +17,7 @@ pub struct Steps {
 }
 
 impl Steps {
+    /// Steps numbered 1..=`total`; the clock starts now.
     pub fn new(total: usize) -> Steps {
         Steps {
             k: 0,

@@ -22,9 +22,11 @@ pub const FILES: [&str; 3] = ["quantize.json", "quantize.md", "quantize_alpha.sv
 pub struct Study {
     /// Directory of depth stacks; None: render the embedded default dataset at `resolution`.
     pub stacks: Option<PathBuf>,
+    /// Shadow-map resolution of the rendered default dataset.
     pub resolution: usize,
     /// Folder with theta{m}.json for every technique.
     pub theta_dir: PathBuf,
+    /// The techniques studied.
     pub techniques: Vec<Tech>,
     /// Evaluate every k-th fragment only.
     pub stride: usize,
@@ -34,7 +36,9 @@ pub struct Study {
 
 /// The written study: the JSON text and the Markdown.
 pub struct Written {
+    /// The study as JSON.
     pub json: String,
+    /// The study as Markdown.
     pub markdown: String,
 }
 

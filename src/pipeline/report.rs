@@ -19,21 +19,37 @@ fn s(x: impl ToString) -> String {
 
 /// Everything the report shows.
 pub struct ReportInputs<'a> {
+    /// Sizes of the run.
     pub plan: &'a Plan,
+    /// The run's configuration.
     pub config: &'a Config,
+    /// The rendered depth stacks.
     pub stacks: &'a [DepthStack],
+    /// Every evaluated technique configuration.
     pub all: &'a [Measured],
+    /// The per-scene entries of the speed–accuracy chart.
     pub entries: &'a [Entry],
+    /// The recommendation per scene.
     pub recs: &'a [Recommendation],
+    /// The `tune` step's result.
     pub tuning: &'a crate::tune::Tuning,
+    /// LP grid size n chosen per scene: (scene, n).
     pub chosen_grid: &'a [(String, usize)],
+    /// The grid refinement: (n, [(scene, error)]).
     pub refinement: &'a [(usize, Vec<(String, f64)>)],
+    /// One row per θ_m computed.
     pub theta_rows: &'a [ThetaRow],
+    /// One note per m of the candidate sweep.
     pub search_notes: &'a [String],
+    /// Folder of the sweep report.
     pub search_report: &'a Path,
+    /// The report folder.
     pub out: &'a Path,
+    /// Shadow pictures: (path relative to the report, caption).
     pub pictures: &'a [(String, String)],
+    /// Eye-view pictures.
     pub eye: &'a [super::techniques::EyeFigure],
+    /// Wall time of the run so far, seconds.
     pub seconds: f64,
 }
 

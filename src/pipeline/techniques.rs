@@ -36,10 +36,15 @@ pub fn closed_forms() -> impl Iterator<Item = &'static str> {
 /// One evaluation of the study: a technique at a storage precision, the fragments it sees
 /// (every `stride`-th) and the random inputs of its speed measurement.
 pub struct Job {
+    /// Technique spec name.
     pub name: String,
+    /// Moment storage precision ("f32", "f64").
     pub precision: String,
+    /// The technique at that precision.
     pub technique: Box<dyn Technique>,
+    /// Evaluate every `stride`-th fragment.
     pub stride: usize,
+    /// Fragments of the speed measurement.
     pub speed_inputs: usize,
 }
 

@@ -21,6 +21,7 @@ pub type ThetaRow = (usize, f64, f64, f64);
 /// What one θ search runs with.
 #[derive(Clone, Debug)]
 pub struct Search {
+    /// Options of the optimizer.
     pub options: optimize::Options,
     /// Starts within this many bits of the best count as reaching the best basin.
     pub basin_tol: f64,

@@ -20,7 +20,9 @@ use anyhow::{bail, Result};
 /// deviation of the series from θ∘b on 8193 points of [0,1] (f64).
 #[derive(Clone, Debug, PartialEq)]
 pub struct ChebyshevRows {
+    /// `coeffs[i][k]`: coefficient of T_k(2z − 1) in row i of θ∘b.
     pub coeffs: Vec<Vec<f64>>,
+    /// max over the 8193 points and rows of |series − θ∘b|.
     pub max_fit_error: f64,
 }
 
@@ -261,7 +263,9 @@ fn chunk_names(prefix: &str, m: usize) -> Vec<String> {
 /// How the stored channels are passed: one array, or float4 chunks (m ≤ 4: returned).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
+    /// One `float m[]` array.
     Array,
+    /// float4 chunks (the last one shorter when m is not a multiple of 4).
     Vectors,
 }
 
@@ -385,9 +389,13 @@ pub enum ChannelOrder {
 /// encoder and decoder), the θ in the emitted channel order, and the encoder form.
 #[derive(Clone, Debug)]
 pub struct Snippet {
+    /// Modules with GLSL-style names.
     pub glsl: Module,
+    /// Modules with HLSL-style names.
     pub hlsl: Module,
+    /// θ with its rows in the emitted channel order.
     pub theta: Theta,
+    /// What the encoder takes (the depth, or the basis values).
     pub form: EncoderForm,
     /// "paper" or "search".
     pub order: &'static str,

@@ -121,6 +121,7 @@ pub struct SampledCurve {
 }
 
 impl SampledCurve {
+    /// Tabulates `f` at `samples` + 1 uniform points (at least 17) and checks every value is finite.
     pub fn new(names: Vec<String>, samples: usize, f: EvalFn) -> anyhow::Result<SampledCurve> {
         let m = names.len();
         let samples = samples.max(16);

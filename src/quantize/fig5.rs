@@ -19,7 +19,9 @@ pub struct Fig5Volumes {
     pub volume_theta: f64,
     /// volume_theta / volume_b (= |det θ₃| up to rounding).
     pub ratio: f64,
+    /// det θ₃ = 2^gain_bits.
     pub det: f64,
+    /// Number of curve points in each hull.
     pub points: usize,
 }
 

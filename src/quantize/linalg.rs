@@ -20,6 +20,7 @@ impl Lu {
         self.lu.log2_abs_det()
     }
 
+    /// det A.
     pub fn det(&self) -> f64 {
         let (l, s) = self.log2_abs_det();
         s * l.exp2()

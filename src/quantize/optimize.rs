@@ -27,6 +27,7 @@ use rayon::prelude::*;
 /// Options of [`optimize`].
 #[derive(Clone, Debug)]
 pub struct Options {
+    /// Seed of the random starts.
     pub seed: u64,
     /// Independent random starts.
     pub restarts: usize,
@@ -39,6 +40,7 @@ pub struct Options {
     /// Basin-hopping steps per start: perturb all rows by relative noise `hop_sigma`,
     /// re-ascend, keep if better.
     pub hops: usize,
+    /// Relative noise of a basin-hopping perturbation.
     pub hop_sigma: f64,
     /// Run only these start indices (of 0..restarts) instead of all: re-runs a start of a
     /// seeded search exactly (e.g. the one that reached the best basin) in a fraction of the time.
@@ -63,6 +65,7 @@ impl Default for Options {
 /// Result of [`optimize`].
 #[derive(Clone, Debug)]
 pub struct Outcome {
+    /// The best θ found (strictly feasible after the `margin` shrink).
     pub theta: Theta,
     /// Gain of each start after convergence (bits), in start order.
     pub start_gains: Vec<f64>,
@@ -544,7 +547,9 @@ fn frame_gain(frame: &Frame) -> f64 {
 /// How many starts reached the best basin: starts within `tol_bits` of the best gain.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Basin {
+    /// The best gain log₂|det A| over the starts, bits.
     pub best_bits: f64,
+    /// Tolerance that defines the best basin, bits.
     pub tol_bits: f64,
     /// Start indices within `tol_bits` of the best, ascending.
     pub starts: Vec<usize>,

@@ -21,8 +21,10 @@ use anyhow::{bail, Result};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum HalfRounding {
+    /// IEEE round to nearest, ties to even.
     #[default]
     NearestEven,
+    /// Round toward zero (truncate the mantissa).
     TowardZero,
 }
 

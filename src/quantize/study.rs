@@ -101,6 +101,7 @@ pub enum Tech {
 }
 
 impl Tech {
+    /// Every technique of the study.
     pub const ALL: [Tech; 4] = [Tech::Vsm, Tech::Msm4, Tech::Msm6, Tech::Msm8];
 
     /// Parse a technique name ("vsm", "hamburger4", "hamburger6", "hamburger8"; the older
@@ -110,6 +111,7 @@ impl Tech {
         Tech::ALL.into_iter().find(|t| t.name() == name)
     }
 
+    /// Moment count m.
     pub fn m(self) -> usize {
         match self {
             Tech::Vsm => 2,
@@ -118,6 +120,7 @@ impl Tech {
             Tech::Msm8 => 8,
         }
     }
+    /// The registry name ("vsm", "hamburger4", …).
     pub fn name(self) -> &'static str {
         match self {
             Tech::Vsm => "vsm",
@@ -189,16 +192,22 @@ pub fn identity_theta(m: usize) -> Theta {
 /// One storage configuration of the study.
 #[derive(Clone, Debug)]
 pub struct Config {
+    /// Label in tables and plots.
     pub name: String,
+    /// The transform θ applied before storage.
     pub theta: Theta,
+    /// The per-channel storage format.
     pub storage: Storage,
 }
 
 /// Error against α for one technique and configuration.
 #[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct Sweep {
+    /// Technique name.
     pub technique: String,
+    /// Configuration label.
     pub config: String,
+    /// The α values swept.
     pub alphas: Vec<f64>,
     /// Mean |G − PCF| over all evaluated fragments, per α.
     pub errors: Vec<f64>,
@@ -207,8 +216,11 @@ pub struct Sweep {
     pub deviation: Vec<f64>,
     /// Fragments with non-finite G per α (counted as error 1).
     pub non_finite: Vec<usize>,
+    /// The α with the smallest mean error.
     pub best_alpha: f64,
+    /// The mean error at `best_alpha`.
     pub best_error: f64,
+    /// Evaluated fragments.
     pub fragments: usize,
 }
 

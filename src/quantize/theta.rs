@@ -11,9 +11,13 @@ use serde::{Deserialize, Serialize};
 /// θ: stored vector s = matrix·b + offset; b = inverse·(s − offset).
 #[derive(Clone, Debug, Serialize, Deserialize, PartialEq)]
 pub struct Theta {
+    /// Basis function names, in the order of b's components.
     pub basis: Vec<String>,
+    /// A (m × m, rows): s = A·b + offset.
     pub matrix: Vec<Vec<f64>>,
+    /// The offset t (length m).
     pub offset: Vec<f64>,
+    /// A⁻¹, for decoding b = A⁻¹·(s − t).
     pub inverse: Vec<Vec<f64>>,
 }
 
@@ -44,6 +48,7 @@ impl Theta {
         })
     }
 
+    /// Moment count m.
     pub fn m(&self) -> usize {
         self.matrix.len()
     }

@@ -36,7 +36,9 @@ pub fn volume_bound_bits(m: usize) -> f64 {
 /// A closed triangulated convex polyhedron: faces index `points`, outward counter-clockwise.
 #[derive(Clone, Debug)]
 pub struct Hull {
+    /// Vertices.
     pub points: Vec<[f64; 3]>,
+    /// Triangles as indices into `points`, outward counter-clockwise.
     pub faces: Vec<[usize; 3]>,
 }
 

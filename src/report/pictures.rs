@@ -34,13 +34,16 @@ pub const PANELS: usize = 5;
 /// An 8-bit RGB image.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RgbImage {
+    /// Pixels per row.
     pub width: usize,
+    /// Rows of pixels.
     pub height: usize,
     /// Row-major RGB bytes, 3 per pixel.
     pub data: Vec<u8>,
 }
 
 impl RgbImage {
+    /// A `width` × `height` image filled with `fill`.
     pub fn new(width: usize, height: usize, fill: [u8; 3]) -> RgbImage {
         RgbImage {
             width,
@@ -48,10 +51,12 @@ impl RgbImage {
             data: fill.repeat(width * height),
         }
     }
+    /// The colour at (x, y).
     pub fn get(&self, x: usize, y: usize) -> [u8; 3] {
         let i = 3 * (y * self.width + x);
         [self.data[i], self.data[i + 1], self.data[i + 2]]
     }
+    /// Sets the colour at (x, y).
     pub fn set(&mut self, x: usize, y: usize, c: [u8; 3]) {
         let i = 3 * (y * self.width + x);
         self.data[i..i + 3].copy_from_slice(&c);

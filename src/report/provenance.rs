@@ -9,12 +9,17 @@ pub const COMMIT: &str = env!("MOMENTLAB_GIT_COMMIT");
 /// The provenance of one run.
 #[derive(Clone, Debug, Serialize)]
 pub struct Provenance {
+    /// momentlab's version (Cargo.toml).
     pub version: String,
+    /// The git commit of the build ([`COMMIT`]).
     pub commit: String,
+    /// CPU model name from /proc/cpuinfo.
     pub cpu: String,
+    /// Worker threads of the run.
     pub threads: usize,
     /// UTC, `YYYY-MM-DD HH:MM`.
     pub date: String,
+    /// The command line of the run.
     pub command: String,
 }
 

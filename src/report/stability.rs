@@ -43,8 +43,11 @@ pub const FILES: [&str; 5] = [
 /// What a finished study reports.
 #[derive(Clone, Debug)]
 pub struct Outcome {
+    /// Inputs (samples) evaluated.
     pub inputs: usize,
+    /// Techniques tested.
     pub techniques: usize,
+    /// Wall time of the study, seconds.
     pub seconds: f64,
 }
 

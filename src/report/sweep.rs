@@ -24,6 +24,7 @@ use std::path::{Path, PathBuf};
 pub struct ReportOptions {
     /// Solver and chunk size for the Fig. 3 curves.
     pub solver: String,
+    /// Fragments per solver instance (warm-start chain) of the Fig. 3 curves.
     pub chunk: usize,
     /// Results directories of other sweeps (e.g. m = 2 and 3) for the side-by-side plot.
     pub compare: Vec<PathBuf>,

@@ -122,9 +122,13 @@ where
 /// size and the median standard error of a candidate's estimate on it.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Fig4Data {
+    /// Errors of the candidates tied for first, unresolved, and the others.
     pub classes: [Vec<f64>; 3],
+    /// Errors of the candidates scored on more fragments than the common sample.
     pub deeper: Vec<f64>,
+    /// Fragments of the common sample.
     pub fragments: u64,
+    /// Median standard error of a candidate's estimate on the common sample.
     pub median_se: f64,
 }
 
