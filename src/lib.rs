@@ -31,6 +31,8 @@
 //!
 //! The command line (src/cli, one file per subcommand) belongs to the binary, not the library.
 
+#![warn(missing_docs)]
+
 pub mod artefact;
 pub mod basis;
 pub mod batch;

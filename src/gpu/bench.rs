@@ -38,6 +38,7 @@ pub struct Plan {
     /// texels (a 4096² map on a software rasterizer takes seconds per run).
     #[serde(default = "one")]
     pub repeats_large: usize,
+    /// Shadow-map edge from which `repeats_large` applies (default: never).
     #[serde(default = "never")]
     pub large_from: usize,
 }
@@ -64,8 +65,11 @@ impl Plan {
 /// Median, mean and maximum of a time in milliseconds.
 #[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
 pub struct Stat {
+    /// Median, ms.
     pub median: f64,
+    /// Mean, ms.
     pub mean: f64,
+    /// Maximum, ms.
     pub max: f64,
 }
 
@@ -84,34 +88,48 @@ impl Stat {
 /// One measured point.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Point {
+    /// Technique name.
     pub technique: String,
+    /// Storage format name.
     pub storage: String,
+    /// Bits stored per texel.
     pub bits_per_texel: u32,
     /// "size", "filter" or "output": the axis this point belongs to.
     pub axis: String,
+    /// Shadow-map edge length (texels).
     pub size: usize,
+    /// Filter taps per axis.
     pub filter: usize,
+    /// Output edge length (output² lookups).
     pub output: usize,
     /// Timed runs behind the statistics.
     #[serde(default)]
     pub runs: usize,
+    /// Encode pass (depth to stored moments).
     pub encode_ms: Stat,
+    /// Separable filter passes.
     pub filter_ms: Stat,
+    /// Lookup pass (G per receiver).
     pub lookup_ms: Stat,
+    /// The whole run.
     pub total_ms: Stat,
 }
 
 /// The artefact `reports/gpu/<adapter>.json`.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Report {
+    /// The adapter measured on.
     pub adapter: Adapter,
     /// "timestamp" (GPU time per pass) or "wall" (whole run, passes not split).
     pub timer: String,
+    /// The sweeps run.
     pub plan: Plan,
     /// Statements of each technique's lookup shader (`tunedShadow`, loops unrolled), the
     /// static size a cost model would use.
     pub shader_ops: Vec<(String, usize)>,
+    /// Every measured point.
     pub points: Vec<Point>,
+    /// Wall time of the bench, seconds.
     pub seconds: f64,
 }
 

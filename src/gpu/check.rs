@@ -109,7 +109,9 @@ fn steps(storage: Storage, a: f32, b: f32, scale: f32) -> f64 {
 /// The comparison of one setting.
 #[derive(Clone, Debug, Serialize)]
 pub struct Verdict {
+    /// Label of the setting.
     pub label: String,
+    /// Receivers compared.
     pub receivers: usize,
     /// The driver's binary16 conversion the model used.
     pub half_rounding: HalfRounding,
@@ -122,18 +124,23 @@ pub struct Verdict {
     /// Largest |G_gpu − G_model(GPU map)| beyond the receiver's tolerance (0: none), the
     /// receiver, and the largest |G_gpu − G_model(GPU map)| itself.
     pub g_excess: f64,
+    /// Index of the receiver with the largest excess.
     pub g_worst: usize,
+    /// Largest |G_gpu − G_model(GPU map)|.
     pub g_max: f64,
     /// Share of receivers beyond their tolerance.
     pub g_outliers: f64,
     /// The worst receiver's texel (x, y) and z_f.
     pub worst_texel: (usize, usize),
+    /// z_f of the worst receiver.
     pub worst_zf: f32,
     /// Largest and mean |G_gpu − G_model| of the whole CPU model (its own map).
     pub pipeline_max: f64,
+    /// Mean |G_gpu − G_model| of the whole CPU model.
     pub pipeline_mean: f64,
     /// Share of receivers where the whole model differs by more than 1/255.
     pub pipeline_above_8bit: f64,
+    /// The map is within its tolerance and few enough receivers are beyond theirs.
     pub passed: bool,
 }
 

@@ -61,9 +61,15 @@ pub const EXPORT_LINES_BOUND: usize = 2000;
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum CostSource {
     /// `gpu bench`'s lookup pass on this adapter.
-    Measured { adapter: String },
+    Measured {
+        /// Name of the adapter.
+        adapter: String,
+    },
     /// The op-count model, calibrated on the bench artefacts of these adapters.
-    Model { calibrated_on: Vec<String> },
+    Model {
+        /// Names of the adapters.
+        calibrated_on: Vec<String>,
+    },
 }
 
 /// Operations of one execution of a shader function (a loop body counted once per trip).
@@ -71,6 +77,7 @@ pub enum CostSource {
 pub struct OpCount {
     /// + − × negation, abs, min, max, clamp.
     pub arithmetic: u64,
+    /// Divisions.
     pub division: u64,
     /// sqrt, exp, log, sin, cos, acos, atan2.
     pub transcendental: u64,
@@ -129,6 +136,7 @@ impl OpCount {
 pub struct GpuCost {
     /// Nanoseconds per shadow lookup (one fragment).
     pub ns_per_lookup: f64,
+    /// Where `ns_per_lookup` comes from.
     pub source: CostSource,
     /// Operations of the lookup program (`tunedShadow`).
     pub ops: OpCount,
@@ -210,7 +218,9 @@ fn program_of(t: TechniqueKind, s: StorageKind) -> Result<Program> {
 /// One technique × storage of a calibration.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct FitRow {
+    /// The technique.
     pub technique: TechniqueKind,
+    /// The storage format.
     pub storage: StorageKind,
     /// W of its lookup program.
     pub weighted_ops: f64,
@@ -230,16 +240,20 @@ impl FitRow {
 /// The model ns = a + b·W calibrated on one bench artefact.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Fit {
+    /// Name of the adapter of the bench artefact.
     pub adapter: String,
+    /// Whether that adapter is a software rasterizer.
     pub software: bool,
     /// a: ns per lookup of a program without operations.
     pub intercept_ns: f64,
     /// b: ns per weighted operation.
     pub ns_per_op: f64,
+    /// The technique × storage rows fitted.
     pub rows: Vec<FitRow>,
 }
 
 impl Fit {
+    /// Predicted ns per lookup, a + b·W, for a program with operations `ops`.
     pub fn predict(&self, ops: &OpCount) -> f64 {
         self.intercept_ns + self.ns_per_op * ops.weighted()
     }
@@ -389,6 +403,7 @@ pub fn gpu_cost(t: TechniqueKind, s: StorageKind) -> Result<GpuCost> {
 /// The point [`measured_costs`] times: the committed bench's base point — a 512² shadow map,
 /// the 9×9 filter, 256² lookups — three runs after a warm-up.
 pub const MEASURE: (usize, usize, usize) = (512, 9, 256);
+/// Timed runs per technique × storage at [`MEASURE`].
 pub const MEASURE_REPEATS: usize = 3;
 
 /// The measured GPU cost of each technique × storage of `pairs` on `gpu`: `gpu bench`'s lookup

@@ -81,8 +81,11 @@ impl Adapter {
 
 /// A device and its queue, with the features the shadow-map pipeline uses.
 pub struct Gpu {
+    /// The wgpu device.
     pub device: wgpu::Device,
+    /// Its queue.
     pub queue: wgpu::Queue,
+    /// What the adapter is.
     pub adapter: Adapter,
     /// Timestamp queries inside passes are available (per-pass times in `gpu bench`).
     pub timestamps: bool,

@@ -95,6 +95,7 @@ pub fn filter(k: usize, weights: &[f32], vertical: bool) -> String {
 
 /// Invocations per workgroup of the lookup, and workgroups per row of its 2-D dispatch.
 pub const LOOKUP_GROUP: u32 = 64;
+/// Largest workgroups per row of the lookup's 2-D dispatch.
 pub const LOOKUP_ROW: u32 = 32768;
 
 /// The lookup pass: `functions` holds `tunedShadow(stored: array<f32, m>, fragmentDepth: f32) -> f32`.

@@ -26,32 +26,44 @@ pub fn texture_format(storage: Storage) -> Result<wgpu::TextureFormat> {
 /// the 1-D filter weights. `wgsl`, when given, is the shader text run instead of the module's
 /// own printing (an export file as shipped); the module then only gives the channel count.
 pub struct Program<'a> {
+    /// The shader module with `tunedEncode` and `tunedShadow`.
     pub module: &'a Module,
+    /// WGSL text run instead of the module's own printing.
     pub wgsl: Option<&'a str>,
+    /// Storage format of the moment maps.
     pub storage: Storage,
+    /// 1-D filter weights (the separable kernel).
     pub weights: &'a [f32],
 }
 
 /// The receivers to look up: texel index and z_f (already biased) per fragment.
 #[derive(Clone, Debug, Default)]
 pub struct Receivers {
+    /// Texel index y·width + x of each receiver.
     pub texel: Vec<u32>,
+    /// Biased fragment depth z_f of each receiver.
     pub zf: Vec<f32>,
 }
 
 /// Seconds per pass from timestamp queries (None where the adapter has none).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PassTimes {
+    /// Encode pass, seconds.
     pub encode: f64,
+    /// Filter passes, seconds.
     pub filter: f64,
+    /// Lookup pass, seconds.
     pub lookup: f64,
 }
 
 /// What one run gives: the filtered, stored map (m values per texel, texel-major), G per
 /// receiver, and the pass times.
 pub struct Output {
+    /// The filtered, stored map: m values per texel, texel-major.
     pub filtered: Vec<f32>,
+    /// G per receiver.
     pub shadow: Vec<f32>,
+    /// Pass times (None without timestamp queries).
     pub times: Option<PassTimes>,
 }
 

@@ -89,8 +89,12 @@ pub enum Subsample {
     Stride(usize),
     /// Each fragment independently with probability `fraction`, decided by a hash of
     /// (seed, view, layer, texel): deterministic and independent of thread timing.
-    /// Each fragment with probability `fraction`, hashed with `seed`.
-    Random { fraction: f64, seed: u64 },
+    Random {
+        /// Probability of keeping a fragment, in (0, 1].
+        fraction: f64,
+        /// Seed of the hash.
+        seed: u64,
+    },
 }
 
 impl Subsample {

@@ -31,6 +31,7 @@ pub struct SweepConfig {
     pub dataset: String,
     /// Fingerprint of the dataset's fragments.
     pub dataset_fingerprint: String,
+    /// Seed of the fragment sample and of the racing order.
     pub seed: u64,
     /// LP solves after which no further look starts (0: none). It never eliminates anyone:
     /// the race ends with its survivors *unresolved*.
@@ -71,10 +72,15 @@ pub struct SweepConfig {
 /// The racing and sharding parameters of a sweep, as given (flags or a configuration).
 #[derive(Clone, Copy, Debug)]
 pub struct Parameters {
+    /// [i, N]: this run scores the candidates with index % N == i.
     pub shard: [usize; 2],
+    /// Fragments in racing stage 0.
     pub first_sample: usize,
+    /// Sample growth factor per stage.
     pub growth: usize,
+    /// Candidates per flushed batch.
     pub batch: usize,
+    /// Confidence 1 − α of the elimination tests.
     pub confidence: f64,
 }
 

@@ -84,6 +84,7 @@ pub struct DatasetBuilder {
 }
 
 impl DatasetBuilder {
+    /// An empty dataset on `grid`.
     pub fn new(grid: &Grid) -> DatasetBuilder {
         DatasetBuilder {
             data: Dataset {
@@ -172,6 +173,7 @@ impl DatasetBuilder {
         Ok(true)
     }
 
+    /// The dataset, its fragments sorted by (distribution, z_f, layer) for warm starts.
     pub fn finish(mut self) -> Dataset {
         self.data.fragments.sort_by_key(|f| (f.dist, f.zf, f.layer));
         self.data.nontrivial_population = self.data.fragments.len() as u64;
@@ -180,6 +182,7 @@ impl DatasetBuilder {
 }
 
 impl Dataset {
+    /// The depth grid I the distributions are snapped to.
     pub fn grid(&self) -> &Grid {
         &self.grid
     }
@@ -187,6 +190,7 @@ impl Dataset {
     pub fn fragments(&self) -> &[Fragment] {
         &self.fragments
     }
+    /// Number of distributions.
     pub fn distribution_count(&self) -> usize {
         self.dists.len()
     }
@@ -195,6 +199,7 @@ impl Dataset {
         let (s, l) = self.dists[d as usize];
         &self.entries[s as usize..(s + l) as usize]
     }
+    /// Trivial fragments (F_Z(z_f) = 0 on the grid): not stored, G = 0.
     pub fn trivial_count(&self) -> u64 {
         self.trivial_count
     }
@@ -240,6 +245,7 @@ impl Dataset {
         };
         ((self.trivial_error + pop * mean) / total, pop / total * se)
     }
+    /// View names, indexed by view number.
     pub fn views(&self) -> &[String] {
         &self.views
     }

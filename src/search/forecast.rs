@@ -26,6 +26,7 @@ use std::collections::HashMap;
 /// One candidate's estimates from the proxy race.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Estimate {
+    /// Candidate index.
     pub index: u64,
     /// Mean error gap to the proxy's winner over the looks both saw (fragment-weighted).
     pub gap: f64,
@@ -94,16 +95,25 @@ pub fn estimates(looks: &[Vec<StageStats>], winner: u64) -> Vec<Estimate> {
 /// The run a forecast simulates: its kept fragments and racing parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shape {
+    /// Kept non-trivial fragments.
     pub fragments: usize,
+    /// Fragments in racing stage 0.
     pub first_sample: usize,
+    /// Sample growth factor per stage.
     pub growth: usize,
+    /// Early look ([`SweepConfig::early_look`]).
     pub early_look: usize,
+    /// Candidates tried to pick the stage-0 reference.
     pub pilot: usize,
     /// LP solves after which no look starts (0: none; [`SweepConfig::lp_budget`]).
     pub lp_budget: u64,
+    /// Confidence 1 − α of the elimination tests.
     pub confidence: f64,
+    /// One-sided bound of the tests.
     pub bound: Bound,
+    /// Paired differences (true) or independent intervals.
     pub paired: bool,
+    /// Number of shards N.
     pub shards: usize,
 }
 
@@ -128,6 +138,7 @@ impl Shape {
 /// Simulated runs of a race ([`simulate`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Forecast {
+    /// Simulated runs.
     pub replicates: usize,
     /// Mean LP solves per run (stage references and the pilot included).
     pub lp_solves: f64,

@@ -14,8 +14,11 @@ use std::path::{Path, PathBuf};
 /// A results directory checked to be whole: its configuration, its rows, and whether it is
 /// complete.
 pub struct Verified {
+    /// The run's configuration.
     pub config: SweepConfig,
+    /// Its rows.
     pub rows: Vec<Row>,
+    /// Whether the run finished (its completion marker is present).
     pub complete: bool,
 }
 

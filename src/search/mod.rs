@@ -84,6 +84,7 @@ impl FunctionTable {
         FunctionTable::new(grid, names, |j, z| functions[j].eval(z))
     }
 
+    /// The depth grid the functions are tabulated on.
     pub fn grid(&self) -> &Grid {
         self.table.grid()
     }
@@ -91,9 +92,11 @@ impl FunctionTable {
     pub fn len(&self) -> usize {
         self.names.len()
     }
+    /// True when N = 0.
     pub fn is_empty(&self) -> bool {
         self.names.is_empty()
     }
+    /// The function names, in column order.
     pub fn names(&self) -> &[String] {
         &self.names
     }

@@ -104,8 +104,11 @@ pub fn schedule(cfg: &SweepConfig, active: u64, fragments: u64) -> Schedule {
 /// (docs/search.md), so an unstratified sample misjudges the mix.
 #[derive(Clone, Debug)]
 pub struct Calibration {
+    /// Candidates sampled.
     pub candidates: usize,
+    /// Fragments each sampled candidate was scored on.
     pub fragments: usize,
+    /// LP solves of the sample.
     pub lp_solves: u64,
     /// Wall time of the sample on `threads` threads.
     pub seconds: f64,
@@ -171,13 +174,17 @@ impl Calibration {
 pub struct Plan {
     /// Candidates selected (before sharding), degenerate ones, duplicate spans.
     pub candidates: u64,
+    /// Degenerate candidates.
     pub degenerate: u64,
+    /// Duplicate candidates.
     pub duplicates: u64,
     /// Kept non-trivial fragments.
     pub fragments: u64,
     /// Per shard: racing (an upper bound, see the module docs), exhaustive.
     pub racing: Vec<Schedule>,
+    /// Per shard: exhaustive.
     pub exhaustive: Vec<Schedule>,
+    /// The measured LP cost of a stratified candidate sample.
     pub calibration: Calibration,
     /// Racing's expected cost from a proxy race of shard `cfg.shard` (None: not asked for, or
     /// exhaustive).
@@ -262,6 +269,7 @@ pub struct Proxy {
     /// Of those, the candidates' per family ([`super::timing::family_of`]), and the rest
     /// (stage references and the pilot).
     pub by_family: Vec<(&'static str, u64)>,
+    /// LP solves of the stage references and the pilot.
     pub other: u64,
     /// Its wall time on this machine (all threads).
     pub seconds: f64,
@@ -273,12 +281,15 @@ pub struct Proxy {
 /// Racing's expected cost from [`FORECAST_RUNS`] simulated runs of the race.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Expected {
+    /// Simulated runs.
     pub runs: usize,
     /// Mean LP solves, and the 10th and 90th percentile of the runs'.
     pub lp_solves: u64,
+    /// 10th and 90th percentile of the runs' LP solves.
     pub range: (u64, u64),
     /// Of the mean, the candidates' per family and the rest (stage references and the pilot).
     pub by_family: Vec<(&'static str, u64)>,
+    /// LP solves of the stage references and the pilot (mean).
     pub other: u64,
     /// The candidates' per family, each weighted by its cost per LP relative to its family's in
     /// the proxy race ([`relative_cost`]): what the calibration's µs per family are applied to.

@@ -18,12 +18,16 @@
 /// Count, Σx and Σx² of a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Moments {
+    /// Sample size n.
     pub n: u64,
+    /// Σx
     pub sum: f64,
+    /// Σx²
     pub sumsq: f64,
 }
 
 impl Moments {
+    /// The sums (n, Σx, Σx²).
     pub fn new(n: u64, sum: f64, sumsq: f64) -> Moments {
         Moments { n, sum, sumsq }
     }
@@ -35,11 +39,13 @@ impl Moments {
         }
         m
     }
+    /// Adds x to the sample.
     pub fn push(&mut self, x: f64) {
         self.n += 1;
         self.sum += x;
         self.sumsq += x * x;
     }
+    /// Merges the sums of `o`.
     pub fn add(&mut self, o: &Moments) {
         self.n += o.n;
         self.sum += o.sum;
@@ -79,6 +85,7 @@ pub enum Bound {
 }
 
 impl Bound {
+    /// The bound named "normal" or "bernstein".
     pub fn parse(s: &str) -> anyhow::Result<Bound> {
         match s {
             "normal" => Ok(Bound::Normal),
@@ -86,6 +93,7 @@ impl Bound {
             _ => anyhow::bail!("unknown bound '{s}' (normal or bernstein)"),
         }
     }
+    /// "normal" or "bernstein".
     pub fn name(&self) -> &'static str {
         match self {
             Bound::Normal => "normal",
@@ -181,6 +189,7 @@ pub enum Elimination {
 /// One candidate's statistics on a stage block.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct StageStats {
+    /// Candidate index.
     pub index: u64,
     /// Errors e on the block.
     pub e: Moments,
@@ -193,6 +202,7 @@ pub struct StageStats {
 pub struct Rule {
     /// Per-test error probability (see [`stage_delta`]).
     pub delta: f64,
+    /// One-sided bound of the test.
     pub bound: Bound,
     /// Paired differences (true) or independent intervals: c is worse when its lower bound is
     /// above the reference's upper bound, each at δ/2 (for comparison only).

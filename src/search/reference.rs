@@ -18,10 +18,13 @@ use std::f64::consts::PI;
 /// A labelled error value marked in the histogram (e.g. "b_MSM (LP)").
 #[derive(Clone, Debug, PartialEq)]
 pub struct Reference {
+    /// Label in the histogram and tables.
     pub label: String,
     /// Number of functions (ranks are only stated among candidates of the same m).
     pub m: usize,
+    /// Mean |G − PCF|.
     pub error: f64,
+    /// Standard error of `error`.
     pub stderr: f64,
     /// A closed-form technique evaluated by [`metrics::evaluate`] on every fragment of the
     /// stacks (not an LP candidate on the sweep's fragments).
@@ -65,9 +68,11 @@ const FIG3_NAMES: [&str; 8] = [
     "z", "z²", "z³", "z⁴", "sin 2πz", "cos 2πz", "sin 4πz", "cos 4πz",
 ];
 
+/// Columns of [`paper_bases`] of the polynomial basis (z, …, z^m).
 pub fn poly_cols(m: usize) -> Vec<usize> {
     (0..m).collect()
 }
+/// Columns of [`paper_bases`] of the trigonometric basis (sin 2πz, cos 2πz, …), m of them.
 pub fn trig_cols(m: usize) -> Vec<usize> {
     (4..4 + m).collect()
 }
@@ -207,10 +212,15 @@ pub fn closed_form_references(stacks: &[DepthStack], bias: &Bias) -> Result<Vec<
 /// A reference value with its rank among the scored candidates of the same m.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct RankedReference {
+    /// Label of the reference.
     pub label: String,
+    /// Number of functions.
     pub m: usize,
+    /// Mean |G − PCF|.
     pub error: f64,
+    /// Standard error of `error`.
     pub stderr: f64,
+    /// Whether it is a closed-form technique (see [`Reference::closed_form`]).
     pub closed_form: bool,
     /// 1 + number of candidates with a smaller error (None: different m or PCF).
     pub rank: Option<usize>,
@@ -224,9 +234,13 @@ pub struct RankedReference {
 /// The best candidate of a results set.
 #[derive(Clone, Debug, PartialEq, Serialize)]
 pub struct Best {
+    /// Candidate index.
     pub index: u64,
+    /// Names of its basis functions.
     pub functions: Vec<String>,
+    /// Mean |G − PCF|.
     pub error: f64,
+    /// Standard error of `error`.
     pub stderr: f64,
     /// Scored on every fragment of the dataset (not only a racing sample).
     pub full: bool,
@@ -240,11 +254,14 @@ pub struct Summary {
     /// The winner (the best survivor of the race, or the best candidate scored on every
     /// fragment).
     pub best: Option<Best>,
+    /// The references with their ranks.
     pub references: Vec<RankedReference>,
     /// Racing: candidates statistically tied for first (the winner included), eliminated by
     /// evidence, left unresolved by an LP budget (0 for exhaustive runs).
     pub tied: usize,
+    /// Candidates eliminated by the racing tests.
     pub confidence_eliminated: usize,
+    /// Candidates left unresolved by the LP budget.
     pub unresolved: usize,
 }
 
@@ -310,9 +327,11 @@ pub fn errors_of(rows: &[Row]) -> Vec<f64> {
 
 /// One Fig. 3 panel: F_Z and the bounds G for m = 2, 3, 4 of one basis family.
 pub struct Fig3Panel {
+    /// Panel title (the basis family).
     pub title: String,
     /// z_f values.
     pub z: Vec<f64>,
+    /// F_Z(z_f) of the panel's distribution.
     pub cdf: Vec<f64>,
     /// (label, G values) for m = 2, 3, 4.
     pub bounds: Vec<(String, Vec<f64>)>,

@@ -62,6 +62,7 @@ pub struct Row {
     /// scale as `error`) and its standard error.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff: Option<f64>,
+    /// Standard error of `diff`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff_se: Option<f64>,
     /// Eliminated: the look of stage `stage` that removed it (0: the first or only look, 1: the
@@ -69,6 +70,7 @@ pub struct Row {
     /// the stage's δ that was above 0 (the evidence: diff ∈ [diff_lower, ∞)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub look: Option<usize>,
+    /// The one-sided lower confidence bound of `diff` that eliminated it.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff_lower: Option<f64>,
     /// Racing survivor when the LP budget ended the race: neither eliminated nor completed.
@@ -78,8 +80,10 @@ pub struct Row {
     /// candidate of the run): error, its standard error and the fragments (Fig. 4).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub common_error: Option<f64>,
+    /// Standard error of `common_error`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub common_stderr: Option<f64>,
+    /// Fragments of the common sample (0: none).
     #[serde(default, skip_serializing_if = "is_zero")]
     pub common_fragments: u64,
 }

@@ -39,21 +39,29 @@ pub struct SweepOptions {
     pub dataset: String,
     /// Racing parameters (see [`SweepConfig`]); `lp_budget` 0: none.
     pub lp_budget: u64,
+    /// Every candidate on every fragment, no racing.
     pub exhaustive: bool,
     /// Only these candidate indices, or these candidates by names "f1,f2;g1,g2".
     pub candidates: Option<Vec<u64>>,
+    /// Only these candidates by names "f1,f2;g1,g2" (see `candidates`).
     pub names: Option<String>,
+    /// [i, N]: this run scores the candidates with index % N == i.
     pub shard: [usize; 2],
+    /// Fragments in racing stage 0.
     pub first_sample: usize,
+    /// Sample growth factor per stage.
     pub growth: usize,
     /// Early look (see [`SweepConfig::early_look`]).
     pub early_look: usize,
     /// Confidence of the elimination tests (all stages and candidates together).
     pub confidence: f64,
+    /// One-sided bound of the tests.
     pub bound: super::race::Bound,
     /// Seed of the racing order (None: `seed`); the fragment sample keeps `seed`.
     pub race_seed: Option<u64>,
+    /// Candidates tried to pick the stage-0 reference.
     pub pilot: usize,
+    /// Candidates per flushed batch.
     pub batch: usize,
     /// Mark the closed forms (metrics::evaluate on every fragment of the stacks).
     pub closed_forms: bool,

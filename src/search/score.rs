@@ -54,12 +54,15 @@ impl<'a> Scorer<'a> {
         })
     }
 
+    /// The fragments scored on.
     pub fn data(&self) -> &Dataset {
         self.data
     }
+    /// The tabulated functions candidates pick from.
     pub fn table(&self) -> &FunctionTable {
         self.table
     }
+    /// Name of the LP solver.
     pub fn solver(&self) -> &str {
         self.solver.name()
     }

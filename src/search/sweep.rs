@@ -64,7 +64,9 @@ use std::path::Path;
 pub struct SweepSummary {
     /// Candidates in this run (after sharding).
     pub candidates: u64,
+    /// Degenerate candidates (linearly dependent columns on the grid), not scored.
     pub degenerate: u64,
+    /// Duplicate candidates (same span as an earlier one), scored through their representative.
     pub duplicates: u64,
     /// Per racing stage: (candidates, fragments in its block).
     pub stages: Vec<(u64, u64)>,
@@ -73,6 +75,7 @@ pub struct SweepSummary {
     /// Non-trivial fragments stored in the dataset (the sample) / all fragments of the
     /// population.
     pub nontrivial_fragments: u64,
+    /// All fragments of the population.
     pub all_fragments: u64,
     /// Non-trivial fragments of the population the dataset was sampled from.
     #[serde(default)]
@@ -91,11 +94,15 @@ pub struct SweepSummary {
 /// What the race decided and whether its budget bound.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RaceSummary {
+    /// Confidence 1 − α of the elimination tests.
     pub confidence: f64,
+    /// One-sided bound of the tests.
     pub bound: Bound,
+    /// Paired differences to the reference (true) or independent intervals.
     pub paired: bool,
     /// Fragments of the pilot block (choosing the stage-0 reference).
     pub pilot_fragments: u64,
+    /// One log per stage run.
     pub stages: Vec<StageLog>,
     /// Planned looks over all stages (the Bonferroni count of [`race::stage_delta`]).
     #[serde(default)]
@@ -120,6 +127,7 @@ pub struct RaceSummary {
     pub unresolved: u64,
     /// The best by pooled mean among the tied (or, when unresolved, among the survivors).
     pub winner: Option<u64>,
+    /// Candidates eliminated by the tests, over all stages.
     pub confidence_eliminated: u64,
     /// Fragments of the common sample (stage 0's block): every candidate is scored on it.
     #[serde(default)]
@@ -129,12 +137,17 @@ pub struct RaceSummary {
 /// One racing stage.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StageLog {
+    /// Candidates entering the stage.
     pub candidates: u64,
+    /// Fragments in the stage's block.
     pub fragments: u64,
+    /// Index of the stage reference (the leader after the previous stage, else the pilot's best).
     pub reference: u64,
     /// Per-test error probability δ and the matching normal quantile z_{1−δ}.
     pub delta: f64,
+    /// z_{1−δ}.
     pub z: f64,
+    /// Candidates eliminated in this stage.
     pub confidence_eliminated: u64,
     /// Of those, eliminated at the early look (on the first half of the block).
     #[serde(default)]
@@ -164,7 +177,12 @@ impl SweepSummary {
 #[derive(Clone, Debug)]
 pub enum Progress {
     /// A new phase with this many work units (fragment solves).
-    Phase { name: String, units: u64 },
+    Phase {
+        /// Name of the phase.
+        name: String,
+        /// Work units of the phase.
+        units: u64,
+    },
     /// Units done.
     Advance(u64),
 }
@@ -174,6 +192,7 @@ pub enum Progress {
 pub struct Hooks<'h> {
     /// Stop (as if killed) after this many flushed batches.
     pub stop_after_batches: Option<usize>,
+    /// Called with every progress event.
     pub progress: Option<&'h (dyn Fn(Progress) + Sync)>,
     /// Factor on the racing tests' half-widths ([`super::race::Rule::width`]; None: 1). Set
     /// only by the plan's proxy race ([`super::plan::proxy_race`]).
@@ -184,6 +203,7 @@ pub struct Hooks<'h> {
 #[derive(Clone, Debug, PartialEq)]
 #[allow(clippy::large_enum_variant)] // one value per run
 pub enum Outcome {
+    /// The run finished; its summary.
     Complete(SweepSummary),
     /// Stopped by [`Hooks::stop_after_batches`].
     Stopped,

@@ -113,22 +113,28 @@ pub fn status(r: &Row) -> String {
 pub struct Validation {
     /// The exhaustive winner and its error.
     pub exhaustive_winner: u64,
+    /// The exhaustive winner's error.
     pub exhaustive_error: f64,
     /// The race winner and its exhaustive error.
     pub race_winner: u64,
+    /// The race winner's exhaustive error.
     pub race_winner_error: f64,
     /// Status of the exhaustive winner in the race.
     pub exhaustive_winner_status: String,
     /// The exhaustive winner is tied / in the certified set (tied ∪ unresolved).
     pub winner_tied: bool,
+    /// The exhaustive winner is in the certified set (tied ∪ unresolved).
     pub winner_certified: bool,
     /// Confidence-eliminated candidates with an exhaustive error ≤ the race winner's.
     pub eliminated_better_than_winner: Vec<u64>,
     /// Confidence-eliminated candidates with an exhaustive error ≤ that of their stage
     /// reference: the false eliminations the stated confidence bounds.
     pub false_eliminations: Vec<u64>,
+    /// Candidates tied for first in the race.
     pub tied: usize,
+    /// Candidates the LP budget left unresolved.
     pub unresolved: usize,
+    /// Candidates eliminated by confidence.
     pub confidence: usize,
     /// Rank (exhaustive) of the worst tied candidate.
     pub worst_tied_rank: usize,

@@ -38,7 +38,9 @@ fn exp_rate(name: &str) -> Option<f64> {
 pub struct FamilyTime {
     /// "stage k".
     pub stage: String,
+    /// The family ([`family_of`]).
     pub family: &'static str,
+    /// Candidates of the family in the stage.
     pub candidates: u64,
     /// LPs solved (fragments × candidates).
     pub lps: u64,

@@ -848,12 +848,19 @@ pub fn shader_texts(m: &Module) -> Result<[String; 3]> {
 /// What `setting.json` of an export holds.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct Exported<'a> {
+    /// Scene name, or "all".
     pub scene: &'a str,
+    /// The exported setting.
     pub setting: &'a Setting,
+    /// Its label.
     pub label: String,
+    /// Bits stored per texel.
     pub bits_per_texel: u32,
+    /// Its score (leak + darkening + noise).
     pub error: f64,
+    /// Mean max(PCF − G_exact, 0).
     pub leak: f64,
+    /// Mean max(G_exact − PCF, 0).
     pub darkening: f64,
     /// Files with the shader code (empty when the technique has no export here).
     pub shaders: Vec<String>,

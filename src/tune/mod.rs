@@ -38,7 +38,9 @@ use std::time::Instant;
 /// What to search and how much data to score on.
 #[derive(Clone, Debug)]
 pub struct Options {
+    /// Techniques searched.
     pub techniques: Vec<TechniqueKind>,
+    /// Storage formats searched.
     pub storages: Vec<StorageKind>,
     /// Error above the best setting that is acceptable (absolute; 0.002 = 0.2 points).
     pub tolerance: f64,
@@ -51,6 +53,7 @@ pub struct Options {
     pub screen_per_scene: usize,
     /// Settings per target and family re-scored on the whole sample.
     pub keep: usize,
+    /// Seed of the fragment sample.
     pub seed: u64,
     /// Fragments of the speed measurement per family.
     pub speed_inputs: usize,
@@ -108,8 +111,11 @@ impl Options {
 /// A setting scored on a set of fragments.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Scored {
+    /// The setting.
     pub setting: Setting,
+    /// Its label ([`Setting::label`]).
     pub label: String,
+    /// Bits stored per texel (m × bits per channel).
     pub bits_per_texel: u32,
     /// GPU time per lookup in ns (`crate::gpu::cost::gpu_cost`: the shader-IR model calibrated on the
     /// committed GPU benches), not CPU time.
@@ -129,16 +135,20 @@ pub struct Scored {
     pub noise_share: f64,
     /// noise_share ≤ the run's max_noise.
     pub feasible: bool,
+    /// Fragments whose G or G_exact is not finite (scored as 1).
     pub non_finite: usize,
+    /// Fragments scored.
     pub fragments: usize,
 }
 
 /// A paired difference of mean errors on the same fragments with its 95 % interval.
 #[derive(Clone, Copy, Debug, Serialize, Deserialize)]
 pub struct Paired {
+    /// mean(a − b) over the paired fragments.
     pub mean: f64,
     /// 1.96·sd/√n of the per-fragment differences.
     pub half_width: f64,
+    /// Fragments paired (n).
     pub fragments: usize,
 }
 
@@ -166,9 +176,11 @@ impl Paired {
             fragments: n,
         }
     }
+    /// Lower end of the 95 % interval, mean − half_width.
     pub fn lo(&self) -> f64 {
         self.mean - self.half_width
     }
+    /// Upper end of the 95 % interval, mean + half_width.
     pub fn hi(&self) -> f64 {
         self.mean + self.half_width
     }
@@ -177,7 +189,9 @@ impl Paired {
 /// A published default evaluated on the same fragments, and what the tuned setting gains.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Reference {
+    /// Name of the published default.
     pub name: String,
+    /// The default scored on the target's fragments.
     pub scored: Scored,
     /// Its error minus the tuned (chosen) setting's error: > 0 means tuning helps.
     pub gain: Paired,
@@ -186,18 +200,24 @@ pub struct Reference {
 /// The result for one target: a scene, or all scenes ("all").
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Target {
+    /// Scene name, or "all".
     pub scene: String,
+    /// Fragments of the target in the confirming sample.
     pub fragments: usize,
+    /// The feasible setting with the smallest error.
     pub best: Scored,
+    /// The cheapest feasible setting within `tolerance` of the best.
     pub chosen: Scored,
     /// Chosen minus best error (≤ tolerance by construction), paired.
     pub chosen_minus_best: Paired,
+    /// The setting chosen when the chosen one's technique and storage are left out.
     pub runner_up: Option<Scored>,
     /// Chosen minus runner-up error, paired.
     pub chosen_minus_runner_up: Option<Paired>,
     /// Settings no other setting beats in bits per texel, ns per fragment and error at once
     /// (ascending bits, then ns).
     pub pareto: Vec<Scored>,
+    /// The published defaults ([`references`]) on the same fragments.
     pub references: Vec<Reference>,
     /// Per family searched: the smallest α that keeps the noise bound on this target's
     /// fragments (None: no α of the grid does).
@@ -209,24 +229,36 @@ pub struct Target {
 /// The smallest moment bias α of a family that keeps the noise bound.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct AlphaFloor {
+    /// The family's label.
     pub family: String,
+    /// The smallest α of the refined grid that keeps the noise bound (None: none does).
     pub alpha: Option<f64>,
 }
 
 /// Everything `tune` found.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Tuning {
+    /// Error above the best setting that is acceptable (absolute).
     pub tolerance: f64,
     /// Largest share of fragments with noise above 1/255 for a feasible setting.
     pub max_noise: f64,
+    /// Fragments sampled per scene (the confirming sample).
     pub fragments_per_scene: usize,
+    /// Fragments per scene of the screening subsample.
     pub screen_per_scene: usize,
+    /// Seed of the fragment sample.
     pub seed: u64,
+    /// Families searched (technique × storage × own parameters).
     pub families: usize,
+    /// Settings scored on the screening subsample.
     pub settings_screened: usize,
+    /// Settings re-scored on the whole sample.
     pub settings_confirmed: usize,
+    /// The result per scene.
     pub scenes: Vec<Target>,
+    /// The result over all scenes.
     pub overall: Target,
+    /// Wall time, seconds.
     pub seconds: f64,
 }
 

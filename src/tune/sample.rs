@@ -28,9 +28,11 @@ pub struct Sample {
 }
 
 impl Sample {
+    /// Number of fragments.
     pub fn len(&self) -> usize {
         self.z.len()
     }
+    /// True when the sample has no fragments.
     pub fn is_empty(&self) -> bool {
         self.z.is_empty()
     }

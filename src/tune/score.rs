@@ -42,6 +42,7 @@ pub const DISPLAY_STEP: f64 = 1.0 / 255.0;
 /// Stored (pipeline) and exact moments of every sample fragment for one family
 /// (row-major, fragments × m).
 pub struct Moments {
+    /// The family the moments belong to.
     pub family: Family,
     /// What the lookup decodes: the pipeline model's filtered texel, θ⁻¹ in f32.
     pub stored: Vec<f64>,
@@ -180,12 +181,17 @@ pub fn outcomes(
 /// Sums of one setting over some fragments (mergeable across scenes).
 #[derive(Clone, Debug, Default)]
 pub struct Acc {
+    /// Fragments added.
     pub n: usize,
+    /// Σ max(PCF − G_exact, 0): light leaked.
     pub leak: f64,
+    /// Σ max(G_exact − PCF, 0): over-darkening.
     pub dark: f64,
+    /// Σ |G − G_exact|: noise.
     pub noise: f64,
     /// Fragments with |ν| > 1/255.
     pub noisy: usize,
+    /// Fragments whose G or G_exact is not finite.
     pub non_finite: usize,
     /// |ν| of every finite fragment, kept where a quantile is wanted.
     pub noise_values: Option<Vec<f32>>,
@@ -199,6 +205,7 @@ impl Acc {
             ..Acc::default()
         }
     }
+    /// Adds one fragment's outcome.
     pub fn add(&mut self, o: &Outcome) {
         self.n += 1;
         if !(o.error.is_finite() && o.noise.is_finite()) {
@@ -219,6 +226,7 @@ impl Acc {
             v.push(a as f32);
         }
     }
+    /// Adds the sums of `o` (noise values are kept only when both kept them).
     pub fn merge(&mut self, o: &Acc) {
         self.n += o.n;
         self.leak += o.leak;

@@ -24,6 +24,7 @@ pub enum StorageKind {
 }
 
 impl StorageKind {
+    /// Every storage format, in search order.
     pub const ALL: [StorageKind; 4] = [
         StorageKind::F32,
         StorageKind::Unorm16Theta,
@@ -31,6 +32,7 @@ impl StorageKind {
         StorageKind::F16,
     ];
 
+    /// The command-line name ("f32", "unorm16-theta", "unorm16", "f16").
     pub fn name(self) -> &'static str {
         match self {
             StorageKind::F32 => "f32",
@@ -40,6 +42,7 @@ impl StorageKind {
         }
     }
 
+    /// The storage format named `s` ([`StorageKind::name`]).
     pub fn parse(s: &str) -> Option<StorageKind> {
         StorageKind::ALL.into_iter().find(|k| k.name() == s.trim())
     }
@@ -53,6 +56,7 @@ impl StorageKind {
         }
     }
 
+    /// Bits per stored channel.
     pub fn bits(self) -> u32 {
         self.storage().bits()
     }
@@ -71,16 +75,24 @@ impl StorageKind {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum TechniqueKind {
+    /// Variance shadow maps, b = (z, z²).
     Vsm,
+    /// Exponential shadow maps, b = e^{c·z}.
     Esm,
+    /// Exponential variance shadow maps (two warps, four moments).
     Evsm,
+    /// Hamburger 4MSM, b = (z, z², z³, z⁴) (Algorithm 3).
     Hamburger4,
+    /// Hausdorff 4MSM on [0,1], same basis.
     Hausdorff4,
+    /// Hamburger 6MSM, six power moments.
     Hamburger6,
+    /// Trigonometric MSM.
     Tmsm,
 }
 
 impl TechniqueKind {
+    /// Every technique, in search order.
     pub const ALL: [TechniqueKind; 7] = [
         TechniqueKind::Vsm,
         TechniqueKind::Esm,
@@ -104,12 +116,14 @@ impl TechniqueKind {
         }
     }
 
+    /// The technique named `s` (its registry name).
     pub fn parse(s: &str) -> Option<TechniqueKind> {
         TechniqueKind::ALL
             .into_iter()
             .find(|k| k.name() == s.trim())
     }
 
+    /// Moment count m.
     pub fn moment_count(self) -> usize {
         match self {
             TechniqueKind::Esm => 1,
@@ -219,32 +233,50 @@ pub fn overflow_limit(t: TechniqueKind, storage: StorageKind) -> f64 {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum Own {
+    /// No own parameters.
     None,
-    Esm { c: f64 },
-    Evsm { c_pos: f64, c_neg: f64 },
+    /// ESM exponent c.
+    Esm {
+        /// Exponent c of b = e^{c·z}.
+        c: f64,
+    },
+    /// EVSM exponents c₊, c₋.
+    Evsm {
+        /// Positive exponent c₊.
+        c_pos: f64,
+        /// Negative exponent c₋.
+        c_neg: f64,
+    },
 }
 
 /// Technique depth bias ε′ = constant + slope_scale·(|dz/du| + |dz/dv|), subtracted from z_f.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct DepthBias {
+    /// Constant part ε.
     pub constant: f64,
+    /// Slope scale s, per texel step.
     pub slope_scale: f64,
 }
 
 /// The depth-bias grid (the default of `momentlab evaluate` is ε = 10⁻⁴, s = 2).
 pub const CONSTANTS: [f64; 3] = [0.0, 1e-4, 5e-4];
+/// Slope scales s of the depth-bias grid.
 pub const SLOPE_SCALES: [f64; 5] = [0.0, 1.0, 2.0, 3.0, 4.0];
 
 /// One family of settings: everything that changes the stored moments (technique basis,
 /// storage, own parameters). The settings of a family share the decoded moment maps.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Family {
+    /// The technique.
     pub technique: TechniqueKind,
+    /// How the moments are stored.
     pub storage: StorageKind,
+    /// The technique's own parameters.
     pub own: Own,
 }
 
 impl Family {
+    /// m × bits per channel.
     pub fn bits_per_texel(&self) -> u32 {
         self.technique.moment_count() as u32 * self.storage.bits()
     }
@@ -283,12 +315,16 @@ impl Family {
 /// A point of the search space.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Setting {
+    /// Technique, storage and own parameters.
     pub family: Family,
+    /// Moment bias α of b' = (1 − α)·b + α·b*.
     pub alpha: f64,
+    /// Technique depth bias ε′.
     pub depth_bias: DepthBias,
 }
 
 impl Setting {
+    /// "<family> α=… ε=… s=…".
     pub fn label(&self) -> String {
         format!(
             "{} α={:e} ε={:e} s={}",
