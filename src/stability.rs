@@ -137,7 +137,7 @@ impl Sample {
 /// Harness settings.
 #[derive(Clone, Debug, Serialize)]
 pub struct Config {
-    /// Number of random samples drawn per scenario.
+    /// Inputs drawn in all, cycling through [`Scenario::ALL`].
     pub samples: usize,
     /// Seed of the sample generator (same seed, same samples).
     pub seed: u64,

@@ -64,7 +64,7 @@ use std::path::Path;
 pub struct SweepSummary {
     /// Candidates in this run (after sharding).
     pub candidates: u64,
-    /// Degenerate candidates (linearly dependent columns on the grid), not scored.
+    /// Degenerate candidates ([1, b] numerically rank-deficient on the grid), not scored.
     pub degenerate: u64,
     /// Duplicate candidates (same span as an earlier one), scored through their representative.
     pub duplicates: u64,
