@@ -14,9 +14,17 @@ const TIME_MARGIN: f64 = 1.5;
 /// Print the plan to stdout. `setup` is the seconds it took to build the dataset (each task
 /// pays it again).
 pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
+    print_calibration(plan, opts);
+    let expected_seconds = print_costs(plan, opts, setup);
+    if let (Some(p), Some(secs)) = (plan.proxy.as_ref(), expected_seconds) {
+        print_proxy(p, opts, secs);
+    }
+    print_schedule(plan, opts, setup);
+}
+
+/// The candidates and the calibration sample's rate.
+fn print_calibration(plan: &Plan, opts: &SweepOptions) {
     let c = &plan.calibration;
-    let threads = rayon::current_num_threads();
-    let shards = opts.shard[1].max(1);
     println!(
         "plan: m = {}, {} candidates: {} scored, {} degenerate, {} duplicate spans; {} kept non-trivial fragments",
         opts.m,
@@ -49,6 +57,14 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
         c.failures,
         count(c.rate().round() as u64)
     );
+}
+
+/// The cost table (LP solves, core-hours, wall time per row; the chosen row starred); returns
+/// the expected seconds of one shard's race where a proxy race ran and the sweep races.
+fn print_costs(plan: &Plan, opts: &SweepOptions, setup: f64) -> Option<f64> {
+    let c = &plan.calibration;
+    let threads = rayon::current_num_threads();
+    let shards = opts.shard[1].max(1);
     println!(
         "plan: {:<28} {:>12} {:>11} {:>18}",
         "",
@@ -88,50 +104,61 @@ pub fn print(plan: &Plan, opts: &SweepOptions, setup: f64) {
             duration(setup + plan.references_seconds + hours * 3600.0 / threads as f64)
         );
     }
-    if let (Some(p), Some(secs)) = (expected, expected_seconds) {
-        let stages = |s: &mut dyn Iterator<Item = String>| s.collect::<Vec<_>>().join(", ");
-        let families = |f: &[(&str, u64)]| {
-            f.iter()
-                .map(|(f, n)| format!("{f} {}", big(*n)))
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        println!(
-            "plan: proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; its LP solves × {} = {}",
-            if shards > 1 {
-                format!(" of shard {}/{shards} (the expected row: × {shards})", opts.shard[0])
-            } else {
-                String::new()
-            },
-            p.share,
-            count(p.fragments),
-            p.seconds,
-            p.share,
-            stages(&mut p.stages.iter().map(|(c, f)| format!("{} × {}", count(*c), count(*f)))),
-            p.tied,
-            p.share,
-            count(p.lp_solves),
-        );
-        let (lps, cost_by_family, _) = p.expected();
-        match &p.forecast {
-            Some(f) => println!(
-                "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
-                f.runs,
-                stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
-                count(lps),
-                big(f.range.0),
-                big(f.range.1),
-                families(&f.by_family),
-                duration(secs)
-            ),
-            None => println!(
-                "plan: expected from the proxy race: {} LP solves ({}), {} at the calibrated µs per LP of each family",
-                count(lps),
-                families(cost_by_family),
-                duration(secs)
-            ),
-        }
+    expected_seconds
+}
+
+/// The proxy race and the expected cost drawn from it (`secs`: one shard's expected seconds).
+fn print_proxy(p: &momentlab::search::plan::Proxy, opts: &SweepOptions, secs: f64) {
+    let shards = opts.shard[1].max(1);
+    let stages = |s: &mut dyn Iterator<Item = String>| s.collect::<Vec<_>>().join(", ");
+    let families = |f: &[(&str, u64)]| {
+        f.iter()
+            .map(|(f, n)| format!("{f} {}", big(*n)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    println!(
+        "plan: proxy race{} on 1/{} of the fragments ({} fragments, {:.1} s, every half-width × 1/√{}): stages {}; {} tied; its LP solves × {} = {}",
+        if shards > 1 {
+            format!(" of shard {}/{shards} (the expected row: × {shards})", opts.shard[0])
+        } else {
+            String::new()
+        },
+        p.share,
+        count(p.fragments),
+        p.seconds,
+        p.share,
+        stages(&mut p.stages.iter().map(|(c, f)| format!("{} × {}", count(*c), count(*f)))),
+        p.tied,
+        p.share,
+        count(p.lp_solves),
+    );
+    let (lps, cost_by_family, _) = p.expected();
+    match &p.forecast {
+        Some(f) => println!(
+            "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
+            f.runs,
+            stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
+            count(lps),
+            big(f.range.0),
+            big(f.range.1),
+            families(&f.by_family),
+            duration(secs)
+        ),
+        None => println!(
+            "plan: expected from the proxy race: {} LP solves ({}), {} at the calibrated µs per LP of each family",
+            count(lps),
+            families(cost_by_family),
+            duration(secs)
+        ),
     }
+}
+
+/// The racing stages, the largest task and the Slurm line.
+fn print_schedule(plan: &Plan, opts: &SweepOptions, setup: f64) {
+    let c = &plan.calibration;
+    let threads = rayon::current_num_threads();
+    let shards = opts.shard[1].max(1);
     if let Some(s) = plan.racing.first().filter(|_| shards == 1) {
         let stages: Vec<String> = s
             .stages

@@ -253,7 +253,6 @@ pub fn run(args: Args) -> Result<()> {
         return validate(&args, ex);
     }
     let grid = Grid::uniform(args.grid)?;
-    let bias = Bias::default();
     let table = table_of(&args, &grid)?;
     // Before any rendering or sampling: m, the candidate selection, the sweep's parameters, the
     // results folder (a folder, not in use by another run), for --report-only results that are
@@ -265,73 +264,32 @@ pub fn run(args: Args) -> Result<()> {
         args.candidates.as_deref(),
         args.names.as_deref(),
     )?;
-    let shard = match &args.shard {
-        Some(s) => parse_shard(s)?,
-        None => [0, 1],
-    };
-    let mut opts = SweepOptions {
-        m: args.m,
-        catalog: args.catalog.clone(),
-        grid: args.grid,
-        solver: args.solver.clone(),
-        chunk: args.chunk,
-        bias,
-        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
-        seed: args.seed,
-        dataset: String::new(),
-        lp_budget: args.lp_budget,
-        exhaustive: args.exhaustive,
-        candidates: args.candidates.clone(),
-        names: args.names.clone(),
-        shard,
-        first_sample: args.first_sample,
-        growth: args.growth,
-        early_look: args.early_look,
-        confidence: args.confidence,
-        bound: momentlab::search::race::Bound::parse(&args.bound).context("--bound")?,
-        race_seed: args.race_seed,
-        pilot: args.pilot,
-        batch: args.batch,
-        closed_forms: !args.no_closed_forms,
-    };
-    opts.parameters().check()?;
+    let mut opts = sweep_options(&args)?;
     let results = args
         .results
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/search-m{}", args.m)));
     let report_dir = args.out.clone().unwrap_or_else(|| results.join("report"));
     let report = OutDir::new(&report_dir, args.force).context("--out")?;
-    let writes_report = !args.no_report && !args.plan && shard[1] == 1;
+    let writes_report = !args.no_report && !args.plan && opts.shard[1] == 1;
     if writes_report {
         report
             .reserve(sweep_report::files(args.m))
             .context("--out")?;
     }
     let results_dir = OutDir::new(&results, true).context("--results")?;
-    let mut verified = None;
-    if args.report_only {
-        // A partial merge (`partial.json`, no completion marker) is reported as partial.
-        let partial =
-            std::fs::symlink_metadata(results.join(momentlab::search::results::PARTIAL_FILE))
-                .is_ok();
-        let v =
-            momentlab::search::merge::verify_results(&results, partial).context("--report-only")?;
-        let [i, n] = v.config.shard;
-        if n > 1 {
-            bail!(
-                "--report-only: {} holds shard {i}/{n} of a sharded run, not the whole sweep; \
-                 merge the shards first (momentlab merge)",
-                results.display()
-            );
+    let verified = if args.report_only {
+        Some(verified_rows(&results)?)
+    } else {
+        if !args.plan {
+            // Refuse a folder another run is writing before building the dataset; held until
+            // the sweep (which takes it again, re-entrantly) is done.
+            results_dir.lock().context("--results")?;
         }
-        verified = Some(v.rows);
-    } else if !args.plan {
-        // Refuse a folder another run is writing before building the dataset; held until
-        // the sweep (which takes it again, re-entrantly) is done.
-        results_dir.lock().context("--results")?;
-    }
+        None
+    };
     let t_data = std::time::Instant::now();
-    let (data, data_name, stacks) = load_data(&args, &grid, &bias)?;
+    let (data, data_name, stacks) = load_data(&args, &grid, &opts.bias)?;
     opts.dataset = data_name;
     // Read when the report is written: a sweep's `complete.json` exists only at its end.
     let report_opts = || ReportOptions {
@@ -372,33 +330,9 @@ pub fn run(args: Args) -> Result<()> {
         eprintln!("report: written to {}", report_dir.display());
         return Ok(());
     }
-    let bar = momentlab::progress::Bar::new("search", 0);
-    let progress = |p: Progress| match p {
-        Progress::Phase { name, units } => bar.phase(&format!("search {name}"), units),
-        Progress::Advance(u) => bar.inc(u),
-    };
-    let r: SweepResult = sweep_dataset(
-        &data,
-        &table,
-        stacks.as_deref(),
-        &opts,
-        &results,
-        Some(&progress),
-    )?;
-    bar.finish();
-    if let Some(line) = sweep_line(&r) {
-        eprintln!("{line}");
-    }
-    if r.summary.is_some() {
-        // Where the time went (stage files of a racing run; none for --exhaustive).
-        let times = momentlab::search::timing::stage_family_times(&results, &table, opts.m)?;
-        if !times.is_empty() {
-            eprintln!("search: LP time per stage and candidate family (CPU seconds in the LPs)");
-            eprint!("{}", momentlab::search::timing::render(&times));
-        }
-    }
-    if shard[1] > 1 {
-        eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", shard[0], shard[1]);
+    let r = sweep(&data, &table, stacks.as_deref(), &opts, &results)?;
+    if opts.shard[1] > 1 {
+        eprintln!("search: shard {}/{} done; merge the shards with `momentlab merge`, then `momentlab search --report-only --results <merged>` for the report", opts.shard[0], opts.shard[1]);
         return Ok(());
     }
     if let Some(summary) = &r.ranking {
@@ -411,6 +345,89 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The sweep's options from the command line (the dataset's name is set once it is built),
+/// checked.
+fn sweep_options(args: &Opts) -> Result<SweepOptions> {
+    let shard = match &args.shard {
+        Some(s) => parse_shard(s)?,
+        None => [0, 1],
+    };
+    let opts = SweepOptions {
+        m: args.m,
+        catalog: args.catalog.clone(),
+        grid: args.grid,
+        solver: args.solver.clone(),
+        chunk: args.chunk,
+        bias: Bias::default(),
+        max_fragments: (args.max_fragments > 0).then_some(args.max_fragments),
+        seed: args.seed,
+        dataset: String::new(),
+        lp_budget: args.lp_budget,
+        exhaustive: args.exhaustive,
+        candidates: args.candidates.clone(),
+        names: args.names.clone(),
+        shard,
+        first_sample: args.first_sample,
+        growth: args.growth,
+        early_look: args.early_look,
+        confidence: args.confidence,
+        bound: momentlab::search::race::Bound::parse(&args.bound).context("--bound")?,
+        race_seed: args.race_seed,
+        pilot: args.pilot,
+        batch: args.batch,
+        closed_forms: !args.no_closed_forms,
+    };
+    opts.parameters().check()?;
+    Ok(opts)
+}
+
+/// `--report-only`: the rows of the finished (or partially merged) whole sweep in `results`.
+fn verified_rows(results: &std::path::Path) -> Result<Vec<momentlab::search::Row>> {
+    // A partial merge (`partial.json`, no completion marker) is reported as partial.
+    let partial =
+        std::fs::symlink_metadata(results.join(momentlab::search::results::PARTIAL_FILE)).is_ok();
+    let v = momentlab::search::merge::verify_results(results, partial).context("--report-only")?;
+    let [i, n] = v.config.shard;
+    if n > 1 {
+        bail!(
+            "--report-only: {} holds shard {i}/{n} of a sharded run, not the whole sweep; \
+             merge the shards first (momentlab merge)",
+            results.display()
+        );
+    }
+    Ok(v.rows)
+}
+
+/// The sweep with a progress bar, its closing line and, for a race, where the LP time went
+/// (stderr).
+fn sweep(
+    data: &Dataset,
+    table: &FunctionTable,
+    stacks: Option<&[DepthStack]>,
+    opts: &SweepOptions,
+    results: &std::path::Path,
+) -> Result<SweepResult> {
+    let bar = momentlab::progress::Bar::new("search", 0);
+    let progress = |p: Progress| match p {
+        Progress::Phase { name, units } => bar.phase(&format!("search {name}"), units),
+        Progress::Advance(u) => bar.inc(u),
+    };
+    let r = sweep_dataset(data, table, stacks, opts, results, Some(&progress))?;
+    bar.finish();
+    if let Some(line) = sweep_line(&r) {
+        eprintln!("{line}");
+    }
+    if r.summary.is_some() {
+        // Where the time went (stage files of a racing run; none for --exhaustive).
+        let times = momentlab::search::timing::stage_family_times(results, table, opts.m)?;
+        if !times.is_empty() {
+            eprintln!("search: LP time per stage and candidate family (CPU seconds in the LPs)");
+            eprint!("{}", momentlab::search::timing::render(&times));
+        }
+    }
+    Ok(r)
 }
 
 /// The ranking lines (stderr) and, with `json`, the summary (stdout); results of a partial

@@ -53,7 +53,7 @@ pub fn refine(
             "z^3".into(),
             "z^4".into(),
         ])?;
-        let t = LpCandidate::new(basis, crate::Grid::uniform(n)?, "fast")?;
+        let t = LpCandidate::new(basis, crate::Grid::uniform(n)?, crate::lp::SolverKind::Fast)?;
         let rep = evaluate(
             stacks,
             &t,

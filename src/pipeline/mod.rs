@@ -186,10 +186,46 @@ fn first_difference(old: &serde_json::Value, new: &serde_json::Value) -> String 
         })
 }
 
-/// Run (or resume) the whole study.
-pub fn run(cfg: &Config) -> Result<Outcome> {
-    let plan = cfg.plan()?;
-    let p = Paths::of(cfg);
+/// The LP grid step: the refinement of every scene's grid (`grid_refinement.json` and `.svg`
+/// in `out`) and the smallest n per scene within `tolerance` of the finest grid.
+fn lp_grids(
+    stacks: &[crate::stack::DepthStack],
+    plan: &Plan,
+    tolerance: f64,
+    out: &std::path::Path,
+) -> Result<(grid::Refinement, Vec<(String, usize)>)> {
+    let refinement = grid::refine(stacks, plan, &out.join("grid_refinement.json"), tolerance)?;
+    let chosen = grid::choose(&refinement, tolerance);
+    grid::chart(&refinement, &chosen, &out.join("grid_refinement.svg"))?;
+    Ok((refinement, chosen))
+}
+
+/// The candidate sweeps (racing) of the run, or a note that they were skipped.
+fn search_step(
+    cfg: &Config,
+    stacks: &[crate::stack::DepthStack],
+    plan: &Plan,
+    p: &Paths,
+    report: &std::path::Path,
+) -> Result<Vec<String>> {
+    if cfg.skip_search {
+        return Ok(vec!["skipped (--skip-search)".to_string()]);
+    }
+    sweep::run_all(
+        stacks,
+        plan,
+        &sweep::Folders {
+            stacks: &p.stacks,
+            data: &p.data,
+            report,
+        },
+    )
+}
+
+/// The run's report and data folders (`p.out`, `p.data`), locked for this run and ready:
+/// refused unless empty, this run's own unfinished run, or `cfg.fresh` (which removes the
+/// run's artefacts); marked in progress.
+fn open_run(cfg: &Config, plan: &Plan, p: &Paths) -> Result<[OutDir; 2]> {
     // The run's folders are real folders inside --out and --results: a link there is refused,
     // never followed out of them.
     for root in [&cfg.reports, &cfg.results] {
@@ -210,13 +246,13 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     // refuse rows of another configuration.)
     let out = &locks[0];
     let marker = crate::artefact::read_json::<serde_json::Value>(&p.out.join(IN_PROGRESS)).ok();
-    let own = marker.as_ref() == Some(&mark(cfg, &plan));
+    let own = marker.as_ref() == Some(&mark(cfg, plan));
     if let (false, false, Some(m)) = (cfg.fresh, own, &marker) {
         bail!(
             "{} holds an unfinished run with other settings: {}; rerun it with its settings \
              to resume, or pass --force to replace its outputs",
             p.out.display(),
-            first_difference(m, &mark(cfg, &plan))
+            first_difference(m, &mark(cfg, plan))
         );
     }
     if !cfg.fresh && !own {
@@ -234,7 +270,16 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
         l.create_dir(".")?;
     }
     refuse_linked_entries(out, &locks[1])?;
-    out.write_json(IN_PROGRESS, &mark(cfg, &plan))?;
+    out.write_json(IN_PROGRESS, &mark(cfg, plan))?;
+    Ok(locks)
+}
+
+/// Run (or resume) the whole study.
+pub fn run(cfg: &Config) -> Result<Outcome> {
+    let plan = cfg.plan()?;
+    let p = Paths::of(cfg);
+    let locks = open_run(cfg, &plan, &p)?;
+    let out = &locks[0];
     let mut step = Steps::new(10);
 
     step.start(&format!(
@@ -246,20 +291,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     eprintln!("  {} views, {fragments} fragments", stacks.len());
 
     step.start("LP grid: the smallest n within tolerance of the finest grid");
-    let grid_tolerance = cfg.tolerance / 10.0;
-    let refinement = grid::refine(
-        &stacks,
-        &plan,
-        &p.out.join("grid_refinement.json"),
-        grid_tolerance,
-    )?;
-    let chosen_grid = grid::choose(&refinement, grid_tolerance);
-    grid::chart(
-        &refinement,
-        &chosen_grid,
-        &p.out.join("grid_refinement.svg"),
-    )?;
-
+    let (refinement, chosen_grid) = lp_grids(&stacks, &plan, cfg.tolerance / 10.0, &p.out)?;
     // The LP candidates run on the finest grid any scene needs.
     let lp_grid = chosen_grid
         .iter()
@@ -275,19 +307,7 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
 
     step.start("candidate sweep (racing)");
     let search_report = p.out.join("search");
-    let search_notes = if cfg.skip_search {
-        vec!["skipped (--skip-search)".to_string()]
-    } else {
-        sweep::run_all(
-            &stacks,
-            &plan,
-            &sweep::Folders {
-                stacks: &p.stacks,
-                data: &p.data,
-                report: &search_report,
-            },
-        )?
-    };
+    let search_notes = search_step(cfg, &stacks, &plan, &p, &search_report)?;
 
     step.start("optimal quantization transforms θ");
     let theta_dir = p.out.join("theta");

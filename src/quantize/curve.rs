@@ -25,18 +25,7 @@ pub trait Curve: Send + Sync {
 
 /// min and max of a·b over [0,1] from the extrema oracle: (z_min, min, z_max, max).
 pub fn row_min_max(curve: &dyn Curve, a: &[f64]) -> (f64, f64, f64, f64) {
-    let mut r = (0.0, f64::INFINITY, 0.0, f64::NEG_INFINITY);
-    for (z, v) in curve.extrema(a) {
-        if v < r.1 {
-            r.0 = z;
-            r.1 = v;
-        }
-        if v > r.3 {
-            r.2 = z;
-            r.3 = v;
-        }
-    }
-    r
+    poly::arg_min_max(curve.extrema(a))
 }
 
 /// b(z) = (z^{e_1}, …, z^{e_m}); the power basis of m moments is exponents 1..=m.

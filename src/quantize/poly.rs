@@ -91,9 +91,14 @@ pub fn extrema_candidates(c: &[f64]) -> Vec<(f64, f64)> {
 
 /// (z_min, min, z_max, max) of p over [0,1], exact up to rounding.
 pub fn min_max(c: &[f64]) -> (f64, f64, f64, f64) {
-    let cands = extrema_candidates(c);
+    arg_min_max(extrema_candidates(c))
+}
+
+/// (z_min, min, z_max, max) over the points (z, v): the first point of the least v and the
+/// first of the greatest; (0, ∞, 0, −∞) for none.
+pub fn arg_min_max(points: impl IntoIterator<Item = (f64, f64)>) -> (f64, f64, f64, f64) {
     let mut r = (0.0, f64::INFINITY, 0.0, f64::NEG_INFINITY);
-    for (z, v) in cands {
+    for (z, v) in points {
         if v < r.1 {
             r.0 = z;
             r.1 = v;

@@ -133,143 +133,183 @@ pub fn speed_accuracy_svg(title: &str, entries: &[Entry]) -> Result<String> {
             boxes.push((px - r, py - r, px + r, py + r));
             pix.push((px, py, r));
         }
-        // Numbers: the first free spot on rings of growing radius around the marker.
-        let (pw, ph) = plot_area.dim_in_pixel();
-        let inside = |b: &(i32, i32, i32, i32)| {
-            b.0 >= 85 && b.2 <= pw as i32 - 5 && b.1 >= 40 && b.3 <= ph as i32 - 55
-        };
-        let overlaps = |a: &(i32, i32, i32, i32), b: &(i32, i32, i32, i32)| {
-            a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
-        };
-        for (k, &(px, py, r)) in pix.iter().enumerate() {
-            let label = format!("{}", k + 1);
-            let (tw, th) = (7 * label.len() as i32 + 2, 12);
-            let mut placed = None;
-            'search: for ring in 0..12 {
-                let d = r + 3 + ring * 7;
-                for (dx, dy) in [
-                    (1, -1),
-                    (1, 0),
-                    (1, 1),
-                    (0, -1),
-                    (-1, -1),
-                    (-1, 0),
-                    (-1, 1),
-                    (0, 1),
-                ] {
-                    let (cx, cy) = (px + dx * d, py + dy * d);
-                    let bx = (
-                        if dx < 0 {
-                            cx - tw
-                        } else if dx == 0 {
-                            cx - tw / 2
-                        } else {
-                            cx
-                        },
-                        if dy < 0 {
-                            cy - th
-                        } else if dy == 0 {
-                            cy - th / 2
-                        } else {
-                            cy
-                        },
-                    );
-                    let b = (bx.0, bx.1, bx.0 + tw, bx.1 + th);
-                    if inside(&b) && !boxes.iter().any(|o| overlaps(o, &b)) {
-                        placed = Some((b, ring > 0));
-                        break 'search;
-                    }
-                }
-            }
-            let Some((b, far)) = placed else { continue };
-            boxes.push(b);
-            if far {
-                let (cx, cy) = ((b.0 + b.2) / 2, (b.1 + b.3) / 2);
-                plot_area
-                    .draw(&PathElement::new(vec![(px, py), (cx, cy)], BLACK.mix(0.35)))
-                    .map_err(err(title))?;
-            }
-            plot_area
-                .draw(&Text::new(
-                    label,
-                    (b.0 + 1, b.1),
-                    ("sans-serif", 12).into_font().color(&BLACK),
-                ))
-                .map_err(err(title))?;
-        }
-        // Legend: key, then one numbered line per point.
-        let font = ("sans-serif", 12).into_font();
-        let mut y = 30;
-        let line =
-            |area: &DrawingArea<SVGBackend, plotters::coord::Shift>, text: String, y: &mut i32| {
-                let r = area.draw(&Text::new(text, (10, *y), font.clone()));
-                *y += 16;
-                r
-            };
-        line(&legend_area, "Key".into(), &mut y).map_err(err(title))?;
-        legend_area
-            .draw(&Circle::new(
-                (16, y + 6),
-                5,
-                RGBColor(40, 40, 40).mix(0.6).filled(),
-            ))
-            .map_err(err(title))?;
-        legend_area
-            .draw(&Text::new(
-                "closed form, f32 (● f32, ▲ f64)",
-                (28, y),
-                font.clone(),
-            ))
-            .map_err(err(title))?;
-        y += 16;
-        legend_area
-            .draw(&Circle::new(
-                (16, y + 6),
-                5,
-                RGBColor(30, 90, 200).mix(0.6).filled(),
-            ))
-            .map_err(err(title))?;
-        legend_area
-            .draw(&Text::new(
-                "LP candidate (Algorithm 1, reference)",
-                (28, y),
-                font.clone(),
-            ))
-            .map_err(err(title))?;
-        y += 16;
-        legend_area
-            .draw(&PathElement::new(
-                vec![(8, y + 6), (24, y + 6)],
-                RED.stroke_width(2),
-            ))
-            .map_err(err(title))?;
-        legend_area
-            .draw(&Text::new(
-                "Pareto front (★ in the list)",
-                (28, y),
-                font.clone(),
-            ))
-            .map_err(err(title))?;
-        y += 16;
-        line(&legend_area, "marker size: bits per texel".into(), &mut y).map_err(err(title))?;
-        y += 8;
-        for (k, &i) in idx.iter().enumerate() {
-            let e = &entries[i];
-            let star = if front.contains(&i) { "★" } else { " " };
-            let text = format!(
-                "{:>2}{star} {} ({}, {} bit): {} %, {} ns",
-                k + 1,
-                e.name,
-                e.precision,
-                e.bits_per_texel,
-                plain((1e4 * e.error).round() / 100.0),
-                plain(e.ns_per_fragment.round())
-            );
-            line(&legend_area, text, &mut y).map_err(err(title))?;
-        }
+        draw_numbers(&plot_area, &pix, boxes, title)?;
+        draw_legend(&legend_area, entries, &idx, &front, title)?;
         root.present().map_err(err(title))?;
         Ok(())
     })
+}
+
+/// The number of each marker in `pix` (pixel x, y, radius) at the first free spot on rings of
+/// growing radius around it, clear of `boxes` (the markers' boxes) and of the numbers placed
+/// before; a leader line where it had to move.
+fn draw_numbers(
+    plot_area: &DrawingArea<SVGBackend, Shift>,
+    pix: &[(i32, i32, i32)],
+    mut boxes: Vec<PixelBox>,
+    title: &str,
+) -> Result<()> {
+    // Numbers: the first free spot on rings of growing radius around the marker.
+    let (pw, ph) = plot_area.dim_in_pixel();
+    let inside = |b: &(i32, i32, i32, i32)| {
+        b.0 >= 85 && b.2 <= pw as i32 - 5 && b.1 >= 40 && b.3 <= ph as i32 - 55
+    };
+    let overlaps = |a: &(i32, i32, i32, i32), b: &(i32, i32, i32, i32)| {
+        a.0 < b.2 && b.0 < a.2 && a.1 < b.3 && b.1 < a.3
+    };
+    for (k, &(px, py, r)) in pix.iter().enumerate() {
+        let label = format!("{}", k + 1);
+        let (tw, th) = (7 * label.len() as i32 + 2, 12);
+        let placed = label_spot((px, py, r), (tw, th), |b| {
+            inside(b) && !boxes.iter().any(|o| overlaps(o, b))
+        });
+        let Some((b, far)) = placed else { continue };
+        boxes.push(b);
+        if far {
+            let (cx, cy) = ((b.0 + b.2) / 2, (b.1 + b.3) / 2);
+            plot_area
+                .draw(&PathElement::new(vec![(px, py), (cx, cy)], BLACK.mix(0.35)))
+                .map_err(err(title))?;
+        }
+        plot_area
+            .draw(&Text::new(
+                label,
+                (b.0 + 1, b.1),
+                ("sans-serif", 12).into_font().color(&BLACK),
+            ))
+            .map_err(err(title))?;
+    }
+    Ok(())
+}
+
+/// A pixel box (x0, y0, x1, y1).
+type PixelBox = (i32, i32, i32, i32);
+
+/// Where a `tw`×`th` label of the marker of radius `r` at (`px`, `py`) goes: the first box
+/// that is `free`, on eight directions of rings of growing radius (12 rings, 7 px apart); with
+/// whether it left the first ring (then a leader line joins it to the marker).
+fn label_spot(
+    (px, py, r): (i32, i32, i32),
+    (tw, th): (i32, i32),
+    free: impl Fn(&PixelBox) -> bool,
+) -> Option<(PixelBox, bool)> {
+    for ring in 0..12 {
+        let d = r + 3 + ring * 7;
+        for (dx, dy) in [
+            (1, -1),
+            (1, 0),
+            (1, 1),
+            (0, -1),
+            (-1, -1),
+            (-1, 0),
+            (-1, 1),
+            (0, 1),
+        ] {
+            let (cx, cy) = (px + dx * d, py + dy * d);
+            let bx = (
+                if dx < 0 {
+                    cx - tw
+                } else if dx == 0 {
+                    cx - tw / 2
+                } else {
+                    cx
+                },
+                if dy < 0 {
+                    cy - th
+                } else if dy == 0 {
+                    cy - th / 2
+                } else {
+                    cy
+                },
+            );
+            let b = (bx.0, bx.1, bx.0 + tw, bx.1 + th);
+            if free(&b) {
+                return Some((b, ring > 0));
+            }
+        }
+    }
+    None
+}
+
+/// The legend of [`speed_accuracy_svg`]: the key, then one numbered line per point of `idx`
+/// (★ on the Pareto `front`); `title` names the chart in errors.
+fn draw_legend(
+    legend_area: &DrawingArea<SVGBackend, Shift>,
+    entries: &[Entry],
+    idx: &[usize],
+    front: &[usize],
+    title: &str,
+) -> Result<()> {
+    // Legend: key, then one numbered line per point.
+    let font = ("sans-serif", 12).into_font();
+    let mut y = 30;
+    let line = |area: &DrawingArea<SVGBackend, Shift>, text: String, y: &mut i32| {
+        let r = area.draw(&Text::new(text, (10, *y), font.clone()));
+        *y += 16;
+        r
+    };
+    line(legend_area, "Key".into(), &mut y).map_err(err(title))?;
+    legend_area
+        .draw(&Circle::new(
+            (16, y + 6),
+            5,
+            RGBColor(40, 40, 40).mix(0.6).filled(),
+        ))
+        .map_err(err(title))?;
+    legend_area
+        .draw(&Text::new(
+            "closed form, f32 (● f32, ▲ f64)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(title))?;
+    y += 16;
+    legend_area
+        .draw(&Circle::new(
+            (16, y + 6),
+            5,
+            RGBColor(30, 90, 200).mix(0.6).filled(),
+        ))
+        .map_err(err(title))?;
+    legend_area
+        .draw(&Text::new(
+            "LP candidate (Algorithm 1, reference)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(title))?;
+    y += 16;
+    legend_area
+        .draw(&PathElement::new(
+            vec![(8, y + 6), (24, y + 6)],
+            RED.stroke_width(2),
+        ))
+        .map_err(err(title))?;
+    legend_area
+        .draw(&Text::new(
+            "Pareto front (★ in the list)",
+            (28, y),
+            font.clone(),
+        ))
+        .map_err(err(title))?;
+    y += 16;
+    line(legend_area, "marker size: bits per texel".into(), &mut y).map_err(err(title))?;
+    y += 8;
+    for (k, &i) in idx.iter().enumerate() {
+        let e = &entries[i];
+        let star = if front.contains(&i) { "★" } else { " " };
+        let text = format!(
+            "{:>2}{star} {} ({}, {} bit): {} %, {} ns",
+            k + 1,
+            e.name,
+            e.precision,
+            e.bits_per_texel,
+            plain((1e4 * e.error).round() / 100.0),
+            plain(e.ns_per_fragment.round())
+        );
+        line(legend_area, text, &mut y).map_err(err(title))?;
+    }
+    Ok(())
 }
 
 /// Where an empty bin is drawn on the log₁₀ count axis: a count of 0.5 (log₁₀ = −0.30), on a

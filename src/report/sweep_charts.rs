@@ -50,30 +50,48 @@ pub fn plot_histogram(title: &str, errors: &[f64], refs: &[Reference]) -> Result
     })
 }
 
-fn draw_histogram<DB: DrawingBackend>(
-    area: &DrawingArea<DB, plotters::coord::Shift>,
+/// The layout of a histogram panel: caption font size, margin, label areas (pixels), x label.
+struct HistogramStyle {
+    caption: u32,
+    margin: u32,
+    x_area: u32,
+    y_area: u32,
+    x_desc: &'static str,
+}
+
+/// A white `area` with the histogram of `errors` in % (`bins` bins on [lo, hi]) as blue bars
+/// and its axes; returns the chart (for markers drawn over it) and the top of its y range.
+#[allow(clippy::type_complexity)]
+fn histogram_bars<'a, DB: DrawingBackend>(
+    area: &'a DrawingArea<DB, plotters::coord::Shift>,
     title: &str,
     errors: &[f64],
-    refs: &[Reference],
-    bins: usize,
-) -> Result<()>
+    (lo, hi, bins): (f64, f64, usize),
+    style: &HistogramStyle,
+) -> Result<(
+    ChartContext<
+        'a,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    f64,
+)>
 where
     DB::ErrorType: 'static,
 {
     area.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let (lo, hi) = range_of(errors, refs);
     let h = histogram_bins(errors, lo, hi, bins);
     let ymax = h.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.15;
     let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 18))
-        .margin(10)
-        .x_label_area_size(40)
-        .y_label_area_size(55)
+        .caption(title, ("sans-serif", style.caption))
+        .margin(style.margin)
+        .x_label_area_size(style.x_area)
+        .y_label_area_size(style.y_area)
         .build_cartesian_2d(lo * 100.0..hi * 100.0, 0.0..ymax)
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
     chart
         .configure_mesh()
-        .x_desc("mean error |G - PCF| (%)")
+        .x_desc(style.x_desc)
         .y_desc("candidates")
         .draw()
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
@@ -84,6 +102,28 @@ where
             Rectangle::new([(x0, 0.0), (x0 + w, c as f64)], BLUE.mix(0.5).filled())
         }))
         .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    Ok((chart, ymax))
+}
+
+fn draw_histogram<DB: DrawingBackend>(
+    area: &DrawingArea<DB, plotters::coord::Shift>,
+    title: &str,
+    errors: &[f64],
+    refs: &[Reference],
+    bins: usize,
+) -> Result<()>
+where
+    DB::ErrorType: 'static,
+{
+    let (lo, hi) = range_of(errors, refs);
+    let style = HistogramStyle {
+        caption: 18,
+        margin: 10,
+        x_area: 40,
+        y_area: 55,
+        x_desc: "mean error |G - PCF| (%)",
+    };
+    let (mut chart, ymax) = histogram_bars(area, title, errors, (lo, hi, bins), &style)?;
     let colors = [
         BLACK,
         RED,
@@ -366,30 +406,14 @@ fn draw_histogram_range<DB: DrawingBackend>(
 where
     DB::ErrorType: 'static,
 {
-    let bins = 40;
-    area.fill(&WHITE).map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let h = histogram_bins(errors, lo, hi, bins);
-    let ymax = h.iter().copied().max().unwrap_or(1).max(1) as f64 * 1.15;
-    let mut chart = ChartBuilder::on(area)
-        .caption(title, ("sans-serif", 16))
-        .margin(8)
-        .x_label_area_size(35)
-        .y_label_area_size(50)
-        .build_cartesian_2d(lo * 100.0..hi * 100.0, 0.0..ymax)
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    chart
-        .configure_mesh()
-        .x_desc("mean error (%)")
-        .y_desc("candidates")
-        .draw()
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
-    let w = (hi - lo) / bins as f64 * 100.0;
-    chart
-        .draw_series(h.iter().enumerate().map(|(k, &c)| {
-            let x0 = lo * 100.0 + k as f64 * w;
-            Rectangle::new([(x0, 0.0), (x0 + w, c as f64)], BLUE.mix(0.5).filled())
-        }))
-        .map_err(|e| anyhow::anyhow!("{e:?}"))?;
+    let style = HistogramStyle {
+        caption: 16,
+        margin: 8,
+        x_area: 35,
+        y_area: 50,
+        x_desc: "mean error (%)",
+    };
+    let (mut chart, ymax) = histogram_bars(area, title, errors, (lo, hi, 40), &style)?;
     for r in refs.iter().filter(|r| r.error.is_finite()) {
         let x = r.error * 100.0;
         chart

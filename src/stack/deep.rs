@@ -306,6 +306,115 @@ fn unpack(comp: DeepCompression, src: &[u8], out_len: usize) -> Result<(Vec<u8>,
     Ok((unpredict(raw), true))
 }
 
+/// Sample counts and channel values of one scan line: (counts per pixel, values per channel).
+type Line = (Vec<u32>, Vec<Vec<f32>>);
+
+/// Decodes chunk `i` at byte `off` of `b`: (its line in the data window, the line, how many of
+/// its two blocks were compressed). `lines` are those decoded so far (a line twice is refused).
+fn read_chunk(
+    b: &[u8],
+    h: &Header,
+    i: usize,
+    off: usize,
+    lines: &[Option<Line>],
+) -> Result<(usize, Line, usize)> {
+    let [x0, y0, x1, _] = h.window;
+    let (w, hgt) = ((x1 as i64 - x0 as i64 + 1) as usize, lines.len());
+    let psize: usize = h.channels.iter().map(|(_, t)| t.size()).sum();
+    let mut k = Cur { b, pos: off };
+    let ctx = || format!("chunk {i} at offset {off}");
+    let y = k.i32("scan line y").with_context(ctx)?;
+    let line = y as i64 - y0 as i64;
+    if !(0..hgt as i64).contains(&line) {
+        bail!("{}: scan line y = {y} outside the data window", ctx());
+    }
+    let line = line as usize;
+    if lines[line].is_some() {
+        bail!("{}: scan line y = {y} stored twice", ctx());
+    }
+    let tsize = k.u64("packed table size").with_context(ctx)?;
+    let dsize = k.u64("packed sample size").with_context(ctx)?;
+    let usize_ = k.u64("unpacked sample size").with_context(ctx)?;
+    let left = (b.len() - k.pos) as u64;
+    if tsize > left || dsize > left - tsize {
+        bail!(
+            "{}: packed sizes {tsize} + {dsize} run past the end of the file ({left} bytes left)",
+            ctx()
+        );
+    }
+    let tbytes = k.take(tsize as usize, "pixel offset table")?;
+    let dbytes = k.take(dsize as usize, "sample data")?;
+    let (table, zt) = unpack(h.compression, tbytes, 4 * w)
+        .with_context(|| format!("{}: pixel offset table", ctx()))?;
+    let mut prev = 0i64;
+    let mut row = vec![0u32; w];
+    for (x, cnt) in row.iter_mut().enumerate() {
+        let v = i32::from_le_bytes(table[4 * x..4 * x + 4].try_into().expect("4 bytes")) as i64;
+        let n = v - prev;
+        if n < 0 {
+            bail!(
+                "{}: pixel offset table decreases at x = {} ({prev} then {v})",
+                ctx(),
+                x as i64 + x0 as i64
+            );
+        }
+        if n as usize > MAX_SAMPLES_PER_PIXEL {
+            bail!(
+                "{}: pixel x = {} has {n} samples (more than {MAX_SAMPLES_PER_PIXEL})",
+                ctx(),
+                x as i64 + x0 as i64
+            );
+        }
+        *cnt = n as u32;
+        prev = v;
+    }
+    let total = prev as u64;
+    let want = total * psize as u64;
+    if usize_ != want {
+        bail!(
+            "{}: unpacked sample size {usize_} disagrees with {total} samples × {psize} bytes",
+            ctx()
+        );
+    }
+    // an unpacked size larger than any packing of this chunk's bytes could give is corrupt
+    // (zlib expands at most ~1032:1, RLE 64:1): bounds the allocation by the file's length
+    if want > (dsize + 64).saturating_mul(1100) {
+        bail!(
+            "{}: {want} unpacked bytes from {dsize} packed is impossible",
+            ctx()
+        );
+    }
+    let (data, zd) = unpack(h.compression, dbytes, want as usize)
+        .with_context(|| format!("{}: sample data", ctx()))?;
+    let chans = decode_channels(&h.channels, &data, total as usize);
+    Ok((line, (row, chans), zt as usize + zd as usize))
+}
+
+/// The values of each channel (as f32) from a line's unpacked sample data of `n` samples.
+fn decode_channels(channels: &[(String, PixelType)], data: &[u8], n: usize) -> Vec<Vec<f32>> {
+    let mut chans = Vec::with_capacity(channels.len());
+    let mut p = 0;
+    for (_, t) in channels {
+        let bytes = &data[p..p + n * t.size()];
+        p += n * t.size();
+        chans.push(match t {
+            PixelType::Float => bytes
+                .chunks_exact(4)
+                .map(|q| f32::from_le_bytes([q[0], q[1], q[2], q[3]]))
+                .collect(),
+            PixelType::Uint => bytes
+                .chunks_exact(4)
+                .map(|q| u32::from_le_bytes([q[0], q[1], q[2], q[3]]) as f32)
+                .collect(),
+            PixelType::Half => bytes
+                .chunks_exact(2)
+                .map(|q| exr::prelude::f16::from_bits(u16::from_le_bytes([q[0], q[1]])).to_f32())
+                .collect(),
+        });
+    }
+    chans
+}
+
 /// Decodes a single-part deep scan line OpenEXR file.
 pub fn read_deep(b: &[u8]) -> Result<DeepImage> {
     if b.len() < 8 || b[..4] != MAGIC {
@@ -346,10 +455,8 @@ pub fn read_deep(b: &[u8]) -> Result<DeepImage> {
     for i in 0..hgt {
         offsets.push(c.u64(&format!("chunk offset {i}"))?);
     }
-    let psize: usize = h.channels.iter().map(|(_, t)| t.size()).sum();
     // per line (in any chunk order): its sample counts and channel values; allocated as lines
     // are decoded, so memory follows the data present, not the header's claims
-    type Line = (Vec<u32>, Vec<Vec<f32>>);
     let mut lines: Vec<Option<Line>> = vec![None; hgt];
     let mut compressed_blocks = 0;
     for (i, &off) in offsets.iter().enumerate() {
@@ -359,99 +466,9 @@ pub fn read_deep(b: &[u8]) -> Result<DeepImage> {
                 b.len()
             );
         }
-        let mut k = Cur {
-            b,
-            pos: off as usize,
-        };
-        let ctx = || format!("chunk {i} at offset {off}");
-        let y = k.i32("scan line y").with_context(ctx)?;
-        let line = y as i64 - y0 as i64;
-        if !(0..hgt as i64).contains(&line) {
-            bail!("{}: scan line y = {y} outside the data window", ctx());
-        }
-        let line = line as usize;
-        if lines[line].is_some() {
-            bail!("{}: scan line y = {y} stored twice", ctx());
-        }
-        let tsize = k.u64("packed table size").with_context(ctx)?;
-        let dsize = k.u64("packed sample size").with_context(ctx)?;
-        let usize_ = k.u64("unpacked sample size").with_context(ctx)?;
-        let left = (b.len() - k.pos) as u64;
-        if tsize > left || dsize > left - tsize {
-            bail!(
-                "{}: packed sizes {tsize} + {dsize} run past the end of the file ({left} bytes left)",
-                ctx()
-            );
-        }
-        let tbytes = k.take(tsize as usize, "pixel offset table")?;
-        let dbytes = k.take(dsize as usize, "sample data")?;
-        let (table, zt) = unpack(h.compression, tbytes, 4 * w)
-            .with_context(|| format!("{}: pixel offset table", ctx()))?;
-        let mut prev = 0i64;
-        let mut row = vec![0u32; w];
-        for (x, cnt) in row.iter_mut().enumerate() {
-            let v = i32::from_le_bytes(table[4 * x..4 * x + 4].try_into().expect("4 bytes")) as i64;
-            let n = v - prev;
-            if n < 0 {
-                bail!(
-                    "{}: pixel offset table decreases at x = {} ({prev} then {v})",
-                    ctx(),
-                    x as i64 + x0 as i64
-                );
-            }
-            if n as usize > MAX_SAMPLES_PER_PIXEL {
-                bail!(
-                    "{}: pixel x = {} has {n} samples (more than {MAX_SAMPLES_PER_PIXEL})",
-                    ctx(),
-                    x as i64 + x0 as i64
-                );
-            }
-            *cnt = n as u32;
-            prev = v;
-        }
-        let total = prev as u64;
-        let want = total * psize as u64;
-        if usize_ != want {
-            bail!(
-                "{}: unpacked sample size {usize_} disagrees with {total} samples × {psize} bytes",
-                ctx()
-            );
-        }
-        // an unpacked size larger than any packing of this chunk's bytes could give is corrupt
-        // (zlib expands at most ~1032:1, RLE 64:1): bounds the allocation by the file's length
-        if want > (dsize + 64).saturating_mul(1100) {
-            bail!(
-                "{}: {want} unpacked bytes from {dsize} packed is impossible",
-                ctx()
-            );
-        }
-        let (data, zd) = unpack(h.compression, dbytes, want as usize)
-            .with_context(|| format!("{}: sample data", ctx()))?;
-        compressed_blocks += zt as usize + zd as usize;
-        let mut chans = Vec::with_capacity(h.channels.len());
-        let mut p = 0;
-        for (_, t) in &h.channels {
-            let n = total as usize;
-            let bytes = &data[p..p + n * t.size()];
-            p += n * t.size();
-            chans.push(match t {
-                PixelType::Float => bytes
-                    .chunks_exact(4)
-                    .map(|q| f32::from_le_bytes([q[0], q[1], q[2], q[3]]))
-                    .collect(),
-                PixelType::Uint => bytes
-                    .chunks_exact(4)
-                    .map(|q| u32::from_le_bytes([q[0], q[1], q[2], q[3]]) as f32)
-                    .collect(),
-                PixelType::Half => bytes
-                    .chunks_exact(2)
-                    .map(|q| {
-                        exr::prelude::f16::from_bits(u16::from_le_bytes([q[0], q[1]])).to_f32()
-                    })
-                    .collect(),
-            });
-        }
-        lines[line] = Some((row, chans));
+        let (line, decoded, compressed) = read_chunk(b, &h, i, off as usize, &lines)?;
+        compressed_blocks += compressed;
+        lines[line] = Some(decoded);
     }
     if let Some(i) = lines.iter().position(Option::is_none) {
         bail!("scan line {} has no chunk", i as i64 + y0 as i64);
@@ -559,14 +576,72 @@ pub fn deep_to_stack(
     let zc = img
         .channel("Z")
         .ok_or_else(|| anyhow!("deep image has no Z channel (channels: {})", names(img)))?;
-    let zb = img.channel("ZBack");
-    let ac = img.channel("A");
     let mut stats = DeepStats {
         samples: img.values[zc].len(),
         ..Default::default()
     };
+    let (zs, lo, hi) = pixel_samples(img, zc, sort, &mut stats)?;
+    let (near, far) = match (side.near, side.far) {
+        (Some(n), Some(f)) => (n, f),
+        (None, None) => {
+            if !lo.is_finite() {
+                bail!("deep image has no opaque samples; give near and far in the sidecar");
+            }
+            let r = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
+            (lo - super::MARGIN * r, hi + super::MARGIN * r)
+        }
+        _ => bail!("the sidecar gives only one of near and far"),
+    };
+    if !(near.is_finite() && far.is_finite() && near < far) {
+        bail!("near/far planes invalid: near={near} far={far}");
+    }
+    let layers_of = merged_depths(&zs, w, near, far, &mut stats)?;
+    let layers = layers_of.iter().map(Vec::len).max().unwrap_or(0).max(1);
+    let meta = super::StackMeta {
+        scene: side.scene.clone().unwrap_or_else(|| stem.to_string()),
+        view: side.view.clone().unwrap_or_else(|| "light0".into()),
+        light_dir: side.light_dir,
+        near,
+        far,
+        width: w,
+        height: h,
+        layers,
+        u_axis: side.u_axis,
+        v_axis: side.v_axis,
+        uv_origin: side.uv_origin,
+        texel_size: side.texel_size,
+    };
+    super::check_size(&meta)?;
+    let n = w * h;
+    let mut depth = vec![vec![f32::INFINITY; n]; layers];
+    for (t, v) in layers_of.iter().enumerate() {
+        for (l, &d) in v.iter().enumerate() {
+            depth[l][t] = d;
+        }
+    }
+    let (dzdu, dzdv) = neighbour_slopes(&depth, w, h);
+    let st = super::DepthStack {
+        meta,
+        depth,
+        dzdu,
+        dzdv,
+    };
+    super::validate(&st)?;
+    Ok((st, stats))
+}
+
+/// Per pixel, the Z of its kept samples (alpha > 0; checked: finite Z, ZBack ≥ Z, sorted by Z
+/// unless `sort`), sorted; and the least and greatest kept Z. `zc` is the Z channel.
+fn pixel_samples(
+    img: &DeepImage,
+    zc: usize,
+    sort: bool,
+    stats: &mut DeepStats,
+) -> Result<(Vec<Vec<f64>>, f64, f64)> {
+    let (w, h) = (img.width, img.height);
+    let zb = img.channel("ZBack");
+    let ac = img.channel("A");
     let at = |t: usize| (t % w, t / w);
-    // per pixel: the kept samples' Z, sorted
     let mut zs: Vec<Vec<f64>> = Vec::with_capacity(w * h);
     let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
     for t in 0..w * h {
@@ -619,23 +694,21 @@ pub fn deep_to_stack(
         v.sort_by(f64::total_cmp);
         zs.push(v);
     }
-    let (near, far) = match (side.near, side.far) {
-        (Some(n), Some(f)) => (n, f),
-        (None, None) => {
-            if !lo.is_finite() {
-                bail!("deep image has no opaque samples; give near and far in the sidecar");
-            }
-            let r = if hi > lo { hi - lo } else { lo.abs().max(1.0) };
-            (lo - super::MARGIN * r, hi + super::MARGIN * r)
-        }
-        _ => bail!("the sidecar gives only one of near and far"),
-    };
-    if !(near.is_finite() && far.is_finite() && near < far) {
-        bail!("near/far planes invalid: near={near} far={far}");
-    }
-    // depths, merged within the tolerance
+    Ok((zs, lo, hi))
+}
+
+/// Per pixel, the depths z = (Z − near)/(far − near) of its samples `zs` (sorted), each within
+/// [0, 1], a sample closer than [`super::DEDUP_EPS`] to the kept one in front merged into it.
+fn merged_depths(
+    zs: &[Vec<f64>],
+    w: usize,
+    near: f64,
+    far: f64,
+    stats: &mut DeepStats,
+) -> Result<Vec<Vec<f32>>> {
+    let at = |t: usize| (t % w, t / w);
     let range = far - near;
-    let mut layers_of: Vec<Vec<f32>> = Vec::with_capacity(w * h);
+    let mut layers_of: Vec<Vec<f32>> = Vec::with_capacity(zs.len());
     for (t, v) in zs.iter().enumerate() {
         let (x, y) = at(t);
         let mut out: Vec<f32> = Vec::with_capacity(v.len());
@@ -656,38 +729,7 @@ pub fn deep_to_stack(
         }
         layers_of.push(out);
     }
-    let layers = layers_of.iter().map(Vec::len).max().unwrap_or(0).max(1);
-    let meta = super::StackMeta {
-        scene: side.scene.clone().unwrap_or_else(|| stem.to_string()),
-        view: side.view.clone().unwrap_or_else(|| "light0".into()),
-        light_dir: side.light_dir,
-        near,
-        far,
-        width: w,
-        height: h,
-        layers,
-        u_axis: side.u_axis,
-        v_axis: side.v_axis,
-        uv_origin: side.uv_origin,
-        texel_size: side.texel_size,
-    };
-    super::check_size(&meta)?;
-    let n = w * h;
-    let mut depth = vec![vec![f32::INFINITY; n]; layers];
-    for (t, v) in layers_of.iter().enumerate() {
-        for (l, &d) in v.iter().enumerate() {
-            depth[l][t] = d;
-        }
-    }
-    let (dzdu, dzdv) = neighbour_slopes(&depth, w, h);
-    let st = super::DepthStack {
-        meta,
-        depth,
-        dzdu,
-        dzdv,
-    };
-    super::validate(&st)?;
-    Ok((st, stats))
+    Ok(layers_of)
 }
 
 fn names(img: &DeepImage) -> String {

@@ -20,15 +20,14 @@ pub struct LpCandidate {
 }
 
 impl LpCandidate {
-    /// Tabulates the basis on the grid and checks that `solver_kind` can be built.
-    pub fn new(basis: Basis, grid: Grid, solver_kind: &str) -> Result<LpCandidate> {
+    /// Tabulates the basis on the grid; `solver_kind` solves its LPs.
+    pub fn new(basis: Basis, grid: Grid, solver_kind: SolverKind) -> Result<LpCandidate> {
         if basis.is_empty() {
             bail!("LP candidate: need at least one basis function");
         }
         let m = basis.len();
         let table = GridTable::from_fn(&grid, m, |z, out| basis.eval(z, out))
             .with_context(|| format!("LP candidate [{}]", basis.names().join(",")))?;
-        let solver_kind: SolverKind = solver_kind.parse()?;
         Ok(LpCandidate {
             basis,
             grid,
@@ -38,8 +37,7 @@ impl LpCandidate {
     }
 
     /// "f1,f2,…" (commas inside parentheses do not split) resolved in the embedded catalog, on
-    /// [`DEFAULT_GRID_POINTS`] uniform points, with the "fast" solver, or "reference" when
-    /// the fast solver cannot be built.
+    /// [`DEFAULT_GRID_POINTS`] uniform points, with the fast solver.
     pub fn from_spec(list: &str) -> Result<LpCandidate> {
         Self::from_spec_on(list, DEFAULT_GRID_POINTS)
     }
@@ -54,15 +52,12 @@ impl LpCandidate {
             .basis(&names)
             .with_context(|| format!("LP candidate 'lp:{list}'"))?;
         let grid = Grid::uniform(n)?;
-        match LpCandidate::new(basis.clone(), grid.clone(), "fast") {
-            Ok(c) => Ok(c),
-            Err(_) => LpCandidate::new(basis, grid, "reference"),
-        }
+        LpCandidate::new(basis, grid, SolverKind::Fast)
     }
 
-    /// Name of the LP solver ("fast" or "reference").
-    pub fn solver_kind(&self) -> &str {
-        self.solver_kind.name()
+    /// The LP solver.
+    pub fn solver_kind(&self) -> SolverKind {
+        self.solver_kind
     }
 
     /// The basis tabulated on the grid, as the solver reads it.

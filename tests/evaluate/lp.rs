@@ -3,7 +3,7 @@
 
 use crate::common::kernel::*;
 use momentlab::basis::Catalog;
-use momentlab::lp::{GridTable, MomentSolver, ReferenceSolver, Status};
+use momentlab::lp::{GridTable, MomentSolver, ReferenceSolver, SolverKind, Status};
 use momentlab::metrics::{self, Bias, EvalOptions};
 use momentlab::technique::lp_candidate::LpCandidate;
 use momentlab::Grid;
@@ -20,7 +20,7 @@ fn lp_candidate_evaluation_equals_direct_algorithm_1() {
     for names in [vec!["z", "z^2"], vec!["z", "z^2", "z^3", "z^4"]] {
         let basis = Catalog::embedded().basis(&names).unwrap();
         let m = basis.len();
-        let cand = LpCandidate::new(basis.clone(), grid.clone(), "reference").unwrap();
+        let cand = LpCandidate::new(basis.clone(), grid.clone(), SolverKind::Reference).unwrap();
         let rep = metrics::evaluate(
             &stacks,
             &cand,
@@ -79,7 +79,7 @@ fn front_layer_of_tilted_lit_planes_is_lit_for_four_power_moments() {
     let basis = Catalog::embedded()
         .basis(&["z", "z^2", "z^3", "z^4"])
         .unwrap();
-    let cand = LpCandidate::new(basis, grid, "reference").unwrap();
+    let cand = LpCandidate::new(basis, grid, SolverKind::Reference).unwrap();
     for (i, (a, b)) in [(0.002, 0.001), (-0.003, 0.003), (0.0, 0.004)]
         .into_iter()
         .enumerate()
@@ -143,7 +143,7 @@ fn fast_lp_evaluation_is_the_same_on_any_number_of_threads() {
     let basis = Catalog::embedded()
         .basis(&["z", "z^2", "z^3", "z^4"])
         .unwrap();
-    let cand = LpCandidate::new(basis, grid, "fast").unwrap();
+    let cand = LpCandidate::new(basis, grid, SolverKind::Fast).unwrap();
     let opts = EvalOptions {
         keep_values: true,
         ..Default::default()

@@ -369,3 +369,54 @@ fn an_invalid_flag_in_a_documented_command_is_found() {
     assert!(parse(&cmds[1]).is_ok());
     assert!(parse("momentlab shadow --help").is_ok());
 }
+
+/// Where `text` shows the LP solver API as it is not: a `make_solver(` whose first argument is
+/// a string (solvers are named by `lp::SolverKind`), or a `SolverKind::…` that is no variant.
+fn solver_api_findings(text: &str) -> Vec<String> {
+    let variants: Vec<String> = momentlab::lp::SolverKind::ALL
+        .iter()
+        .map(|k| format!("{k:?}"))
+        .collect();
+    let mut out = Vec::new();
+    for (at, _) in text.match_indices("make_solver(") {
+        if text[at + "make_solver(".len()..]
+            .trim_start()
+            .starts_with('"')
+        {
+            let end = text[at..].find(')').map_or(text.len(), |e| at + e + 1);
+            out.push(text[at..end].to_string());
+        }
+    }
+    for (at, _) in text.match_indices("SolverKind::") {
+        let name: String = text[at + "SolverKind::".len()..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if !variants.contains(&name) && name != "ALL" {
+            out.push(format!("SolverKind::{name}"));
+        }
+    }
+    out
+}
+
+#[test]
+fn readme_and_docs_show_the_solver_api_as_it_is() {
+    let mut bad = Vec::new();
+    for f in doc_files() {
+        for x in solver_api_findings(&std::fs::read_to_string(&f).unwrap()) {
+            bad.push(format!("{}: {x}", f.display()));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "README/docs show an LP solver API that is not today's (make_solver takes a SolverKind):\n{}",
+        bad.join("\n")
+    );
+    assert_eq!(
+        solver_api_findings(
+            "`make_solver( \"fast\", t)`, `SolverKind::Strict`; fine: \
+             `lp::make_solver(SolverKind::Fast, table)`, `SolverKind::Reference`"
+        ),
+        vec!["make_solver( \"fast\", t)", "SolverKind::Strict"]
+    );
+}

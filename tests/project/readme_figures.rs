@@ -269,7 +269,25 @@ fn readme_is_short_and_its_layout_matches_src() {
     let text = readme_text();
     let lines = text.lines().count();
     assert!(lines <= 200, "README has {lines} lines (at most 200)");
-    // Every part of src/ is in the layout table.
+    // Every part of src/ is in the layout table, and every `src/…` path of the table exists.
+    let start = text
+        .find("\n## Layout\n")
+        .expect("README has its Layout section");
+    let layout = &text[start + 1..];
+    let layout = &layout[..layout[3..].find("\n## ").map_or(layout.len(), |e| e + 3)];
+    let rows: Vec<&str> = layout.lines().filter(|l| l.starts_with("| `")).collect();
+    assert!(rows.len() > 10, "README's layout table not found: {layout}");
+    let table = rows.join("\n");
+    for row in &rows {
+        for span in row.split('`').skip(1).step_by(2) {
+            if span.starts_with("src/") {
+                assert!(
+                    root().join(span).exists(),
+                    "README's layout lists {span}, which does not exist"
+                );
+            }
+        }
+    }
     for e in std::fs::read_dir(root().join("src")).unwrap() {
         let e = e.unwrap();
         let name = e.file_name().to_string_lossy().to_string();
@@ -282,7 +300,7 @@ fn readme_is_short_and_its_layout_matches_src() {
             format!("`src/{name}`")
         };
         assert!(
-            text.contains(&shown),
+            table.contains(&shown),
             "README's layout does not list {shown}"
         );
     }

@@ -131,7 +131,7 @@ fn compare(stacks: &[DepthStack], grid: &Grid, solver: &str, names: &[&[&str]], 
                 by_name(&format!("lp:{}", n.join(","))).unwrap()
             } else {
                 let basis = Catalog::embedded().basis(n).unwrap();
-                Box::new(LpCandidate::new(basis, grid.clone(), solver).unwrap())
+                Box::new(LpCandidate::new(basis, grid.clone(), solver.parse().unwrap()).unwrap())
             };
         let ev = metrics::evaluate(stacks, tech.as_ref(), &EvalOptions::default()).unwrap();
         assert_eq!(ev.non_finite, 0, "{n:?}");
@@ -150,24 +150,23 @@ fn compare(stacks: &[DepthStack], grid: &Grid, solver: &str, names: &[&[&str]], 
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// `technique::by_name("lp:…")` (1024-point grid, the fast solver if built, else the
-/// reference) against the sweep on the same grid with the same solver, on a tiny stack.
+/// `technique::by_name("lp:…")` (1024-point grid, the fast solver) against the sweep on the same grid with the same solver, on a tiny stack.
 #[test]
 fn sweep_equals_evaluate_for_registry_lp_candidates() {
     let stacks = vec![stack(3, 8, 8, 2)];
     let probe = LpCandidate::from_spec("z,z^2").unwrap();
-    let solver = probe.solver_kind().to_string();
+    let solver = probe.solver_kind().name();
     compare(
         &stacks,
         &Grid::uniform(1024).unwrap(),
-        &solver,
+        solver,
         &[&["z", "z^2"]],
         "reg2",
     );
     compare(
         &stacks,
         &Grid::uniform(1024).unwrap(),
-        &solver,
+        solver,
         &[&["z", "z^2", "z^3", "z^4"]],
         "reg4",
     );
