@@ -1,9 +1,12 @@
-//! `momentlab gpu check` on the committed tune exports as shipped: they pass, a changed
-//! constant fails with one line naming the setting and the worst texel, and a machine without
-//! an adapter gets one line.
+//! `momentlab gpu check` on the default scenes: the committed tune exports as shipped pass, a
+//! changed constant fails with one line naming the setting and the worst texel; a machine
+//! without an adapter gets one line. (Every technique × storage on the default scenes:
+//! tests/gpu/pipeline.rs, through the same `gpu::study::check_setting`.)
 
 use crate::common::gpu::gpu_or_skip;
-use std::path::Path;
+use momentlab::shader::wgsl::literal;
+use momentlab::tune::space::Setting;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn momentlab(args: &[&str]) -> std::process::Output {
@@ -24,17 +27,32 @@ fn last_line(b: &[u8]) -> String {
 
 const EXPORTS: &str = "reports/default/tune/export";
 
+/// The committed exports' folders, sorted.
+fn export_dirs() -> Vec<PathBuf> {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join(EXPORTS);
+    let mut dirs: Vec<PathBuf> = std::fs::read_dir(&base)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.is_dir())
+        .collect();
+    dirs.sort();
+    assert!(dirs.len() >= 2, "{}: no exports", base.display());
+    dirs
+}
+
+/// The committed tune exports as shipped pass `gpu check`; the first export whose α appears as
+/// a literal in its `shadow.wgsl`, with that literal multiplied by 10 in the WGSL only, fails
+/// with one line naming the setting and the worst texel.
 #[test]
 fn committed_exports_pass_and_a_changed_constant_fails() {
     if gpu_or_skip("committed_exports_pass_and_a_changed_constant_fails").is_none() {
         return;
     }
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let dirs: Vec<String> = ["city", "stairs"]
+    let dirs: Vec<String> = export_dirs()
         .iter()
-        .map(|s| root.join(EXPORTS).join(s).display().to_string())
+        .map(|d| d.display().to_string())
         .collect();
-    let mut args = vec!["gpu", "check", "--resolution", "48", "--receivers", "1500"];
+    let mut args = vec!["gpu", "check", "--resolution", "32", "--receivers", "600"];
     for d in &dirs {
         args.extend(["--export", d.as_str()]);
     }
@@ -45,23 +63,32 @@ fn committed_exports_pass_and_a_changed_constant_fails() {
         String::from_utf8_lossy(&ok.stderr)
     );
     let out = String::from_utf8_lossy(&ok.stdout);
+    let views = momentlab::render::default_dataset_views().unwrap().len();
     assert_eq!(
         out.lines().filter(|l| l.starts_with("ok ")).count(),
-        2 * 12,
+        dirs.len() * views,
         "{out}"
     );
 
-    // α of the city export (1e-6) changed to 1e-5 in the shipped WGSL only
+    // α of an export changed in the shipped WGSL only
+    let (src, setting, wgsl, alpha) = export_dirs()
+        .into_iter()
+        .find_map(|d| {
+            let v: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(d.join("setting.json")).unwrap())
+                    .unwrap();
+            let s: Setting = serde_json::from_value(v["setting"].clone()).unwrap();
+            let wgsl = std::fs::read_to_string(d.join("shadow.wgsl")).unwrap();
+            let alpha = literal(s.alpha as f32);
+            wgsl.contains(&alpha).then_some((d, s, wgsl, alpha))
+        })
+        .expect("no export has its α as a literal in shadow.wgsl");
     let tmp = std::env::temp_dir().join(format!("momentlab-gpu-tamper-{}", std::process::id()));
     std::fs::create_dir_all(&tmp).unwrap();
-    let src = root.join(EXPORTS).join("city");
     std::fs::copy(src.join("setting.json"), tmp.join("setting.json")).unwrap();
-    let wgsl = std::fs::read_to_string(src.join("shadow.wgsl")).unwrap();
-    let alpha = "9.999999974752427e-7f";
-    assert!(wgsl.contains(alpha), "the city export's α literal moved");
     std::fs::write(
         tmp.join("shadow.wgsl"),
-        wgsl.replace(alpha, "9.999999747378752e-6f"),
+        wgsl.replace(&alpha, &literal((10.0 * setting.alpha) as f32)),
     )
     .unwrap();
     let t = tmp.display().to_string();
@@ -69,19 +96,22 @@ fn committed_exports_pass_and_a_changed_constant_fails() {
         "gpu",
         "check",
         "--resolution",
-        "48",
+        "32",
         "--receivers",
-        "1500",
+        "600",
         "--export",
         &t,
     ]);
     let _ = std::fs::remove_dir_all(&tmp);
-    assert_eq!(bad.status.code(), Some(1));
+    assert_eq!(bad.status.code(), Some(1), "{}", setting.label());
     let err = last_line(&bad.stderr);
+    let named = format!(
+        "{} {}",
+        setting.family.technique.name(),
+        setting.family.storage.name()
+    );
     assert!(
-        err.starts_with("error: gpu check:")
-            && err.contains("hamburger6 unorm16")
-            && err.contains("texel"),
+        err.starts_with("error: gpu check:") && err.contains(&named) && err.contains("texel"),
         "{err}"
     );
 }

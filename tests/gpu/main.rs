@@ -6,5 +6,6 @@ mod common;
 
 mod cli;
 mod cost;
+mod exports;
 mod pipeline;
 mod programs;
