@@ -430,19 +430,23 @@ mod tests {
         }
     }
 
-    /// docs/lp.md's moments-only table is the rendering of reports/bench/lp_moments.json.
+    /// docs/lp.md's moments-only and stacks tables are the renderings of
+    /// reports/bench/lp_moments.json and lp_stacks.json.
     #[test]
     fn docs_table_renders_the_artefact() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-        let json = std::fs::read_to_string(root.join("reports/bench/lp_moments.json")).unwrap();
-        let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
-        let table = super::markdown_rows(&rows).expect("bench lp --json rows");
         let doc = std::fs::read_to_string(root.join("docs/lp.md")).unwrap();
-        assert!(doc.contains(&table), "docs/lp.md does not show:\n{table}");
-        // A changed figure fails the check.
-        let mut changed = rows.clone();
-        changed[0]["fast_us"]["mean"] = serde_json::json!(1234.5);
-        assert!(!doc.contains(&super::markdown_rows(&changed).unwrap()));
+        for name in ["lp_moments.json", "lp_stacks.json"] {
+            let path = root.join("reports/bench").join(name);
+            let json = std::fs::read_to_string(&path).unwrap();
+            let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
+            let table = super::markdown_rows(&rows).expect("bench lp --json rows");
+            assert!(doc.contains(&table), "docs/lp.md does not show {name}:\n{table}");
+            // A changed figure fails the check.
+            let mut changed = rows.clone();
+            changed[0]["fast_us"]["mean"] = serde_json::json!(1234.5);
+            assert!(!doc.contains(&super::markdown_rows(&changed).unwrap()));
+        }
     }
 
     #[test]

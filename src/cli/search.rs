@@ -86,9 +86,9 @@ pub struct Opts {
     /// Factor by which each racing stage's fragment block grows (2..=64).
     #[arg(long, default_value_t = 4, value_parser = usize_in(2, 64))]
     pub growth: usize,
-    /// Early look: a stage block whose halves hold at least this many fragments is first
-    /// tested on its first half, by confidence only, and the survivors on the whole block
-    /// (0 = never).
+    /// Early looks: a stage block after stage 0 is first tested on its prefixes of 1/8, 1/4
+    /// and 1/2 that hold at least this many fragments, by confidence only, the survivors of
+    /// each going on to the next and then to the whole block (0 = never).
     #[arg(long, default_value_t = momentlab::search::config::DEFAULT_EARLY_LOOK)]
     pub early_look: usize,
     /// Confidence of the elimination tests, for all stages and candidates together

@@ -299,6 +299,14 @@ fn shared(v: &Value) -> &'static str {
     }
 }
 
+/// ", CPU <time>" for a wall-time file that records the command's CPU seconds (user +
+/// system, `cpu_seconds`), else "".
+fn cpu_time(v: &Value) -> String {
+    v.get("cpu_seconds")
+        .and_then(Value::as_f64)
+        .map_or_else(String::new, |c| format!(", CPU {}", minutes(c)))
+}
+
 /// The host line of the wall-time files: threads and CPU model.
 fn host(v: &Value) -> (u64, String) {
     (
@@ -376,7 +384,7 @@ fn race_times(reports: &Path) -> Result<String> {
             "| m = {m} | {:.1} M | {} | {} | {plan} | ({}) | {} % | {} |",
             solves / 1e6,
             minutes(f(&v, "sweep_seconds", &file)?),
-            minutes(secs) + shared(&v),
+            minutes(secs) + shared(&v) + &cpu_time(&v),
             x.functions,
             x.error,
             x.tied

@@ -378,8 +378,9 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
              non-trivial fragments (`--max-fragments`){}. Tests: {} bound, {}, confidence {c:.0} % \
              for all eliminations together (Bonferroni over the {} looks of the stages, the \
              candidates of each stage and the shards). Stage 0's block is the common sample: one \
-             look, every candidate scored on all of it; a later block whose halves hold at least \
-             `--early-look` fragments is tested on its first half, then on the whole block.\n",
+             look, every candidate scored on all of it; a later block is tested on its prefixes of \
+             1/8, 1/4 and 1/2 that hold at least `--early-look` fragments, the survivors of \
+             each look on the next, then on the whole block.\n",
             r.fragment_budget,
             if r.lp_budget_bound {
                 " and an LP budget (`--lp-budget`), which ended the race"
@@ -405,7 +406,7 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
                 st.z,
                 if st.early_eliminated > 0 {
                     format!(
-                        "{} ({} at the early look)",
+                        "{} ({} at an early look)",
                         st.confidence_eliminated, st.early_eliminated
                     )
                 } else {

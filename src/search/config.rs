@@ -12,8 +12,9 @@ use serde::{Deserialize, Serialize};
 /// sample.
 pub const DEFAULT_FIRST_SAMPLE: usize = 4096;
 
-/// Early look by default: blocks of at least 2 × 1024 fragments are tested on their first half
-/// too (the normal approximation is used on blocks of ≥ 1024 fragments only).
+/// Early looks by default on prefixes of at least 1024 fragments: a block of 2 × 1024 or more
+/// after stage 0 is tested on its prefixes of 1/8, 1/4, 1/2 that hold as many, then whole (the
+/// normal approximation is used on ≥ 1024 fragments only).
 pub const DEFAULT_EARLY_LOOK: usize = 1024;
 
 /// Everything that determines the rows of a run (stored as `config.json`).
@@ -49,10 +50,16 @@ pub struct SweepConfig {
     pub first_sample: usize,
     /// Sample growth factor per stage.
     pub growth: usize,
-    /// Early look: a stage block whose halves hold at least this many fragments is first tested
-    /// on its first half, by confidence only (0: never; [`super::race::looks`]).
+    /// Early looks: a stage block after stage 0 is first tested on its prefixes of 1/8, 1/4 and
+    /// 1/2 that hold at least this many fragments, by confidence only (0: never;
+    /// [`super::race::looks`]).
     #[serde(default)]
     pub early_look: usize,
+    /// Early looks per stage block after stage 0 at most ([`super::race::EARLY_LOOKS`]; rows
+    /// of a run with another number are not resumed: a folder from before the geometric looks
+    /// reads as 1).
+    #[serde(default = "one")]
+    pub early_looks: usize,
     /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
     pub confidence: f64,
     /// One-sided bound of the tests (normal approximation or empirical Bernstein).
@@ -67,6 +74,11 @@ pub struct SweepConfig {
     pub chunk: usize,
     /// Candidates per flushed batch.
     pub batch: usize,
+}
+
+/// Serde default of [`SweepConfig::early_looks`] for folders written before it existed.
+fn one() -> usize {
+    1
 }
 
 /// The racing and sharding parameters of a sweep, as given (flags or a configuration).
@@ -142,6 +154,7 @@ impl SweepConfig {
             first_sample: DEFAULT_FIRST_SAMPLE,
             growth: 4,
             early_look: DEFAULT_EARLY_LOOK,
+            early_looks: super::race::EARLY_LOOKS,
             confidence: 0.99,
             bound: Bound::Normal,
             paired: true,

@@ -263,17 +263,37 @@ pub fn blocks(
     (pilot, out)
 }
 
-/// The looks of stage `stage`'s block of `len` fragments (ranges into the block): stage 0 is
-/// one look at the whole block (the *common sample*: every candidate is scored on all of it);
-/// in a later stage, when each half holds at least `early_look` fragments (0: never), the
-/// candidates are first tested on the first half, and the survivors then on the whole block;
-/// otherwise one look at the whole block. Each look counts as a test in [`stage_delta`].
+/// Early looks of a stage block after stage 0 at most: the looks end at 1/2^EARLY_LOOKS, …,
+/// 1/4, 1/2 of the block and at the whole block ([`looks`]).
+pub const EARLY_LOOKS: usize = 3;
+
+/// The looks of stage `stage`'s block of `len` fragments (consecutive ranges into the block,
+/// each look's new fragments): stage 0 is one look at the whole block (the *common sample*:
+/// every candidate is scored on all of it); a later stage is looked at on the prefixes of
+/// len/2^j fragments, j = [`EARLY_LOOKS`], …, 1, that hold at least `early_look` fragments
+/// (0: never), then on the whole block: the candidates are tested on each prefix, the
+/// survivors go on to the next. Each look counts as a test in [`stage_delta`].
 pub fn looks(stage: usize, len: usize, early_look: usize) -> Vec<std::ops::Range<usize>> {
-    if stage > 0 && early_look > 0 && len / 2 >= early_look {
-        vec![0..len / 2, len / 2..len]
-    } else {
-        std::iter::once(0..len).collect()
+    let mut ends = vec![len];
+    if stage > 0 && early_look > 0 {
+        let mut size = len;
+        for _ in 0..EARLY_LOOKS {
+            size /= 2;
+            if size < early_look {
+                break;
+            }
+            ends.push(size);
+        }
     }
+    ends.reverse();
+    let mut start = 0;
+    ends.into_iter()
+        .map(|end| {
+            let r = start..end;
+            start = end;
+            r
+        })
+        .collect()
 }
 
 /// Mean and standard error of a difference pooled over blocks: `parts` are
@@ -477,10 +497,18 @@ mod tests {
     }
 
     #[test]
-    fn early_look_splits_large_blocks_in_halves() {
+    fn early_looks_split_large_blocks_geometrically() {
         assert_eq!(looks(1, 2048, 1024), vec![0..1024, 1024..2048]);
         assert_eq!(looks(1, 2047, 1024), vec![0..2047]);
-        assert_eq!(looks(3, 87_040, 1024), vec![0..43_520, 43_520..87_040]);
+        assert_eq!(looks(1, 4096, 1024), vec![0..1024, 1024..2048, 2048..4096]);
+        assert_eq!(
+            looks(1, 16_384, 1024),
+            vec![0..2048, 2048..4096, 4096..8192, 8192..16_384]
+        );
+        assert_eq!(
+            looks(3, 87_040, 1024),
+            vec![0..10_880, 10_880..21_760, 21_760..43_520, 43_520..87_040]
+        );
         assert_eq!(looks(1, 4096, 0), vec![0..4096]);
         assert_eq!(looks(1, 1, 1), vec![0..1]);
         // Stage 0 is the common sample: one look, whatever its size.

@@ -149,7 +149,7 @@ pub struct StageLog {
     pub z: f64,
     /// Candidates eliminated in this stage.
     pub confidence_eliminated: u64,
-    /// Of those, eliminated at the early look (on the first half of the block).
+    /// Of those, eliminated at an early look (on a prefix of the block).
     #[serde(default)]
     pub early_eliminated: u64,
 }
@@ -539,7 +539,11 @@ pub fn race_looks(dir: &Path) -> Result<Vec<Vec<StageStats>>> {
         if !stage_file(dir, k, 0).exists() {
             break;
         }
-        paths.extend((0..2).map(|j| stage_file(dir, k, j)).filter(|p| p.exists()));
+        paths.extend(
+            (0..=super::race::EARLY_LOOKS)
+                .map(|j| stage_file(dir, k, j))
+                .filter(|p| p.exists()),
+        );
     }
     paths.push(dir.join(FINAL_FILE));
     paths

@@ -1,6 +1,6 @@
 //! Where a sweep's time went: per racing stage and candidate family, the LPs solved, the mean
 //! CPU µs per LP, the unsettled LPs and the share of all LP time, read from the per-candidate
-//! statistics of the stage files (`stage{k}.jsonl` and the early look's `stage{k}.look1.jsonl`:
+//! statistics of the stage files (`stage{k}.jsonl` and the later looks' `stage{k}.look{j}.jsonl`:
 //! fragments and CPU seconds per candidate).
 //!
 //! A candidate's family is its steepest exponential exp(c·z) (|c| ≥ 40, ≥ 20, smaller), else
@@ -68,9 +68,9 @@ pub fn stage_family_times(dir: &Path, table: &FunctionTable, m: usize) -> Result
             break;
         }
         let mut by: BTreeMap<&'static str, FamilyTime> = BTreeMap::new();
-        // The early look's second file holds the same candidates again (fewer): LPs and time
-        // add up, candidates are counted once.
-        for look in 0..2 {
+        // The later looks' files hold the same candidates again (fewer): LPs and time add up,
+        // candidates are counted once.
+        for look in 0..=super::race::EARLY_LOOKS {
             let path = super::sweep::stage_file(dir, k, look);
             if !path.exists() {
                 continue;

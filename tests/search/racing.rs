@@ -89,7 +89,7 @@ impl Sim {
 /// The race of `run_sweep` (pilot block → stage-0 reference, then the leader by pooled mean;
 /// the decision of `race::decide` with δ from `race::stage_delta`) on simulated errors, with
 /// stage blocks of `first`·4ᵏ fragments. Stage 0 is one look (the common sample); with
-/// `early_look` > 0 a later block is first tested on its first half (`race::looks`, δ over the
+/// `early_look` > 0 a later block is first tested on its prefixes (`race::looks`, δ over the
 /// planned looks). No candidate leaves but by evidence. Returns (tied, fragments used,
 /// candidates eliminated at an early look).
 fn simulate(
@@ -150,7 +150,7 @@ fn simulate(
         let mut next = cur.clone();
         for (j, look) in looks.iter().enumerate() {
             let last = j + 1 == looks.len();
-            // The look sees the block's prefix up to its end (the halves so far).
+            // The look sees the block's prefix up to its end (the looks so far).
             let end = look.end;
             let stats: Vec<StageStats> = next
                 .iter()
@@ -190,7 +190,7 @@ fn simulate(
 
 /// Over 200 seeds at 90 % confidence the tied set misses the true best in at most
 /// α·S + 3·√(α(1−α)S) runs (the bound with slack), with and without early looks (each block
-/// after stage 0 of ≥ 128 fragments tested on its first half too, δ over the planned looks).
+/// after stage 0 tested on its prefixes of ≥ 64 fragments too, δ over the planned looks).
 /// Control: without any correction (δ = ½, i.e. z = 0) the same harness counts many misses, so
 /// the count can fail.
 #[test]
@@ -229,7 +229,7 @@ fn certified_set_contains_the_true_best_at_the_stated_rate() {
         (misses[2] as f64) <= bound,
         "misses {misses:?}, bound {bound}"
     );
-    // The early look does eliminate (blocks of 128 and more after stage 0 are split).
+    // The early looks do eliminate (blocks of 128 and more after stage 0 are split).
     assert!(
         early >= seeds as usize / 2,
         "{early} early-look eliminations"
