@@ -441,7 +441,10 @@ mod tests {
             let json = std::fs::read_to_string(&path).unwrap();
             let rows: serde_json::Value = serde_json::from_str(&json).unwrap();
             let table = super::markdown_rows(&rows).expect("bench lp --json rows");
-            assert!(doc.contains(&table), "docs/lp.md does not show {name}:\n{table}");
+            assert!(
+                doc.contains(&table),
+                "docs/lp.md does not show {name}:\n{table}"
+            );
             // A changed figure fails the check.
             let mut changed = rows.clone();
             changed[0]["fast_us"]["mean"] = serde_json::json!(1234.5);
