@@ -92,7 +92,7 @@ fn mark(cfg: &Config, plan: &Plan) -> serde_json::Value {
 }
 
 /// The entries of a report folder that a run writes (the top level of `<reports>/<run>`).
-pub const REPORT_ENTRIES: [&str; 18] = [
+pub const REPORT_ENTRIES: [&str; 19] = [
     IN_PROGRESS,
     "gpu",
     "grid_refinement.json",
@@ -106,6 +106,7 @@ pub const REPORT_ENTRIES: [&str; 18] = [
     "stability",
     "speed_accuracy.svg",
     "error_histograms.svg",
+    "tmsm_geometry.svg",
     "recommend.json",
     "tune",
     "index.html",

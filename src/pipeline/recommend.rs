@@ -51,6 +51,11 @@ pub fn run(
             &hists,
         )?,
     )?;
+    // The TMSM construction (docs/tmsm.md) on one example distribution.
+    write_text(
+        &out.join("tmsm_geometry.svg"),
+        &crate::report::tmsm_figure::svg()?,
+    )?;
     let recs = recommendations(all, tolerance);
     write_json(&out.join("recommend.json"), &recs)?;
     Ok((entries, recs))

@@ -387,6 +387,16 @@ pub fn build(r: ReportInputs) -> Result<Document> {
          Every bin is drawn: an empty bin at a count of 0.5 (log₁₀ = −0.3) on the dashed \
          baseline; the legend is right of the plot.",
     );
+    d.figure(
+        "tmsm_geometry.svg",
+        "TMSM's sharp bound for one distribution of three depths (docs/tmsm.md). Left: depths on \
+         the circle, rotated so the shadowed arc [0, z_f) is symmetric; a depth is shadowed \
+         exactly when its point lies right of the dashed chord. Blue: the input and its \
+         trigonometric moments c₁, c₂; red rings: the distribution with the same moments and \
+         the least mass on the shadowed arc, which is G. Right: G over z_f against the \
+         input's CDF: read how far below the true shadow the bound of two Fourier frequencies \
+         stays.",
+    );
     let front = pareto::pareto_front(r.entries);
     d.paragraph(format!(
         "Pareto front: {}.",

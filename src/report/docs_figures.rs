@@ -10,7 +10,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 /// The pictures of docs/: (path under docs/, the artefact under reports/ it is a copy of).
-pub const IMAGES: [(&str, &str); 9] = [
+pub const IMAGES: [(&str, &str); 13] = [
     ("img/speed_accuracy.svg", "default/speed_accuracy.svg"),
     ("img/fig3.svg", "search/fig3.svg"),
     ("img/fig4_m3.svg", "search/fig4_m3.svg"),
@@ -21,6 +21,9 @@ pub const IMAGES: [(&str, &str); 9] = [
         "default/quantize/quantize_alpha.svg",
     ),
     ("img/grid_refinement.svg", "default/grid_refinement.svg"),
+    ("img/tmsm_geometry.svg", "default/tmsm_geometry.svg"),
+    ("img/error_histograms.svg", "default/error_histograms.svg"),
+    ("img/distributions.svg", "search/distributions.svg"),
     (
         "img/eye_city_vsm.png",
         "default/eye/city_light0_vsm_eye.png",
@@ -28,6 +31,10 @@ pub const IMAGES: [(&str, &str); 9] = [
     (
         "img/eye_city_hamburger4.png",
         "default/eye/city_light0_hamburger4_eye.png",
+    ),
+    (
+        "img/eye_city_tmsm.png",
+        "default/eye/city_light0_tmsm_eye.png",
     ),
 ];
 
@@ -323,4 +330,112 @@ pub fn theta_fig5(reports: &Path) -> Result<String> {
         .find(|l| l.starts_with("Fig. 5 analogue"))
         .ok_or_else(|| anyhow!("{}: no 'Fig. 5 analogue' line", file.display()))?;
     Ok(format!("{line}\n"))
+}
+
+/// docs/search.md: per committed race (reports/search/lp_time_m<m>.txt, printed by `search` at
+/// the end of a race) and candidate family, the LP solves of all stages, the mean CPU µs per LP
+/// (Σ LPs·µs / Σ LPs), that mean over the mean of the candidates without exponentials, and the
+/// family's share of all LP time.
+pub fn lp_families(reports: &Path) -> Result<String> {
+    let mut s = String::from(
+        "| race | family | LP solves | mean µs per LP | vs no exponential | share of LP time |\n| --- | --- | ---: | ---: | ---: | ---: |\n",
+    );
+    let mut any = false;
+    for m in 2..=4 {
+        let file = reports.join(format!("search/lp_time_m{m}.txt"));
+        if !file.is_file() {
+            continue;
+        }
+        let text = crate::artefact::read_text(&file, crate::artefact::Limit::ARTEFACT)?;
+        // family → (LPs, Σ LPs·µs, share %), in first-seen order.
+        let mut fam: Vec<(String, f64, f64, f64)> = Vec::new();
+        for line in text.lines().filter(|l| l.starts_with("stage ")) {
+            let w: Vec<&str> = line.split_whitespace().collect();
+            // The header line ("stage family candidates …") has no stage number.
+            if w.get(1).and_then(|k| k.parse::<u32>().ok()).is_none() {
+                continue;
+            }
+            if w.len() < 8 {
+                return Err(anyhow!("{}: short row '{line}'", file.display()));
+            }
+            let n = w.len();
+            let parse = |x: &str| -> Result<f64> {
+                x.trim_end_matches('%')
+                    .parse::<f64>()
+                    .map_err(|_| anyhow!("{}: '{x}' in '{line}' is not a number", file.display()))
+            };
+            let (lps, us, share) = (parse(w[n - 4])?, parse(w[n - 3])?, parse(w[n - 1])?);
+            // A family name may hold '|' (|c| < 20): escaped, as a Markdown table cell needs.
+            let name = w[2..n - 5].join(" ").replace('|', "\\|");
+            match fam.iter_mut().find(|f| f.0 == name) {
+                Some(f) => {
+                    f.1 += lps;
+                    f.2 += lps * us;
+                    f.3 += share;
+                }
+                None => fam.push((name, lps, lps * us, share)),
+            }
+        }
+        let base = fam
+            .iter()
+            .find(|f| f.0 == "no exponential")
+            .map(|f| f.2 / f.1)
+            .ok_or_else(|| anyhow!("{}: no 'no exponential' family", file.display()))?;
+        fam.sort_by(|a, b| (b.2 / b.1).total_cmp(&(a.2 / a.1)));
+        for (name, lps, work, share) in fam {
+            let _ = writeln!(
+                s,
+                "| m = {m} | {name} | {:.1} M | {:.1} | {:.1}× | {share:.0} % |",
+                lps / 1e6,
+                work / lps,
+                work / lps / base
+            );
+        }
+        any = true;
+    }
+    if !any {
+        return Err(anyhow!("no reports/search/lp_time_m<m>.txt"));
+    }
+    s.push_str("\nreports/search/lp_time_m<m>.txt, printed by `momentlab search` at the end of the committed races.\n");
+    Ok(s)
+}
+
+/// docs/stacks.md: the fragments of the default dataset per scene and in all, as the committed
+/// run evaluated them (reports/default/evaluate/hamburger4_f32.json: a closed form sees every
+/// fragment).
+pub fn dataset(reports: &Path) -> Result<String> {
+    let file = reports.join("default/evaluate/hamburger4_f32.json");
+    let v = read_json(&file)?;
+    let scenes = v
+        .get("scenes")
+        .and_then(Value::as_array)
+        .ok_or_else(|| anyhow!("{}: no scenes", file.display()))?;
+    let mut s = String::from("| scene | fragments |\n| --- | ---: |\n");
+    let mut sum = 0.0;
+    for sc in scenes {
+        let (Some(name), Some(n)) = (
+            sc.get(0).and_then(Value::as_str),
+            sc.get(2).and_then(Value::as_f64),
+        ) else {
+            return Err(anyhow!(
+                "{}: a scene is not [name, error, fragments]",
+                file.display()
+            ));
+        };
+        sum += n;
+        let _ = writeln!(s, "| {name} | {n:.0} |");
+    }
+    let total = num(&v, "fragments", &file)?;
+    if (sum - total).abs() > 0.5 {
+        return Err(anyhow!(
+            "{}: the scenes' fragments ({sum}) do not add up to {total}",
+            file.display()
+        ));
+    }
+    let _ = writeln!(
+        s,
+        "| **all** | **{total:.0}** |\n\n{:.2} % of them are trivial (no kernel depth below the biased z_f); reports/default/evaluate/hamburger4_f32.json.",
+        100.0 * num(&v, "trivial", &file)? / total
+    );
+    Ok(s)
 }

@@ -13,3 +13,4 @@ pub mod recommend;
 pub mod stability;
 pub mod sweep;
 pub mod sweep_charts;
+pub mod tmsm_figure;

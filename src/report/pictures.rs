@@ -5,7 +5,8 @@
 //! * **shadow**: grey = 1 − shadow (lit = white, fully shadowed = black) — [`shadow_colour`];
 //!   eye views shade it: grey = 0.15 + 0.85·(n·l)⁺·(1 − shadow);
 //! * **|error|** = |G − PCF|: inferno on a square-root scale (black = 0, purple ≈ 0.04,
-//!   orange ≈ 0.5, pale yellow = 1) — [`error_colour`], with a colour bar where there is room;
+//!   orange ≈ 0.5, pale yellow = 1) — [`error_colour`], with a colour bar where there is room,
+//!   its ticks labelled with their values;
 //! * no surface: dark blue-grey [`BACKGROUND`]; non-finite G: magenta [`INVALID`].
 //!
 //! Light-view picture of one view ([`view_picture`]): five panels of the shadow-map resolution
@@ -157,8 +158,54 @@ pub const BAR_PX: usize = 16;
 /// Values of |G − PCF| marked on the colour bar (white ticks): 0, 0.01, 0.04, 0.25, 1.
 pub const BAR_TICKS: [f64; 5] = [0.0, 0.01, 0.04, 0.25, 1.0];
 
+/// Width of the tick labels right of the colour bar, pixels.
+pub const BAR_LABEL_PX: usize = 36;
+/// The labels of [`BAR_TICKS`].
+const BAR_TICK_LABELS: [&str; 5] = ["0", "0.01", "0.04", "0.25", "1"];
+
+/// A 3×5 pixel font for the tick labels: per glyph five rows, bit 2 = left column.
+fn glyph(c: char) -> [u8; 5] {
+    match c {
+        '0' => [7, 5, 5, 5, 7],
+        '1' => [2, 6, 2, 2, 7],
+        '2' => [7, 1, 7, 4, 7],
+        '3' => [7, 1, 7, 1, 7],
+        '4' => [5, 5, 7, 1, 1],
+        '5' => [7, 4, 7, 1, 7],
+        '6' => [7, 4, 7, 5, 7],
+        '7' => [7, 1, 1, 1, 1],
+        '8' => [7, 5, 7, 5, 7],
+        '9' => [7, 5, 7, 1, 7],
+        '.' => [0, 0, 0, 0, 2],
+        _ => [0; 5],
+    }
+}
+
+/// Draw `text` in black with its top-left corner at (x0, y0), each font pixel a `scale`² block;
+/// pixels outside the image are skipped.
+fn draw_text(img: &mut RgbImage, x0: usize, y0: usize, text: &str, scale: usize) {
+    for (k, c) in text.chars().enumerate() {
+        for (row, bits) in glyph(c).iter().enumerate() {
+            for col in 0..3 {
+                if bits & (4 >> col) == 0 {
+                    continue;
+                }
+                for dy in 0..scale {
+                    for dx in 0..scale {
+                        let (x, y) = (x0 + (4 * k + col) * scale + dx, y0 + row * scale + dy);
+                        if x < img.width && y < img.height {
+                            img.set(x, y, [0, 0, 0]);
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
 /// The |error| colour bar in columns x0..x0 + [`BAR_PX`] of `img` (bottom = 0, top = 1, white
-/// ticks at [`BAR_TICKS`]).
+/// ticks at [`BAR_TICKS`]), and right of it, on white in the next [`BAR_LABEL_PX`] columns, a
+/// black tick and the value of each tick (font pixels doubled from 160 pixels of height).
 fn colour_bar(img: &mut RgbImage, x0: usize) {
     let n = img.height;
     for y in 0..n {
@@ -166,12 +213,23 @@ fn colour_bar(img: &mut RgbImage, x0: usize) {
         for x in 0..BAR_PX {
             img.set(x0 + x, y, error_colour(v));
         }
-    }
-    for t in BAR_TICKS {
-        let y = ((1.0 - t.sqrt()) * (n.max(2) - 1) as f64).round() as usize;
-        for x in 0..BAR_PX / 2 {
-            img.set(x0 + x, y.min(n - 1), [255, 255, 255]);
+        for x in BAR_PX..BAR_PX + BAR_LABEL_PX {
+            img.set(x0 + x, y, [255, 255, 255]);
         }
+    }
+    let scale = if n >= 160 { 2 } else { 1 };
+    for (t, label) in BAR_TICKS.iter().zip(BAR_TICK_LABELS) {
+        let y = (((1.0 - t.sqrt()) * (n.max(2) - 1) as f64).round() as usize).min(n - 1);
+        for x in 0..BAR_PX / 2 {
+            img.set(x0 + x, y, [255, 255, 255]);
+        }
+        for x in BAR_PX..BAR_PX + 2 {
+            img.set(x0 + x, y, [0, 0, 0]);
+        }
+        let top = y
+            .saturating_sub(5 * scale / 2)
+            .min(n.saturating_sub(5 * scale));
+        draw_text(img, x0 + BAR_PX + 4, top, label, scale);
     }
 }
 
@@ -207,7 +265,7 @@ pub fn layer_picture(stack: &DepthStack, layer: usize, shadows: &FrontShadows) -
             stack.depth.len()
         );
     }
-    let mut img = RgbImage::new(4 * w + 4 * GAP_PX + BAR_PX, h, GAP);
+    let mut img = RgbImage::new(4 * w + 4 * GAP_PX + BAR_PX + BAR_LABEL_PX, h, GAP);
     for y in 0..h {
         for x in 0..w {
             let t = y * w + x;
@@ -322,7 +380,7 @@ pub fn eye_picture(
             n * n
         );
     }
-    let mut img = RgbImage::new(3 * n + 3 * GAP_PX + BAR_PX, n, GAP);
+    let mut img = RgbImage::new(3 * n + 3 * GAP_PX + BAR_PX + BAR_LABEL_PX, n, GAP);
     for y in 0..n {
         for x in 0..n {
             let i = y * n + x;

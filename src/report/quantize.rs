@@ -5,7 +5,22 @@ use crate::quantize::study::{Sweep, USABLE_DEVIATION};
 use anyhow::Result;
 use plotters::prelude::*;
 
-/// The study's Markdown: one row per sweep, then the usability table of 16-bit storage.
+/// A share (error or deviation, a fraction of full shadow) in percent, without the sign: three
+/// decimals from 0.01 %, two significant digits in scientific notation below (deviations of
+/// 32-bit storage are around 10⁻⁵ %).
+pub fn pct(x: f64) -> String {
+    let p = 100.0 * x;
+    if !p.is_finite() {
+        "n/a".into()
+    } else if p == 0.0 || p.abs() >= 0.01 {
+        format!("{p:.3}")
+    } else {
+        format!("{p:.1e}")
+    }
+}
+
+/// The study's Markdown: one row per sweep, then the usability table of 16-bit storage; errors
+/// and deviations in %.
 pub fn markdown(
     all: &[Sweep],
     usable: &[serde_json::Value],
@@ -16,7 +31,7 @@ pub fn markdown(
 ) -> String {
     let i3 = alphas.iter().position(|&a| (a - 3e-5).abs() < 1e-12);
     let mut md = format!(
-        "Mean |G − PCF| over {} fragments of {views} views ({stacks}), stride {stride}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone).\n\n| technique | storage | best α | error at best α | error at α = 3e-5 | deviation at best α | deviation at α = 3e-5 | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
+        "Mean |G − PCF| over {} fragments of {views} views ({stacks}), stride {stride}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone); both in %.\n\n| technique | storage | best α | error at best α (%) | error at α = 3e-5 (%) | deviation at best α (%) | deviation at α = 3e-5 (%) | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
         all.first().map_or(0, |s| s.fragments),
     );
     for s in all {
@@ -26,26 +41,26 @@ pub fn markdown(
             .position(|&a| a == s.best_alpha)
             .unwrap_or(0);
         md.push_str(&format!(
-            "| {} | {} | {:.0e} | {:.5} | {} | {:.2e} | {} | {} |\n",
+            "| {} | {} | {:.0e} | {} | {} | {} | {} | {} |\n",
             s.technique,
             s.config,
             s.best_alpha,
-            s.best_error,
-            i3.map_or("—".into(), |i| format!("{:.5}", s.errors[i])),
-            s.deviation[k],
-            i3.map_or("—".into(), |i| format!("{:.2e}", s.deviation[i])),
+            pct(s.best_error),
+            i3.map_or("—".into(), |i| pct(s.errors[i])),
+            pct(s.deviation[k]),
+            i3.map_or("—".into(), |i| pct(s.deviation[i])),
             s.non_finite[k]
         ));
     }
     md.push_str(&format!(
-        "\n16-bit storage counted as usable from the smallest α at which its deviation is at most {USABLE_DEVIATION:.0e}:\n\n| technique | storage | smallest usable α | deviation there | error there | 32-bit float error there |\n|---|---|---|---|---|---|\n"
+        "\n16-bit storage counted as usable from the smallest α at which its deviation is at most {} %:\n\n| technique | storage | smallest usable α | deviation there (%) | error there (%) | 32-bit float error there (%) |\n|---|---|---|---|---|---|\n",
+        pct(USABLE_DEVIATION)
     ));
     for u in usable {
         let f = |k: &str, p: &str| {
             u[k].as_f64().map_or("never".to_string(), |v| match p {
                 "e" => format!("{v:.0e}"),
-                "d" => format!("{v:.2e}"),
-                _ => format!("{v:.5}"),
+                _ => pct(v),
             })
         };
         md.push_str(&format!(

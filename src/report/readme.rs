@@ -71,6 +71,8 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "quantize-usable" => super::docs_figures::quantize_usable(reports),
         "theta-fig5" => super::docs_figures::theta_fig5(reports),
         "gpu-cost" => crate::gpu::cost::docs_block(reports),
+        "lp-families" => super::docs_figures::lp_families(reports),
+        "dataset" => super::docs_figures::dataset(reports),
         _ => bail!("unknown README block '{name}'"),
     }
 }

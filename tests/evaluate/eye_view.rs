@@ -183,7 +183,7 @@ fn momentlab(args: &[&str]) -> std::process::Output {
 
 #[test]
 fn evaluate_writes_eye_and_layer_pictures_with_the_scene_camera() {
-    use momentlab::report::pictures::{BAR_PX, GAP_PX};
+    use momentlab::report::pictures::{BAR_LABEL_PX, BAR_PX, GAP_PX};
     let d = Dir::new("cli");
     for (sub, cam) in [("plain", ""), ("top", r#"{ "dir": [0, -1, 0] }"#)] {
         std::fs::create_dir_all(d.p(sub)).unwrap();
@@ -227,7 +227,7 @@ fn evaluate_writes_eye_and_layer_pictures_with_the_scene_camera() {
     want.sort();
     assert_eq!(names, want);
     let (w, h, top) = decode_png(&d.p("top/out/disk_sun_vsm.eye.png"));
-    assert_eq!((w, h), (3 * 40 + 3 * GAP_PX + BAR_PX, 40));
+    assert_eq!((w, h), (3 * 40 + 3 * GAP_PX + BAR_PX + BAR_LABEL_PX, 40));
     let (_, _, plain) = decode_png(&d.p("plain/out/disk_sun_vsm.eye.png"));
     assert_ne!(top, plain, "the scene file's camera changes the eye view");
     // From straight above the sphere covers the picture's centre: lit from 70°, its top is

@@ -105,7 +105,10 @@ fn layer_pictures_show_the_shadow_on_the_hidden_layer() {
     let (w, h) = (48, 32);
     let sh = metrics::layer_shadows(&s, 1, Subject::Technique(&t), &Bias::default()).unwrap();
     let img = pictures::layer_picture(&s, 1, &sh).unwrap();
-    assert_eq!(img.width, 4 * w + 4 * GAP_PX + pictures::BAR_PX);
+    assert_eq!(
+        img.width,
+        4 * w + 4 * GAP_PX + pictures::BAR_PX + pictures::BAR_LABEL_PX
+    );
     assert_eq!(img.height, h);
     let px = |panel: usize, x: usize, y: usize| img.get(panel * (w + GAP_PX) + x, y);
     // Layer 1 exists only under the box: elsewhere every panel is background.

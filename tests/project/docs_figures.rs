@@ -75,6 +75,8 @@ fn docs_blocks_equal_the_artefacts() {
         "theta-comparison",
         "theta-basis",
         "quantize-alpha",
+        "lp-families",
+        "dataset",
     ] {
         assert!(
             blocks.iter().any(|b| b.1 == needed),
@@ -141,7 +143,10 @@ fn copy_dir(from: &Path, to: &Path) {
         let p = e.path();
         if p.is_dir() {
             copy_dir(&p, &to.join(e.file_name()));
-        } else if p.extension().is_some_and(|x| x == "json" || x == "md") {
+        } else if p
+            .extension()
+            .is_some_and(|x| x == "json" || x == "md" || x == "txt")
+        {
             std::fs::copy(&p, to.join(e.file_name())).unwrap();
         }
     }
@@ -154,86 +159,195 @@ fn edit_json(path: &Path, f: impl FnOnce(&mut serde_json::Value)) {
     std::fs::write(path, serde_json::to_string(&v).unwrap()).unwrap();
 }
 
-/// One number changed in each artefact that docs/ quotes, and its block no longer matches.
-#[test]
-fn a_changed_number_in_an_artefact_fails_the_docs_check() {
-    let tmp = std::env::temp_dir().join(format!("momentlab-docs-figures-{}", std::process::id()));
-    std::fs::remove_dir_all(&tmp).ok();
-    copy_dir(&root().join("reports"), &tmp);
-    let blocks = doc_blocks();
-    let block = |name: &str| blocks.iter().find(|b| b.1 == name).unwrap().2.clone();
-    // Sanity: the copy renders what docs/ shows.
-    for name in [
-        "stability",
-        "theta-comparison",
-        "theta-basis",
-        "quantize-alpha",
-    ] {
-        assert_eq!(readme::render(name, &tmp).unwrap(), block(name), "{name}");
-    }
-    // A share above the bound (stability.md).
-    edit_json(&tmp.join("stability/stability.json"), |v| {
-        let x = v["by_mode"][4][3][1]["over_share"].as_f64().unwrap();
-        v["by_mode"][4][3][1]["over_share"] = serde_json::json!(x + 0.001);
-    });
-    assert_ne!(
-        readme::render("stability", &tmp).unwrap(),
-        block("stability")
-    );
-    // A CPU time in the θ comparison table (theta.md).
-    let f = tmp.join("theta/comparison.md");
-    let s = std::fs::read_to_string(&f).unwrap();
+/// Replace the first number of the first line of `file` starting with `prefix` (after the
+/// prefix) by that number + `by`, keeping its decimals.
+fn bump_number_in_line(file: &Path, prefix: &str, by: f64) {
+    let s = std::fs::read_to_string(file).unwrap();
     let row = s
         .lines()
-        .find(|l| l.starts_with("| 6 |"))
-        .unwrap()
+        .find(|l| l.starts_with(prefix))
+        .unwrap_or_else(|| panic!("{}: no line '{prefix}…'", file.display()))
         .to_string();
-    let cells: Vec<&str> = row.split(" | ").collect();
-    let cpu: f64 = cells[3].parse().unwrap();
-    let mut changed = cells.clone();
-    let new_cpu = format!("{:.1}", cpu + 1.0);
-    changed[3] = &new_cpu;
-    std::fs::write(&f, s.replace(&row, &changed.join(" | "))).unwrap();
-    assert_ne!(
-        readme::render("theta-comparison", &tmp).unwrap(),
-        block("theta-comparison")
-    );
-    // A basin share (theta.md).
-    edit_json(&tmp.join("theta/summary.json"), |v| {
-        for r in v["rows"].as_array_mut().unwrap() {
-            if r["m"] == 8 {
-                let x = r["basin"]["runner_up_bits"].as_f64().unwrap();
-                r["basin"]["runner_up_bits"] = serde_json::json!(x - 0.01);
+    let tail = &row[prefix.len()..];
+    let b = tail.as_bytes();
+    let i = (0..b.len())
+        .find(|&i| b[i].is_ascii_digit() && (i == 0 || !b[i - 1].is_ascii_alphanumeric()))
+        .unwrap();
+    let j = (i..b.len())
+        .find(|&j| !(b[j].is_ascii_digit() || b[j] == b'.'))
+        .unwrap_or(b.len());
+    let old = &tail[i..j];
+    let decimals = old.split_once('.').map_or(0, |x| x.1.len());
+    let new = format!("{:.*}", decimals, old.parse::<f64>().unwrap() + by);
+    let changed = format!("{prefix}{}{new}{}", &tail[..i], &tail[j..]);
+    assert_ne!(row, changed);
+    std::fs::write(file, s.replacen(&row, &changed, 1)).unwrap();
+}
+
+/// Per generated block of docs/: one number changed in the artefact it quotes.
+type Perturb = fn(&Path);
+
+const PERTURBATIONS: [(&str, &str, Perturb); 11] = [
+    ("stability", "a share above the bound", |r| {
+        edit_json(&r.join("stability/stability.json"), |v| {
+            let x = v["by_mode"][4][3][1]["over_share"].as_f64().unwrap();
+            v["by_mode"][4][3][1]["over_share"] = serde_json::json!(x + 0.001);
+        })
+    }),
+    ("theta-comparison", "a CPU time of θ₆", |r| {
+        let f = r.join("theta/comparison.md");
+        let s = std::fs::read_to_string(&f).unwrap();
+        let row = s
+            .lines()
+            .find(|l| l.starts_with("| 6 |"))
+            .unwrap()
+            .to_string();
+        let cells: Vec<&str> = row.split(" | ").collect();
+        let cpu: f64 = cells[3].parse().unwrap();
+        let mut changed = cells.clone();
+        let new_cpu = format!("{:.1}", cpu + 1.0);
+        changed[3] = &new_cpu;
+        std::fs::write(&f, s.replace(&row, &changed.join(" | "))).unwrap();
+    }),
+    ("theta-comparison", "a basin's runner-up", |r| {
+        edit_json(&r.join("theta/summary.json"), |v| {
+            for row in v["rows"].as_array_mut().unwrap() {
+                if row["m"] == 8 {
+                    let x = row["basin"]["runner_up_bits"].as_f64().unwrap();
+                    row["basin"]["runner_up_bits"] = serde_json::json!(x - 0.01);
+                }
             }
-        }
-    });
-    assert_ne!(
-        readme::render("theta-comparison", &tmp).unwrap(),
-        block("theta-comparison")
-    );
-    // A basis θ's CPU time (theta.md).
-    let basis = std::fs::read_dir(tmp.join("theta/basis"))
+        })
+    }),
+    ("theta-basis", "a basis θ's CPU time", |r| {
+        let basis = std::fs::read_dir(r.join("theta/basis"))
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .find(|p| p.extension().is_some_and(|x| x == "json"))
+            .unwrap();
+        edit_json(&basis, |v| {
+            let x = v["cpu_seconds"].as_f64().unwrap();
+            v["cpu_seconds"] = serde_json::json!(x + 1.0);
+        })
+    }),
+    ("theta-fig5", "the hull ratio of θ₃", |r| {
+        bump_number_in_line(
+            &r.join("theta/comparison.md"),
+            "Fig. 5 analogue (fig5.svg): hull of b([0,1]) ",
+            0.001,
+        )
+    }),
+    ("quantize-alpha", "the best α of one row", |r| {
+        edit_json(&r.join("default/quantize/quantize.json"), |v| {
+            let a = v["sweeps"][0]["alphas"][3].clone();
+            v["sweeps"][0]["best_alpha"] = a;
+        })
+    }),
+    (
+        "quantize-usable",
+        "the error at the smallest usable α",
+        |r| {
+            edit_json(&r.join("default/quantize/quantize.json"), |v| {
+                let row = v["usable_16bit"]
+                    .as_array_mut()
+                    .unwrap()
+                    .iter_mut()
+                    .find(|u| u["smallest_usable_alpha"].is_number())
+                    .expect("no usable 16-bit row");
+                let x = row["error_there"].as_f64().unwrap();
+                row["error_there"] = serde_json::json!(x + 0.001);
+            })
+        },
+    ),
+    (
+        "lp-families",
+        "a family's mean µs per LP in one stage",
+        |r| {
+            let f = r.join("search/lp_time_m4.txt");
+            let s = std::fs::read_to_string(&f).unwrap();
+            let row = s
+                .lines()
+                .find(|l| l.starts_with("stage 0") && l.contains("exp(±40z)"))
+                .unwrap()
+                .to_string();
+            let us = row.split_whitespace().nth_back(2).unwrap().to_string();
+            let changed = row.replacen(
+                &format!(" {us} "),
+                &format!(" {:.1} ", us.parse::<f64>().unwrap() + 5.0),
+                1,
+            );
+            assert_ne!(row, changed);
+            std::fs::write(&f, s.replace(&row, &changed)).unwrap();
+        },
+    ),
+    ("dataset", "one scene's fragments and the total", |r| {
+        edit_json(&r.join("default/evaluate/hamburger4_f32.json"), |v| {
+            let x = v["scenes"][0][2].as_f64().unwrap();
+            v["scenes"][0][2] = serde_json::json!(x + 1.0);
+            let t = v["fragments"].as_f64().unwrap();
+            v["fragments"] = serde_json::json!(t + 1.0);
+        })
+    }),
+    ("race-times", "the LP solves of the m = 4 race", |r| {
+        edit_json(&r.join("search/wall_m4.json"), |v| {
+            let x = v["lp_solves"].as_f64().unwrap();
+            v["lp_solves"] = serde_json::json!(x + 1e6);
+        })
+    }),
+    ("gpu-cost", "one measured lookup time", |r| {
+        gpu_artefacts(r).into_iter().for_each(|f| {
+            edit_json(&f, |v| {
+                let ms = &mut v["points"][0]["lookup_ms"]["median"];
+                *ms = serde_json::json!(ms.as_f64().unwrap() * 1.5);
+            })
+        })
+    }),
+];
+
+fn gpu_artefacts(reports: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(reports.join("gpu"))
         .unwrap()
         .map(|e| e.unwrap().path())
-        .find(|p| p.extension().is_some_and(|x| x == "json"))
-        .unwrap();
-    edit_json(&basis, |v| {
-        let x = v["cpu_seconds"].as_f64().unwrap();
-        v["cpu_seconds"] = serde_json::json!(x + 1.0);
-    });
-    assert_ne!(
-        readme::render("theta-basis", &tmp).unwrap(),
-        block("theta-basis")
-    );
-    // The best α of one quantize row (theta.md).
-    edit_json(&tmp.join("default/quantize/quantize.json"), |v| {
-        let a = v["sweeps"][0]["alphas"][3].clone();
-        v["sweeps"][0]["best_alpha"] = a;
-    });
-    assert_ne!(
-        readme::render("quantize-alpha", &tmp).unwrap(),
-        block("quantize-alpha")
-    );
+        .filter(|p| p.extension().is_some_and(|x| x == "json"))
+        .collect()
+}
+
+/// One number changed in each artefact that docs/ quotes, on a fresh copy of reports/ each:
+/// the block quoting it no longer matches. Every generated block of docs/ has its change here.
+#[test]
+fn a_changed_number_in_an_artefact_fails_the_docs_check() {
+    let blocks = doc_blocks();
+    let block = |name: &str| blocks.iter().find(|b| b.1 == name).unwrap().2.clone();
+    for (_, name, _) in blocks
+        .iter()
+        .filter(|b| !CHECKED_ELSEWHERE.contains(&b.1.as_str()))
+    {
+        assert!(
+            PERTURBATIONS.iter().any(|p| p.0 == name) || name == "gpu",
+            "docs/ block '{name}' has no changed-number check in PERTURBATIONS"
+        );
+    }
+    let tmp = std::env::temp_dir().join(format!("momentlab-docs-figures-{}", std::process::id()));
+    for (name, what, perturb) in PERTURBATIONS {
+        std::fs::remove_dir_all(&tmp).ok();
+        copy_dir(&root().join("reports"), &tmp);
+        // Sanity: the copy renders what docs/ shows.
+        assert_eq!(readme::render(name, &tmp).unwrap(), block(name), "{name}");
+        perturb(&tmp);
+        assert_ne!(
+            readme::render(name, &tmp).unwrap(),
+            block(name),
+            "{name}: changing {what} left the block as it is"
+        );
+        // docs/gpu.md's `gpu` block quotes the same artefact.
+        if name == "gpu-cost" && blocks.iter().any(|b| b.1 == "gpu") {
+            assert_ne!(
+                readme::render("gpu", &tmp).unwrap(),
+                block("gpu"),
+                "gpu: changing {what} left the block as it is"
+            );
+        }
+    }
     std::fs::remove_dir_all(&tmp).ok();
 }
 
@@ -305,4 +419,66 @@ pub fn shell_words(s: &str) -> Vec<String> {
         out.push(cur);
     }
     out
+}
+
+/// The cells of a Markdown table row: split at every '|' that is not escaped (`\|`), as
+/// GitHub's tables do (a '|' inside a code span splits too).
+fn table_cells(row: &str) -> usize {
+    let b = row.trim().as_bytes();
+    let pipes = (0..b.len())
+        .filter(|&i| b[i] == b'|' && (i == 0 || b[i - 1] != b'\\'))
+        .count();
+    pipes.saturating_sub(1)
+}
+
+/// (line number, cells, header cells) of every table row of `text` whose cell count differs
+/// from its header's: a table the reader sees with shifted columns.
+fn ragged_rows(text: &str) -> Vec<(usize, usize, usize)> {
+    let mut out = Vec::new();
+    let mut header: Option<usize> = None;
+    let mut fenced = false;
+    for (n, line) in text.lines().enumerate() {
+        if line.trim_start().starts_with("```") {
+            fenced = !fenced;
+        }
+        let t = line.trim();
+        if fenced || !(t.starts_with('|') && t.ends_with('|')) {
+            header = None;
+            continue;
+        }
+        let cells = table_cells(t);
+        match header {
+            None => header = Some(cells),
+            Some(h) if h != cells => out.push((n + 1, cells, h)),
+            _ => {}
+        }
+    }
+    out
+}
+
+/// Every table of README and docs/ (generated or not) has as many cells in each row as in its
+/// header; an unescaped '|' in a cell (a family "|c| < 20") fails.
+#[test]
+fn docs_tables_have_whole_rows() {
+    assert_eq!(
+        ragged_rows("| a | b |\n|---|---|\n| exp(c·z), |c| < 20 | 1 |\n"),
+        vec![(3, 4, 2)]
+    );
+    assert!(ragged_rows("| a | b |\n|---|---|\n| exp(c·z), \\|c\\| < 20 | 1 |\n").is_empty());
+    let mut bad = Vec::new();
+    let mut files = pages();
+    files.push(root().join("README.md"));
+    for p in files {
+        for (line, cells, header) in ragged_rows(&std::fs::read_to_string(&p).unwrap()) {
+            bad.push(format!(
+                "{}:{line}: {cells} cells, the header has {header}",
+                p.display()
+            ));
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "ragged Markdown tables:\n{}",
+        bad.join("\n")
+    );
 }

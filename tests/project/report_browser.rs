@@ -1,9 +1,13 @@
 //! The HTML report in a real browser: headless Chromium (Debian's `chromium`) loads
-//! reports/<run>/index.html of a `reproduce --tiny` run; every image must load and no error may
-//! reach the console (script errors, console.error, failed resource loads); every eye-view
-//! picture must have pixel variance > 0 (read back through a canvas). A screenshot is
-//! kept under the target directory and its path printed. A control page with a missing image
-//! must be reported as broken (the check can fail).
+//! reports/<run>/index.html of a fresh `reproduce --tiny` run and the committed
+//! reports/default/index.html; every image must load and no error may reach the console
+//! (script errors, console.error, failed resource loads); every eye-view picture must have
+//! pixel variance > 0 (read back through a canvas); a Summary and a table of contents come
+//! before the first figure, no image is embedded twice, eye-view panels are labelled and no
+//! literal Markdown backtick is left ([`assert_report`]). A screenshot is kept under the target
+//! directory and its path printed. A control page with a missing image, a blank eye view
+//! embedded twice without labels and a backtick must be reported (the check can fail). The
+//! pictures of docs/ load too.
 //!
 //! Without chromium the test is skipped loudly — unless MOMENTLAB_REQUIRE_BROWSER=1 (set by
 //! .ci/run when it installed chromium), where a missing browser is a failure.
@@ -195,68 +199,13 @@ fn report_loads_in_headless_chromium() {
     );
     let run = root.join("reports/b");
     let html = std::fs::read_to_string(run.join("index.html")).unwrap();
-    let img_tags = html.matches("<img").count();
-    assert!(img_tags >= 5, "only {img_tags} images in the report");
     let profile = root.join("profile");
 
-    // The report: every image loads, nothing reaches the console.
+    // The report: every image loads, nothing reaches the console, the answers come first.
     let page = run.join("index.check.html");
     std::fs::write(&page, with_checker(&html, "")).unwrap();
     let v = check_page(&bin, &profile, &page);
-    assert_eq!(v["images"].as_u64(), Some(img_tags as u64), "{v}");
-    assert_eq!(v["broken"], serde_json::json!([]), "broken images: {v}");
-    assert_eq!(v["errors"], serde_json::json!([]), "console errors: {v}");
-    assert_eq!(
-        v["uncaptioned"],
-        serde_json::json!([]),
-        "uncaptioned figures: {v}"
-    );
-    assert_eq!(
-        v["markdown_pre"],
-        serde_json::json!(0),
-        "Markdown in <pre>: {v}"
-    );
-    assert_eq!(
-        v["provenance_missing"],
-        serde_json::json!([]),
-        "provenance: {v}"
-    );
-    // Every eye-view picture loads and is not blank (pixel variance > 0), and the report shows
-    // PCF, Hamburger 4MSM, TMSM, VSM and EVSM from the eye.
-    let eye = v["eye"].as_array().expect("eye list");
-    for e in eye {
-        assert!(e.get("error").is_none(), "eye view not readable: {e}");
-        assert!(e["pixels"].as_u64().unwrap_or(0) > 0, "empty eye view: {e}");
-        assert!(
-            e["variance"].as_f64().unwrap_or(0.0) > 1.0,
-            "blank eye view: {e}"
-        );
-    }
-    for t in ["pcf", "hamburger4", "tmsm", "vsm", "evsm"] {
-        let hit = eye.iter().any(|e| {
-            e["src"]
-                .as_str()
-                .unwrap_or("")
-                .ends_with(&format!("_{t}_eye.png"))
-        });
-        assert!(hit, "no eye view of {t}: {v}");
-    }
-    // The answers first: a summary and a table of contents before the first figure; every
-    // image embedded once, eye-view panels labelled, no literal Markdown backticks.
-    let o = &v["order"];
-    assert_eq!(o["summary_before_figure"], serde_json::json!(true), "{o}");
-    assert_eq!(o["toc_before_figure"], serde_json::json!(true), "{o}");
-    assert!(o["toc_links"].as_u64().unwrap_or(0) >= 5, "{o}");
-    assert_eq!(o["toc_dead_links"], serde_json::json!(0), "{o}");
-    assert_eq!(o["embedded_twice"], serde_json::json!([]), "{o}");
-    assert_eq!(o["eye_unlabelled"], serde_json::json!([]), "{o}");
-    assert_eq!(o["backticks"], serde_json::json!(0), "{o}");
-    // Provenance on the first screen: before the first figure and the first section.
-    let prov = html.find("git commit").expect("no provenance");
-    assert!(prov < html.find("<figure").unwrap_or(usize::MAX));
-    assert!(prov < html.find("<h2").unwrap_or(usize::MAX));
-    // Sub-reports are HTML: their tables are <table>s, not Markdown text.
-    assert!(!html.contains("|---"), "Markdown table text in the HTML");
+    assert_report(&v, &html, "reports/b of reproduce --tiny");
 
     // Control: a missing image, a console error and a blank eye view are caught.
     let blank = run.join("eye/blank_eye.png");
@@ -338,6 +287,138 @@ fn report_loads_in_headless_chromium() {
     assert_eq!((info.width, info.height), (1280, 2400));
     println!("screenshot: {}", shot.display());
     eprintln!("screenshot: {}", shot.display());
+    std::fs::remove_dir_all(&root).ok();
+}
+
+/// What the browser must find in a report (`v` the checker's result on `html`): every image
+/// loads, nothing reaches the console, every figure is captioned, no Markdown table is left as
+/// text, provenance is on the first screen, every eye view is readable and not blank and PCF,
+/// Hamburger 4MSM, TMSM, VSM and EVSM are seen from the eye; the answers first (a Summary and a
+/// table of contents before the first figure), each image embedded once, eye-view panels
+/// labelled, no literal Markdown backticks.
+fn assert_report(v: &serde_json::Value, html: &str, what: &str) {
+    let img_tags = html.matches("<img").count();
+    assert!(
+        img_tags >= 5,
+        "{what}: only {img_tags} images in the report"
+    );
+    assert_eq!(v["images"].as_u64(), Some(img_tags as u64), "{what}: {v}");
+    assert_eq!(
+        v["broken"],
+        serde_json::json!([]),
+        "{what}: broken images: {v}"
+    );
+    assert_eq!(
+        v["errors"],
+        serde_json::json!([]),
+        "{what}: console errors: {v}"
+    );
+    assert_eq!(
+        v["uncaptioned"],
+        serde_json::json!([]),
+        "{what}: uncaptioned figures: {v}"
+    );
+    assert_eq!(
+        v["markdown_pre"],
+        serde_json::json!(0),
+        "{what}: Markdown in <pre>: {v}"
+    );
+    assert_eq!(
+        v["provenance_missing"],
+        serde_json::json!([]),
+        "{what}: provenance: {v}"
+    );
+    let eye = v["eye"].as_array().expect("eye list");
+    for e in eye {
+        assert!(
+            e.get("error").is_none(),
+            "{what}: eye view not readable: {e}"
+        );
+        assert!(
+            e["pixels"].as_u64().unwrap_or(0) > 0,
+            "{what}: empty eye view: {e}"
+        );
+        assert!(
+            e["variance"].as_f64().unwrap_or(0.0) > 1.0,
+            "{what}: blank eye view: {e}"
+        );
+    }
+    for t in ["pcf", "hamburger4", "tmsm", "vsm", "evsm"] {
+        let hit = eye.iter().any(|e| {
+            e["src"]
+                .as_str()
+                .unwrap_or("")
+                .ends_with(&format!("_{t}_eye.png"))
+        });
+        assert!(hit, "{what}: no eye view of {t}: {v}");
+    }
+    let o = &v["order"];
+    assert_eq!(
+        o["summary_before_figure"],
+        serde_json::json!(true),
+        "{what}: no Summary before the first figure: {o}"
+    );
+    assert_eq!(
+        o["toc_before_figure"],
+        serde_json::json!(true),
+        "{what}: no table of contents before the first figure: {o}"
+    );
+    assert!(o["toc_links"].as_u64().unwrap_or(0) >= 5, "{what}: {o}");
+    assert_eq!(o["toc_dead_links"], serde_json::json!(0), "{what}: {o}");
+    assert_eq!(
+        o["embedded_twice"],
+        serde_json::json!([]),
+        "{what}: images embedded twice: {o}"
+    );
+    assert_eq!(
+        o["eye_unlabelled"],
+        serde_json::json!([]),
+        "{what}: eye views without panel labels: {o}"
+    );
+    assert_eq!(
+        o["backticks"],
+        serde_json::json!(0),
+        "{what}: literal backticks: {o}"
+    );
+    // Provenance on the first screen: before the first figure and the first section.
+    let prov = html.find("git commit").expect("no provenance");
+    assert!(prov < html.find("<figure").unwrap_or(usize::MAX), "{what}");
+    assert!(prov < html.find("<h2").unwrap_or(usize::MAX), "{what}");
+    // Sub-reports are HTML: their tables are <table>s, not Markdown text.
+    assert!(
+        !html.contains("|---"),
+        "{what}: Markdown table text in the HTML"
+    );
+}
+
+/// The committed report, reports/default/index.html, passes the same checks as a fresh one:
+/// loaded from a copy of its page outside the repository whose `<base>` is the committed
+/// report's folder, so its relative links resolve to the committed files.
+#[test]
+fn committed_report_loads_in_headless_chromium() {
+    let Some(bin) = browser() else {
+        if std::env::var("MOMENTLAB_REQUIRE_BROWSER").as_deref() == Ok("1") {
+            panic!("MOMENTLAB_REQUIRE_BROWSER=1 but no chromium on PATH");
+        }
+        eprintln!("SKIPPED committed_report_loads_in_headless_chromium: chromium not installed");
+        return;
+    };
+    let run = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("reports/default");
+    let html = std::fs::read_to_string(run.join("index.html")).unwrap();
+    let root = crate::common::tmp_path("browser-committed");
+    std::fs::create_dir_all(&root).unwrap();
+    let page = root.join("index.check.html");
+    let checked = with_checker(&html, "");
+    let head = checked.find("<head>").map_or(0, |i| i + "<head>".len());
+    let based = format!(
+        "{}<base href=\"file://{}/\">{}",
+        &checked[..head],
+        run.display(),
+        &checked[head..]
+    );
+    std::fs::write(&page, based).unwrap();
+    let v = check_page(&bin, &root.join("profile"), &page);
+    assert_report(&v, &html, "reports/default/index.html");
     std::fs::remove_dir_all(&root).ok();
 }
 
