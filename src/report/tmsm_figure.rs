@@ -24,8 +24,8 @@ fn moments(diracs: &[(f64, f64)]) -> [f64; 4] {
     let mut v = [0.0; 4];
     for &(z, w) in diracs {
         tmsm::basis(z, &mut v);
-        for k in 0..4 {
-            b[k] += w * v[k];
+        for (bk, vk) in b.iter_mut().zip(v) {
+            *bk += w * vk;
         }
     }
     b
@@ -197,7 +197,6 @@ pub fn svg() -> Result<String> {
     );
     // F_Z: a step function.
     let mut d = String::new();
-    let mut z_prev = 0.0;
     let mut mass = 0.0;
     let mut sorted = DIRACS.to_vec();
     sorted.sort_by(|p, q| p.0.total_cmp(&q.0));
@@ -209,9 +208,7 @@ pub fn svg() -> Result<String> {
         mass += w;
         let (x, y) = to(z, mass);
         let _ = write!(d, " L {x:.2} {y:.2}");
-        z_prev = z;
     }
-    let _ = z_prev;
     let (x, y) = to(1.0, mass);
     let _ = write!(d, " L {x:.2} {y:.2}");
     let _ = writeln!(
@@ -262,13 +259,8 @@ mod tests {
         let b = moments(&DIRACS);
         let sol = tmsm::solve(b, ZF);
         let m = moments(&sol.support);
-        for k in 0..4 {
-            assert!(
-                (m[k] - b[k]).abs() < 1e-8,
-                "moment {k}: {} vs {}",
-                m[k],
-                b[k]
-            );
+        for (k, (mk, bk)) in m.iter().zip(b).enumerate() {
+            assert!((mk - bk).abs() < 1e-8, "moment {k}: {mk} vs {bk}");
         }
         let shadowed: f64 = sol.support.iter().filter(|d| d.0 < ZF).map(|d| d.1).sum();
         assert!((shadowed - sol.g).abs() < 1e-8, "{shadowed} vs {}", sol.g);
