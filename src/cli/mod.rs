@@ -13,7 +13,6 @@ pub mod lp;
 pub mod merge;
 pub mod plan;
 pub mod quantize;
-pub mod recommend;
 pub mod render;
 pub mod reproduce;
 pub mod search;
@@ -86,9 +85,9 @@ pub enum Command {
     Search(search::Args),
     /// Merge sharded search results.
     Merge(merge::Args),
-    /// The cheapest technique within a tolerance of the best, per scene.
-    Recommend(recommend::Args),
-    /// Search technique × storage × biases per scene: the cheapest setting within a tolerance.
+    /// Search technique × storage × biases per scene: the cheapest setting within a tolerance
+    /// and the noise bound (`recommend` is another name for it).
+    #[command(alias = "recommend")]
     Tune(tune::Args),
     /// Reproduce the whole study on the default data and write the report.
     Reproduce(reproduce::Args),
@@ -163,7 +162,6 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Quantize(a) => quantize::run(a),
         Command::Search(a) => search::run(a),
         Command::Merge(a) => merge::run(a),
-        Command::Recommend(a) => recommend::run(a),
         Command::Tune(a) => tune::run(a),
         Command::Reproduce(a) => reproduce::run(a),
         Command::Gpu(a) => gpu::run(a),
@@ -388,12 +386,12 @@ mod tests {
             "recommend",
             "--techniques",
             "vsm,esm",
-            "--speed-inputs",
+            "--fragments",
             "7",
         ])
         .command
         {
-            Command::Recommend(a) => assert!(a.technique == ["vsm,esm"] && a.inputs == 7),
+            Command::Tune(a) => assert!(a.technique == ["vsm,esm"] && a.fragments == 7),
             _ => unreachable!(),
         }
         match parse(&["momentlab", "theta", "--moments", "4"]).command {

@@ -49,12 +49,8 @@ pub const W_SPECIAL: f64 = 4.0;
 /// Weight of one loop trip: counter increment, compare and branch.
 pub const W_LOOP_TRIP: f64 = 2.0;
 
-/// Largest GLSL export (lines of `shadow.glsl`) that is not flagged. The largest export of a
-/// closed form that is not TMSM is 6MSM with θ₆ (about 1 500 lines: decode, the 4×4 Hankel
-/// solve, the cubic's roots and the fallbacks to two and four moments); the bound is at least
-/// a quarter above it (a test keeps it so). TMSM's exports (over 5 000 lines, ten loops) are
-/// above it.
-pub const EXPORT_LINES_BOUND: usize = 2000;
+/// The export size bound (lines of GLSL), defined beside the export.
+pub use crate::tune::export::EXPORT_LINES_BOUND;
 
 /// Where a [`GpuCost`]'s nanoseconds come from.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -323,9 +323,10 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     step.start("the pipeline on a GPU (check and bench), where there is one");
     let gpu_outcome = gpu::run(&stacks, &p.out.join("gpu"))?;
 
-    step.start("speed against accuracy, recommendations");
-    let (entries, recs) = recommend::run(&all, cfg.tolerance, &p.out)?;
+    step.start("speed against accuracy, the tuned setting per scene");
+    let entries = recommend::run(&all, &p.out)?;
     let tuning = recommend::tuning(&stacks, &plan, cfg.tolerance, &p.out)?;
+    let recs = recommend::recommend(&tuning, &p.out)?;
 
     step.start("report");
     let mut doc = report::build(report::ReportInputs {
@@ -365,13 +366,13 @@ pub fn run(cfg: &Config) -> Result<Outcome> {
     eprintln!("\nSummary ({seconds:.0} s):");
     for r in &recs {
         eprintln!(
-            "  {:<8} recommended: {} ({}), error {} (best {} by {})",
+            "  {:<8} tuned: {}, error {} (best {} by {}), noise above 1/255 on {}",
             r.scene,
-            r.name,
-            r.precision,
+            r.setting,
             pct(r.error),
             pct(r.best_error),
-            r.best_name
+            r.best_name,
+            pct(r.noise_share)
         );
     }
     Ok(Outcome {

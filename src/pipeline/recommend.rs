@@ -1,6 +1,6 @@
-//! Step 8: speed against accuracy (`speed_accuracy.svg`, Pareto front), the per-scene
-//! recommendations among the measured closed forms (`recommend.json`) and the tuned setting
-//! per scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]).
+//! Step 8: speed against accuracy (`speed_accuracy.svg`, Pareto front), the tuned setting per
+//! scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]) and the
+//! recommendation per scene, which is the tuned setting (`recommend.json`).
 
 use crate::artefact::{write_json, write_text, OutDir};
 use crate::progress::Bar;
@@ -25,12 +25,9 @@ pub fn entries(all: &[Measured]) -> Vec<Entry> {
         .collect()
 }
 
-/// Write the chart and the recommendations into `out`; return both.
-pub fn run(
-    all: &[Measured],
-    tolerance: f64,
-    out: &Path,
-) -> Result<(Vec<Entry>, Vec<Recommendation>)> {
+/// Write the speed–accuracy chart and the error histograms into `out`; return the chart's
+/// entries.
+pub fn run(all: &[Measured], out: &Path) -> Result<Vec<Entry>> {
     let entries = entries(all);
     write_text(
         &out.join("speed_accuracy.svg"),
@@ -56,9 +53,14 @@ pub fn run(
         &out.join("tmsm_geometry.svg"),
         &crate::report::tmsm_figure::svg()?,
     )?;
-    let recs = recommendations(all, tolerance);
+    Ok(entries)
+}
+
+/// The recommendation per scene, `tune`'s answer, written to `out/recommend.json`.
+pub fn recommend(t: &Tuning, out: &Path) -> Result<Vec<Recommendation>> {
+    let recs = recommendations(t);
     write_json(&out.join("recommend.json"), &recs)?;
-    Ok((entries, recs))
+    Ok(recs)
 }
 
 /// The tuning of the run: read back from `out/tune/tune.json` when it exists (same tolerance

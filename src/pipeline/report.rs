@@ -409,50 +409,6 @@ pub fn build(r: ReportInputs) -> Result<Document> {
 
     d.heading("No more model than a scene needs");
     tuned_section(&mut d, r.tuning);
-    d.paragraph(format!(
-        "Among the measured closed forms alone (f32 and f64 storage, default parameters): the \
-         cheapest technique (fewest bits per texel, then fewest ns per fragment) whose error is \
-         within {} of the best closed form on that scene (`momentlab recommend --tolerance`). \
-         Runner-up: the most accurate cheaper technique (what going faster costs in error), or \
-         the next within the tolerance.",
-        pct(r.config.tolerance)
-    ));
-    d.table(
-        &[
-            "scene",
-            "recommended",
-            "error",
-            "bits / texel",
-            "ns / fragment",
-            "best",
-            "best error",
-            "runner-up",
-            "its error (ns)",
-        ],
-        r.recs
-            .iter()
-            .map(|x| {
-                vec![
-                    x.scene.clone(),
-                    format!("{} ({})", x.name, x.precision),
-                    pct(x.error),
-                    x.bits_per_texel.to_string(),
-                    ns(x.ns_per_fragment),
-                    x.best_name.clone(),
-                    pct(x.best_error),
-                    x.runner_up.as_ref().map_or("–".into(), |u| u.0.clone()),
-                    x.runner_up.as_ref().map_or("–".into(), |u| {
-                        format!(
-                            "{} ({:+.2} pp, {} ns)",
-                            pct(u.1),
-                            100.0 * (u.1 - x.error),
-                            ns(u.2)
-                        )
-                    }),
-                ]
-            })
-            .collect(),
-    );
     let grid_tol = r.config.tolerance / 10.0;
     d.paragraph(format!(
         "LP grid: b_MSM evaluated with n = {} grid points (every {}-th fragment); the chosen n \
@@ -562,8 +518,9 @@ fn summary_section(d: &mut Document, r: &ReportInputs) {
             "scene",
             "technique and storage",
             "bits / texel",
-            "ns / fragment",
-            "error against PCF",
+            "GPU ns / lookup",
+            "error against PCF (leak + darkening + noise)",
+            "shadow noise above 1/255",
             "how sure (95 % paired intervals)",
         ],
         t.scenes
@@ -575,7 +532,8 @@ fn summary_section(d: &mut Document, r: &ReportInputs) {
                     x.chosen.label.clone(),
                     x.chosen.bits_per_texel.to_string(),
                     ns(x.chosen.ns_per_fragment),
-                    pct(x.chosen.error),
+                    error_split(&x.chosen),
+                    pct(x.chosen.noise_share),
                     sure(x),
                 ]
             })
@@ -708,6 +666,27 @@ fn full_sweeps_section(d: &mut Document, out: &Path) {
 }
 
 /// "± half-width" of a paired difference in percentage points.
+/// "3.35 % (3.07 + 0.27 + 0.01)": a setting's error and its split into leak, darkening, noise.
+fn error_split(s: &crate::tune::Scored) -> String {
+    format!(
+        "{} ({:.2} + {:.2} + {:.2})",
+        pct(s.error),
+        100.0 * s.leak,
+        100.0 * s.darkening,
+        100.0 * s.noise
+    )
+}
+
+/// A published default's error, with its noise share where it is above the bound.
+fn reference_cell(r: &crate::tune::Reference) -> String {
+    let noisy = if r.scored.feasible {
+        String::new()
+    } else {
+        format!("; noise above 1/255 on {}", pct(r.scored.noise_share))
+    };
+    format!("{} ({}{noisy})", pp(&r.gain), pct(r.scored.error))
+}
+
 fn pp(p: &crate::tune::Paired) -> String {
     format!("{:+.2} ± {:.2} pp", 100.0 * p.mean, 100.0 * p.half_width)
 }
@@ -738,16 +717,23 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
          with θ, 16-bit UNORM canonical, 16-bit half float for ESM/EVSM) × moment bias α × \
          technique depth bias (constant and slope scale) × ESM/EVSM exponents within the \
          storage's overflow limit ({} settings screened on {} fragments per scene, the best {} \
-         confirmed on {} fragments per scene) and picks the cheapest setting within {} of the \
-         best: fewest bits per texel, then fewest ns per fragment. Error = mean |G − PCF|, split \
-         into light leaking (G < PCF) and over-darkening (G > PCF). Differences are paired on the \
-         same fragments with 95 % intervals (docs/tune.md). `tune/export/<scene>/` holds each \
+         confirmed on {} fragments per scene). Each setting is scored in the pipeline a GPU \
+         runs: texels stored in the format, two separable filter passes accumulated in f32 and \
+         stored in the format, the reconstruction in f32. Error = mean |G − PCF|, split into \
+         light leaking and over-darkening of the same technique on exact moments, and noise \
+         |G − G_exact| that storage and f32 arithmetic add; adding noise never lowers it. A \
+         setting is feasible when its shadow is more than 1/255 (one 8-bit display step) from \
+         exact moments on at most {} of fragments. Among feasible settings tune picks the \
+         cheapest within {} of the best: fewest bits per texel, then fewest GPU ns per lookup \
+         (docs/tune.md: the cost model). Differences are paired on the same fragments with \
+         95 % intervals. `tune/export/<scene>/` holds each \
          chosen setting as JSON and as {} (encode, decode, reconstruction with the tuned \
          constants; here {}; docs/engine.md shows how to put one into an engine).",
         t.settings_screened,
         t.screen_per_scene,
         t.settings_confirmed,
         t.fragments_per_scene,
+        pct(t.max_noise),
         pct(t.tolerance),
         shaders.join(", "),
         exported.join(", "),
@@ -762,7 +748,9 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
             "error",
             "leaking",
             "over-darkening",
-            "ns / fragment",
+            "noise",
+            "noise above 1/255",
+            "GPU ns / lookup",
             "best (error)",
             "chosen − best",
             "runner-up",
@@ -778,6 +766,8 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
                     pct(x.chosen.error),
                     pct(x.chosen.leak),
                     pct(x.chosen.darkening),
+                    pct(x.chosen.noise),
+                    pct(x.chosen.noise_share),
                     ns(x.chosen.ns_per_fragment),
                     format!("{} ({})", x.best.label, pct(x.best.error)),
                     pp(&x.chosen_minus_best),
@@ -789,10 +779,11 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
     );
     d.paragraph(
         "What the tuned setting gains over published defaults (their error minus the tuned \
-         error on the same fragments; > 0: tuning helps). Defaults at momentlab's evaluation \
+         error on the same fragments; > 0: tuning helps), scored under the same pipeline model; \
+         a default whose noise is above the bound says so. Defaults at momentlab's evaluation \
          depth bias (ε = 10⁻⁴, slope scale 2): the paper's 4MSM α = 3·10⁻⁵ at 16 bit (θ₄) and \
          2·10⁻⁶ at 32 bit; MJP's 4MSM α = 3·10⁻⁶ and EVSM exponents 40/5; Filament's EVSM \
-         5.54 (fp16) and 42 (fp32); HDRP's HDIMS α = 6·10⁻⁷.",
+         5.54 (fp16) and 42 (fp32); HDRP's EVSM exponent 15 and HDIMS α = 6·10⁻⁷.",
     );
     let mut head = vec!["scene".to_string()];
     if let Some(x) = targets.first() {
@@ -805,11 +796,7 @@ fn tuned_section(d: &mut Document, t: &crate::tune::Tuning) {
             .iter()
             .map(|x| {
                 let mut row = vec![x.scene.clone()];
-                row.extend(
-                    x.references
-                        .iter()
-                        .map(|r| format!("{} ({})", pp(&r.gain), pct(r.scored.error))),
-                );
+                row.extend(x.references.iter().map(reference_cell));
                 row
             })
             .collect(),

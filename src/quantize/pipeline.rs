@@ -16,6 +16,14 @@ use crate::kernel::{clamp_coord, Gaussian};
 use crate::shader::{Func, Order};
 use anyhow::{bail, Result};
 
+/// One step of an 8-bit display: a shadow further than this from the same technique on exact
+/// moments is visible noise.
+pub const DISPLAY_STEP: f64 = 1.0 / 255.0;
+
+/// The default noise bound: a setting is usable when at most this share of fragments is further
+/// than [`DISPLAY_STEP`] from exact moments (0.1 %; docs/tune.md gives the reason).
+pub const MAX_NOISE: f64 = 0.001;
+
 /// How a driver converts an f32 to binary16 when it writes a half-float target: IEEE's round
 /// to nearest even, or round toward zero (Vulkan allows either; lavapipe rounds toward zero).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

@@ -1,7 +1,8 @@
 //! The quantization study's tables and plot: Markdown of the best α, error and deviation per
 //! technique and storage, the 16-bit usability table, and error against α (SVG).
 
-use crate::quantize::study::{Sweep, USABLE_DEVIATION};
+use crate::quantize::pipeline::MAX_NOISE;
+use crate::quantize::study::Sweep;
 use anyhow::Result;
 use plotters::prelude::*;
 
@@ -31,7 +32,7 @@ pub fn markdown(
 ) -> String {
     let i3 = alphas.iter().position(|&a| (a - 3e-5).abs() < 1e-12);
     let mut md = format!(
-        "Mean |G − PCF| over {} fragments of {views} views ({stacks}), stride {stride}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage alone); both in %.\n\n| technique | storage | best α | error at best α (%) | error at α = 3e-5 (%) | deviation at best α (%) | deviation at α = 3e-5 (%) | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
+        "Mean |G − PCF| over {} fragments of {views} views ({stacks}), stride {stride}; bias b* = (½,…,½).\n\n`error` = mean |G − PCF|; `deviation` = mean |G − G_exact| against the same technique and α on unquantized f64 moments (the damage done by storage and f32 filtering: texels stored in the format, two f32 filter passes each stored in the format); both in %.\n\n| technique | storage | best α | error at best α (%) | error at α = 3e-5 (%) | deviation at best α (%) | deviation at α = 3e-5 (%) | non-finite at best α |\n|---|---|---|---|---|---|---|---|\n",
         all.first().map_or(0, |s| s.fragments),
     );
     for s in all {
@@ -53,8 +54,8 @@ pub fn markdown(
         ));
     }
     md.push_str(&format!(
-        "\n16-bit storage counted as usable from the smallest α at which its deviation is at most {} %:\n\n| technique | storage | smallest usable α | deviation there (%) | error there (%) | 32-bit float error there (%) |\n|---|---|---|---|---|---|\n",
-        pct(USABLE_DEVIATION)
+        "\n16-bit storage counted as usable from the smallest α at which it meets `tune`'s noise bound (the shadow more than 1/255 from exact moments on at most {} % of fragments):\n\n| technique | storage | smallest usable α | noise share there (%) | deviation there (%) | error there (%) | 32-bit float error there (%) |\n|---|---|---|---|---|---|---|\n",
+        pct(MAX_NOISE)
     ));
     for u in usable {
         let f = |k: &str, p: &str| {
@@ -64,10 +65,11 @@ pub fn markdown(
             })
         };
         md.push_str(&format!(
-            "| {} | {} | {} | {} | {} | {} |\n",
+            "| {} | {} | {} | {} | {} | {} | {} |\n",
             u["technique"].as_str().unwrap_or(""),
             u["config"].as_str().unwrap_or(""),
             f("smallest_usable_alpha", "e"),
+            f("noise_share_there", "%"),
             f("deviation_there", "d"),
             f("error_there", "f"),
             f("f32_error_there", "f"),

@@ -1,7 +1,6 @@
-//! "No more model than a scene needs": per-scene errors of measured techniques and the cheapest
-//! technique within a tolerance of the best ([`super::pareto::recommend`]).
+//! "No more model than a scene needs": per-scene errors of measured techniques, their error
+//! histograms, and the recommendation per scene, which is `tune`'s answer ([`recommendations`]).
 
-use super::pareto::{self, Entry};
 use crate::metrics::EvalReport;
 use serde::{Deserialize, Serialize};
 
@@ -91,94 +90,68 @@ pub fn per_scene(r: &EvalReport) -> Vec<(String, f64, usize)> {
     out
 }
 
-/// The recommendation for one scene.
+/// The recommendation for one scene: `tune`'s answer ([`crate::tune::Target::chosen`]), the
+/// cheapest feasible setting within the tolerance of the best in the modelled GPU pipeline.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Recommendation {
     /// The scene.
     pub scene: String,
-    /// The recommended technique's spec name.
+    /// The technique's name (`tmsm`, `hamburger4`, …).
     pub name: String,
-    /// Its storage precision.
-    pub precision: String,
-    /// Its bits per texel.
+    /// The storage format's name (`f32`, `unorm16-theta`, …).
+    pub storage: String,
+    /// The whole setting: technique, storage, α, depth bias, own parameters.
+    pub setting: String,
+    /// Bits per shadow-map texel.
     pub bits_per_texel: u32,
-    /// Its CPU time per shading call, nanoseconds.
-    pub ns_per_fragment: f64,
-    /// Its mean |G − PCF| on the scene.
+    /// GPU ns per lookup (`gpu::cost`).
+    pub gpu_ns: f64,
+    /// Mean |G − PCF| split as leak + darkening + noise ([`crate::tune::score`]).
     pub error: f64,
-    /// The most accurate closed form on the scene, "name (precision)".
+    /// Mean light leaking against PCF of the same technique on exact moments.
+    pub leak: f64,
+    /// Mean over-darkening against PCF of the same technique on exact moments.
+    pub darkening: f64,
+    /// Mean |G − G_exact|: noise from storage and f32 arithmetic.
+    pub noise: f64,
+    /// Share of fragments whose shadow is more than 1/255 from exact moments.
+    pub noise_share: f64,
+    /// The lowest-error feasible setting and its error.
     pub best_name: String,
-    /// That technique's mean |G − PCF|.
+    /// Its mean |G − PCF|.
     pub best_error: f64,
     /// Allowed excess error over the best: the recommendation is within it.
     pub tolerance: f64,
-    /// The alternative ([`pareto::runner_up`]): "name (precision)", its error and ns/fragment.
-    #[serde(default)]
-    pub runner_up: Option<(String, f64, f64)>,
+    /// The noise bound the setting meets: largest share of fragments above 1/255.
+    pub max_noise: f64,
 }
 
-/// Per scene: the cheapest closed-form technique within `tolerance` of the best one
-/// ([`pareto::recommend`]). LP candidates are references, not shippable techniques.
-pub fn recommendations(all: &[Measured], tolerance: f64) -> Vec<Recommendation> {
-    let mut scenes: Vec<String> = Vec::new();
-    for m in all {
-        for (s, _, _) in &m.scenes {
-            if !scenes.contains(s) {
-                scenes.push(s.clone());
+/// Per scene (and over all scenes): the tuned setting of `t` as a recommendation.
+pub fn recommendations(t: &crate::tune::Tuning) -> Vec<Recommendation> {
+    t.scenes
+        .iter()
+        .chain(std::iter::once(&t.overall))
+        .map(|x| {
+            let c = &x.chosen;
+            Recommendation {
+                scene: x.scene.clone(),
+                name: c.setting.family.technique.name().to_string(),
+                storage: c.setting.family.storage.name().to_string(),
+                setting: c.label.clone(),
+                bits_per_texel: c.bits_per_texel,
+                gpu_ns: c.ns_per_fragment,
+                error: c.error,
+                leak: c.leak,
+                darkening: c.darkening,
+                noise: c.noise,
+                noise_share: c.noise_share,
+                best_name: x.best.label.clone(),
+                best_error: x.best.error,
+                tolerance: t.tolerance,
+                max_noise: t.max_noise,
             }
-        }
-    }
-    let mut out = Vec::new();
-    for scene in scenes {
-        let rows: Vec<(&Measured, Entry)> = all
-            .iter()
-            .filter(|m| !m.name.starts_with("lp:"))
-            .filter_map(|m| {
-                m.scenes.iter().find(|s| s.0 == scene).map(|s| {
-                    (
-                        m,
-                        Entry {
-                            name: m.name.clone(),
-                            precision: m.precision.clone(),
-                            error: s.1,
-                            ns_per_fragment: m.ns_per_fragment,
-                            bits_per_texel: m.bits_per_texel,
-                        },
-                    )
-                })
-            })
-            .collect();
-        let entries: Vec<Entry> = rows.iter().map(|r| r.1.clone()).collect();
-        let Some(i) = pareto::recommend(&entries, tolerance) else {
-            continue;
-        };
-        let best = entries
-            .iter()
-            .filter(|e| e.error.is_finite())
-            .min_by(|a, b| a.error.total_cmp(&b.error))
-            .expect("recommend found a finite entry");
-        let runner_up = pareto::runner_up(&entries, i, tolerance).map(|k| {
-            let r = &entries[k];
-            (
-                format!("{} ({})", r.name, r.precision),
-                r.error,
-                r.ns_per_fragment,
-            )
-        });
-        out.push(Recommendation {
-            scene,
-            name: entries[i].name.clone(),
-            precision: entries[i].precision.clone(),
-            bits_per_texel: entries[i].bits_per_texel,
-            ns_per_fragment: entries[i].ns_per_fragment,
-            error: entries[i].error,
-            best_name: format!("{} ({})", best.name, best.precision),
-            best_error: best.error,
-            tolerance,
-            runner_up,
-        });
-    }
-    out
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -26,6 +26,17 @@ pub const B_STAR_CLAMPED: [f64; 6] = [
 /// α for clamped depths with six moments (supplementary Section 4).
 pub const ALPHA_CLAMPED: f64 = 4e-3;
 
+/// The registry's default α for six moments with the clamped b* at 32-bit float storage: the
+/// smallest α at which 6MSM meets `tune`'s noise bound (the shadow more than 1/255 from exact
+/// moments on at most 0.1 % of fragments, in the modelled GPU pipeline) on every default scene
+/// and on all of them together — the largest `hamburger6 f32` α floor of the committed
+/// `reports/default/tune/tune.json`, rounded up (a test keeps it so). The supplementary's
+/// 4·10⁻³ ([`ALPHA_CLAMPED`]) is below it.
+pub const ALPHA_NOISE_BOUND_F32: f64 = 6e-3;
+
+/// As [`ALPHA_NOISE_BOUND_F32`] for 16-bit storage with θ₆ (`quant_bits` = 16).
+pub const ALPHA_NOISE_BOUND_16BIT: f64 = 2.2e-2;
+
 /// 6MSM for already biased moments b', unclamped G and the roots.
 #[inline(always)]
 pub fn msm6<T: Real>(b: [T; 6], zf: T) -> (T, [T; 3]) {

@@ -93,7 +93,8 @@ pub enum BiasPreset {
 #[serde(default, deny_unknown_fields)]
 pub struct Params {
     /// Bias strength α. Default: MSM techniques 2·10⁻⁶ (3·10⁻⁵ with `quant_bits` = 16; the
-    /// clamped preset's own α), baselines (vsm, esm, evsm, csm) 0.
+    /// clamped preset's own α), hamburger6 without a preset the α that meets tune's noise
+    /// bound (`hamburger6::ALPHA_NOISE_BOUND_F32`, `_16BIT`), baselines (vsm, esm, evsm, csm) 0.
     pub alpha: Option<f64>,
     /// Explicit b* (length m); overrides `bias`.
     pub b_star: Option<Vec<f64>>,
@@ -321,8 +322,14 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
         "hamburger6" => {
             let mut q = p.clone();
             q.bias = Some(p.bias.unwrap_or(BiasPreset::Clamped));
+            // Without α or a bias preset: the α that meets tune's noise bound.
+            let alpha = match (p.alpha, p.bias, p.quant_bits) {
+                (None, None, 16) => super::hamburger6::ALPHA_NOISE_BOUND_16BIT,
+                (None, None, _) => super::hamburger6::ALPHA_NOISE_BOUND_F32,
+                _ => q.msm_alpha(6),
+            };
             Box::new(Hamburger6::new(
-                q.msm_alpha(6),
+                alpha,
                 arr(q.msm_b_star(name, 6)?),
                 prec,
             ))

@@ -862,9 +862,35 @@ pub struct Exported<'a> {
     pub leak: f64,
     /// Mean max(G_exact − PCF, 0).
     pub darkening: f64,
+    /// Mean |G − G_exact| of the setting in the modelled pipeline ([`super::score`]).
+    pub noise: f64,
+    /// Share of fragments with |G − G_exact| > 1/255.
+    pub noise_share: f64,
+    /// GPU cost per lookup in ns ([`super::Options::cost`]; 0 where none was given).
+    pub gpu_ns: f64,
     /// Files with the shader code (empty when the technique has no export here).
     pub shaders: Vec<String>,
+    /// Lines of the GLSL file (0 without shader code).
+    pub glsl_lines: usize,
+    /// `glsl_lines` > [`EXPORT_LINES_BOUND`]: the export is larger than an engine's shader
+    /// budget for one lookup usually allows.
+    pub over_size_bound: bool,
 }
+
+/// Lines of the GLSL file [`write`] emits for setting `s` (0 where it has no shader code).
+pub fn glsl_lines(s: &Setting) -> Result<usize> {
+    Ok(match module(s, header(s))? {
+        Some(m) => shader_texts(&m)?[0].lines().count(),
+        None => 0,
+    })
+}
+
+/// Largest GLSL export (lines of `shadow.glsl`) that is not flagged. The largest export of a
+/// closed form that is not TMSM is 6MSM with θ₆ (about 1 500 lines: decode, the 4×4 Hankel
+/// solve, the cubic's roots and the fallbacks to two and four moments); the bound is at least
+/// a quarter above it (a test in `gpu::cost` keeps it so). TMSM's exports (over 5 000 lines,
+/// ten loops) are above it.
+pub const EXPORT_LINES_BOUND: usize = 2000;
 
 /// The folder of target `scene`'s export inside `dir`: `<dir>/<scene>` (the scene name made
 /// safe as one component).
@@ -897,8 +923,12 @@ pub fn write(out: &crate::artefact::OutDir, dir: &str, t: &super::Tuning) -> Res
         let dir = target_dir(dir, &target.scene);
         let s = &target.chosen.setting;
         let mut shaders = Vec::new();
+        let mut glsl_lines = 0;
         if let Some(m) = module(s, header(s))? {
             for (name, text) in SHADER_FILES.into_iter().zip(shader_texts(&m)?) {
+                if name.ends_with(".glsl") {
+                    glsl_lines = text.lines().count();
+                }
                 out.write_text(&format!("{dir}/{name}"), &text)?;
                 shaders.push(name.to_string());
             }
@@ -913,7 +943,12 @@ pub fn write(out: &crate::artefact::OutDir, dir: &str, t: &super::Tuning) -> Res
                 error: target.chosen.error,
                 leak: target.chosen.leak,
                 darkening: target.chosen.darkening,
+                noise: target.chosen.noise,
+                noise_share: target.chosen.noise_share,
+                gpu_ns: target.chosen.ns_per_fragment,
                 shaders,
+                glsl_lines,
+                over_size_bound: glsl_lines > EXPORT_LINES_BOUND,
             },
         )?;
     }

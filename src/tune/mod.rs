@@ -72,7 +72,7 @@ impl Default for Options {
             techniques: TechniqueKind::ALL.to_vec(),
             storages: StorageKind::ALL.to_vec(),
             tolerance: 0.002,
-            max_noise: 0.001,
+            max_noise: crate::quantize::pipeline::MAX_NOISE,
             fragments_per_scene: 8192,
             screen_per_scene: 1024,
             keep: 2,
@@ -325,6 +325,18 @@ pub fn references() -> Vec<(String, Setting)> {
                 Own::Evsm {
                     c_pos: 42.0,
                     c_neg: 42.0,
+                },
+                0.0,
+            ),
+        ),
+        (
+            "HDRP EVSM 32-bit (c = 15)".into(),
+            s(
+                Evsm,
+                F32,
+                Own::Evsm {
+                    c_pos: 15.0,
+                    c_neg: 15.0,
                 },
                 0.0,
             ),

@@ -37,7 +37,7 @@ use anyhow::Result;
 use rayon::prelude::*;
 
 /// One step of an 8-bit display: the noise threshold.
-pub const DISPLAY_STEP: f64 = 1.0 / 255.0;
+pub use crate::quantize::pipeline::DISPLAY_STEP;
 
 /// Stored (pipeline) and exact moments of every sample fragment for one family
 /// (row-major, fragments × m).

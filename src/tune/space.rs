@@ -179,7 +179,7 @@ impl TechniqueKind {
             TechniqueKind::Vsm | TechniqueKind::Esm | TechniqueKind::Evsm => {
                 &[0.0, 1e-5, 1e-4, 1e-3]
             }
-            TechniqueKind::Hamburger6 => &[1e-6, 1e-5, 1e-4, 1e-3, 4e-3],
+            TechniqueKind::Hamburger6 => &[1e-6, 1e-5, 1e-4, 1e-3, 4e-3, 1e-2, 3e-2],
             _ => &[1e-7, 6e-7, 2e-6, 6e-6, 2e-5, 6e-5, 2e-4, 6e-4],
         }
     }
@@ -323,14 +323,26 @@ pub struct Setting {
     pub depth_bias: DepthBias,
 }
 
+/// `x` in scientific notation with at most three significant digits and no trailing zeros
+/// (1.2649e-5 → "1.26e-5", 3e-5 → "3e-5", 0 → "0e0").
+pub fn short_e(x: f64) -> String {
+    let t = format!("{x:.2e}");
+    match t.split_once('e') {
+        Some((m, e)) if m.contains('.') => {
+            format!("{}e{e}", m.trim_end_matches('0').trim_end_matches('.'))
+        }
+        _ => t,
+    }
+}
+
 impl Setting {
     /// "<family> α=… ε=… s=…".
     pub fn label(&self) -> String {
         format!(
-            "{} α={:e} ε={:e} s={}",
+            "{} α={} ε={} s={}",
             self.family.label(),
-            self.alpha,
-            self.depth_bias.constant,
+            short_e(self.alpha),
+            short_e(self.depth_bias.constant),
             self.depth_bias.slope_scale
         )
     }
@@ -432,6 +444,15 @@ pub fn parse_list<T: Copy>(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn short_e_keeps_three_significant_digits() {
+        assert_eq!(short_e(1.2649110640673518e-5), "1.26e-5");
+        assert_eq!(short_e(3e-5), "3e-5");
+        assert_eq!(short_e(5e-4), "5e-4");
+        assert_eq!(short_e(0.0), "0e0");
+        assert_eq!(short_e(2.5e-6), "2.5e-6");
+    }
 
     #[test]
     fn exponents_respect_the_overflow_limit_of_the_storage() {

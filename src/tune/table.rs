@@ -32,7 +32,17 @@ pub fn table(t: &Tuning) -> String {
     );
     for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
         out += &row(&target.scene, &target.chosen);
-        out += "   ← chosen\n";
+        out += "   ← chosen";
+        match super::export::glsl_lines(&target.chosen.setting) {
+            Ok(n) if n > super::export::EXPORT_LINES_BOUND => {
+                out += &format!(
+                    " (export {n} lines of GLSL, above the {} bound)",
+                    super::export::EXPORT_LINES_BOUND
+                )
+            }
+            _ => {}
+        }
+        out += "\n";
         out += &row("", &target.best);
         out += &format!(
             "   best (chosen − best {:+.3} ± {:.3} pp)\n",

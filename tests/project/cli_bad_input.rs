@@ -291,7 +291,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             "0 fragments",
         ),
         (
-            args(&["recommend", "--stacks", &f.p("empty"), "--inputs", "10"]),
+            args(&["recommend", "--stacks", &f.p("empty"), "--fragments", "10"]),
             None,
             1,
             "0 fragments",
@@ -366,7 +366,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             args(&["recommend", "--technique", "lp:z,z^2"]),
             None,
             1,
-            "'lp:z,z^2': recommend compares closed-form",
+            "lp:z,z^2",
         ),
         (
             args(&["recommend", "--technique", "nope", "--stacks", &f.p("a")]),

@@ -398,3 +398,50 @@ fn adding_zero_mean_noise_to_the_moments_never_lowers_a_score() {
         }
     }
 }
+
+/// 6MSM's registry default α meets the noise bound on the default scenes: for every target of
+/// the committed tuning, the `hamburger6` α floors at f32 and 16-bit θ₆ exist and lie at or
+/// below the defaults (`hamburger6::ALPHA_NOISE_BOUND_F32`, `_16BIT`), and the tuning was run
+/// with the default bound.
+#[test]
+fn six_moment_default_alpha_meets_the_noise_bound_of_the_committed_tuning() {
+    use momentlab::technique::hamburger6::{ALPHA_NOISE_BOUND_16BIT, ALPHA_NOISE_BOUND_F32};
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/default/tune/tune.json");
+    let t: momentlab::tune::Tuning =
+        serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
+    assert_eq!(t.max_noise, Options::default().max_noise);
+    for target in t.scenes.iter().chain(std::iter::once(&t.overall)) {
+        for (family, default) in [
+            ("hamburger6 f32", ALPHA_NOISE_BOUND_F32),
+            ("hamburger6 unorm16-theta", ALPHA_NOISE_BOUND_16BIT),
+        ] {
+            let floor = target
+                .alpha_floor
+                .iter()
+                .find(|f| f.family == family)
+                .and_then(|f| f.alpha)
+                .unwrap_or_else(|| panic!("{}: no feasible α for {family}", target.scene));
+            assert!(
+                floor <= default,
+                "{}: {family} needs α ≥ {floor}, the default is {default}",
+                target.scene
+            );
+        }
+    }
+    // the registry's default hamburger6 is the clamped 6MSM at those α (f64: the same G on a
+    // two-Dirac input whose biased moments depend on α)
+    use momentlab::technique::hamburger6::{Hamburger6, B_STAR_CLAMPED};
+    use momentlab::technique::linalg::Precision;
+    use momentlab::technique::ClosedForm;
+    let b: Vec<f64> = (1..=6).map(|k| 0.5 * 0.2f64.powi(k) + 0.5 * 0.7f64.powi(k)).collect();
+    for (q, alpha) in [(32, ALPHA_NOISE_BOUND_F32), (16, ALPHA_NOISE_BOUND_16BIT)] {
+        let mut p = momentlab::technique::registry::Params::with(Precision::F64, None);
+        p.quant_bits = q;
+        let t = momentlab::technique::registry::build("hamburger6", &p).unwrap();
+        let mut ev = t.evaluator();
+        let want = Hamburger6::new(alpha, B_STAR_CLAMPED, Precision::F64).shadow(&b, 0.5);
+        assert_eq!(ev.shadow(&b, 0.5), want, "quant_bits {q}");
+        let other = Hamburger6::new(4e-3, B_STAR_CLAMPED, Precision::F64).shadow(&b, 0.5);
+        assert_ne!(want, other, "the input does not tell α apart");
+    }
+}
