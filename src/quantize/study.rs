@@ -11,9 +11,9 @@
 
 use super::pipeline::{self, HalfRounding, DISPLAY_STEP, MAX_NOISE};
 use super::theta::{published, Theta};
-use crate::shader::Order;
 use crate::kernel::{filter_separable, front_map, Gaussian};
 use crate::metrics::{fragments_subsampled, Bias, Subsample};
+use crate::shader::Order;
 use crate::stack::DepthStack;
 use crate::technique::hamburger::Hamburger;
 use crate::technique::hamburger4::Hamburger4;
@@ -374,7 +374,8 @@ pub fn usability(all: &[Sweep]) -> Vec<serde_json::Value> {
         else {
             continue;
         };
-        let k = (0..s.alphas.len()).find(|&i| s.noise_share.get(i).is_some_and(|&x| x <= MAX_NOISE));
+        let k =
+            (0..s.alphas.len()).find(|&i| s.noise_share.get(i).is_some_and(|&x| x <= MAX_NOISE));
         out.push(serde_json::json!({
             "technique": s.technique, "config": s.config,
             "smallest_usable_alpha": k.map(|i| s.alphas[i]),
@@ -489,8 +490,9 @@ mod tests {
                 assert!((p - q).abs() < 1e-6, "{p} {q}");
             }
         }
-        // canonical 16-bit: filtering averages the rounded texels, so the error stays within
-        // half a quantum
+        // canonical 16-bit: the texels, the first pass and the second pass are each rounded to
+        // the nearest step (filtering averages the earlier roundings), so the error stays within
+        // three half quanta and exceeds one half quantum (the passes' stores are modelled)
         let exact = decoded_moments(&front, w, h, &identity_theta(4), Storage::Float32, &k);
         let err = |d: &Vec<Vec<f64>>| {
             d.iter()
@@ -499,6 +501,8 @@ mod tests {
                 .fold(0.0f64, f64::max)
         };
         let canon = decoded_moments(&front, w, h, &identity_theta(4), Storage::Unorm(16), &k);
-        assert!(err(&canon) <= 0.5 / 65535.0 + 1e-7);
+        let e = err(&canon);
+        assert!(e <= 1.5 / 65535.0 + 1e-7, "{e}");
+        assert!(e > 0.5 / 65535.0, "{e}");
     }
 }

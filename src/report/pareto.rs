@@ -63,5 +63,4 @@ mod tests {
         ];
         assert_eq!(pareto_front(&v), vec![0, 1, 3, 5]);
     }
-
 }

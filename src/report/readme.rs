@@ -596,24 +596,32 @@ fn tune(reports: &Path) -> Result<String> {
             let r = t
                 .get("references")
                 .and_then(Value::as_array)
-                .and_then(|r| r.iter().find(|x| x.get("name").and_then(Value::as_str) == Some(name)))
-                .ok_or_else(|| anyhow!("{}: no reference '{name}' in every target", file.display()))?;
+                .and_then(|r| {
+                    r.iter()
+                        .find(|x| x.get("name").and_then(Value::as_str) == Some(name))
+                })
+                .ok_or_else(|| {
+                    anyhow!("{}: no reference '{name}' in every target", file.display())
+                })?;
             let g = r
                 .get("gain")
                 .ok_or_else(|| anyhow!("{}: reference '{name}' without 'gain'", file.display()))?;
-            let sc = r
-                .get("scored")
-                .ok_or_else(|| anyhow!("{}: reference '{name}' without 'scored'", file.display()))?;
+            let sc = r.get("scored").ok_or_else(|| {
+                anyhow!("{}: reference '{name}' without 'scored'", file.display())
+            })?;
             let noisy = if sc.get("feasible").and_then(Value::as_bool) == Some(false) {
                 format!(" (noise {} %)", pct(f(sc, "noise_share", &file)?))
             } else {
                 String::new()
             };
-            cells.push(format!(
-                "+{} ± {}{noisy}",
-                pct(f(g, "mean", &file)?),
-                pct(f(g, "half_width", &file)?)
-            ).replace("+-", "−"));
+            cells.push(
+                format!(
+                    "+{} ± {}{noisy}",
+                    pct(f(g, "mean", &file)?),
+                    pct(f(g, "half_width", &file)?)
+                )
+                .replace("+-", "−"),
+            );
         }
         let _ = writeln!(s, "| {name} | {} |", cells.join(" | "));
     }

@@ -328,11 +328,7 @@ pub fn build(name: &str, p: &Params) -> Result<Box<dyn Technique>> {
                 (None, None, _) => super::hamburger6::ALPHA_NOISE_BOUND_F32,
                 _ => q.msm_alpha(6),
             };
-            Box::new(Hamburger6::new(
-                alpha,
-                arr(q.msm_b_star(name, 6)?),
-                prec,
-            ))
+            Box::new(Hamburger6::new(alpha, arr(q.msm_b_star(name, 6)?), prec))
         }
         "tmsm" => {
             if p.bias == Some(BiasPreset::Clamped) {

@@ -406,7 +406,8 @@ fn adding_zero_mean_noise_to_the_moments_never_lowers_a_score() {
 #[test]
 fn six_moment_default_alpha_meets_the_noise_bound_of_the_committed_tuning() {
     use momentlab::technique::hamburger6::{ALPHA_NOISE_BOUND_16BIT, ALPHA_NOISE_BOUND_F32};
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/default/tune/tune.json");
+    let file =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("reports/default/tune/tune.json");
     let t: momentlab::tune::Tuning =
         serde_json::from_str(&std::fs::read_to_string(&file).unwrap()).unwrap();
     assert_eq!(t.max_noise, Options::default().max_noise);
@@ -433,7 +434,9 @@ fn six_moment_default_alpha_meets_the_noise_bound_of_the_committed_tuning() {
     use momentlab::technique::hamburger6::{Hamburger6, B_STAR_CLAMPED};
     use momentlab::technique::linalg::Precision;
     use momentlab::technique::ClosedForm;
-    let b: Vec<f64> = (1..=6).map(|k| 0.5 * 0.2f64.powi(k) + 0.5 * 0.7f64.powi(k)).collect();
+    let b: Vec<f64> = (1..=6)
+        .map(|k| 0.5 * 0.2f64.powi(k) + 0.5 * 0.7f64.powi(k))
+        .collect();
     for (q, alpha) in [(32, ALPHA_NOISE_BOUND_F32), (16, ALPHA_NOISE_BOUND_16BIT)] {
         let mut p = momentlab::technique::registry::Params::with(Precision::F64, None);
         p.quant_bits = q;
