@@ -11,10 +11,10 @@
 //! multiply-add, as a contracting driver computes it. This is the model the GPU check compares
 //! against, fragment by fragment.
 
-use super::study::Storage;
 use crate::kernel::{clamp_coord, Gaussian};
 use crate::shader::{Func, Order};
 use anyhow::{bail, Result};
+use serde::Serialize;
 
 /// One step of an 8-bit display: a shadow further than this from the same technique on exact
 /// moments is visible noise.
@@ -23,6 +23,45 @@ pub const DISPLAY_STEP: f64 = 1.0 / 255.0;
 /// The default noise bound: a setting is usable when at most this share of fragments is further
 /// than [`DISPLAY_STEP`] from exact moments (0.1 %; docs/tune.md gives the reason).
 pub const MAX_NOISE: f64 = 0.001;
+
+/// Per-texel storage format of the moment channels.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub enum Storage {
+    /// n-bit UNORM: clamp to [0,1], round to the nearest of 2^n − 1 steps.
+    Unorm(u32),
+    /// IEEE single precision (round to nearest).
+    Float32,
+    /// IEEE half precision (binary16, round to nearest even; beyond ±65504 it is ±∞, as a
+    /// GPU's R16F/RGBA16F target stores it).
+    Half,
+    /// No rounding (f64): the reference for the quantization deviation.
+    Exact,
+}
+
+impl Storage {
+    /// The value a texture of this format returns for `v`.
+    pub fn store(self, v: f64) -> f64 {
+        match self {
+            Storage::Unorm(bits) => {
+                let q = ((1u64 << bits) - 1) as f64;
+                (v.clamp(0.0, 1.0) * q).round() / q
+            }
+            Storage::Float32 => v as f32 as f64,
+            Storage::Half => half::f16::from_f64(v).to_f64(),
+            Storage::Exact => v,
+        }
+    }
+
+    /// Bits per stored channel (64 for the unrounded reference).
+    pub fn bits(self) -> u32 {
+        match self {
+            Storage::Unorm(bits) => bits,
+            Storage::Float32 => 32,
+            Storage::Half => 16,
+            Storage::Exact => 64,
+        }
+    }
+}
 
 /// How a driver converts an f32 to binary16 when it writes a half-float target: IEEE's round
 /// to nearest even, or round toward zero (Vulkan allows either; lavapipe rounds toward zero).

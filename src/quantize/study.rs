@@ -25,44 +25,7 @@ use anyhow::Result;
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// Per-texel storage format of the moment channels.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
-pub enum Storage {
-    /// n-bit UNORM: clamp to [0,1], round to the nearest of 2^n − 1 steps.
-    Unorm(u32),
-    /// IEEE single precision (round to nearest).
-    Float32,
-    /// IEEE half precision (binary16, round to nearest even; beyond ±65504 it is ±∞, as a
-    /// GPU's R16F/RGBA16F target stores it).
-    Half,
-    /// No rounding (f64): the reference for the quantization deviation.
-    Exact,
-}
-
-impl Storage {
-    /// The value a texture of this format returns for `v`.
-    pub fn store(self, v: f64) -> f64 {
-        match self {
-            Storage::Unorm(bits) => {
-                let q = ((1u64 << bits) - 1) as f64;
-                (v.clamp(0.0, 1.0) * q).round() / q
-            }
-            Storage::Float32 => v as f32 as f64,
-            Storage::Half => half::f16::from_f64(v).to_f64(),
-            Storage::Exact => v,
-        }
-    }
-
-    /// Bits per stored channel (64 for the unrounded reference).
-    pub fn bits(self) -> u32 {
-        match self {
-            Storage::Unorm(bits) => bits,
-            Storage::Float32 => 32,
-            Storage::Half => 16,
-            Storage::Exact => 64,
-        }
-    }
-}
+pub use super::pipeline::Storage;
 
 /// A reconstruction technique of the study with its m (power basis z, …, z^m).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]

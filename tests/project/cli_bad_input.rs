@@ -366,7 +366,7 @@ fn bad_inputs_are_one_line_errors_with_their_exit_code() {
             args(&["recommend", "--technique", "lp:z,z^2"]),
             None,
             1,
-            "lp:z,z^2",
+            "unknown 'lp:z'",
         ),
         (
             args(&["recommend", "--technique", "nope", "--stacks", &f.p("a")]),

@@ -993,6 +993,11 @@ const LONG_FUNCTIONS: &[(&str, &str, &str)] = &[
         "to split: candidates, measurement, choice",
     ),
     (
+        "report/tmsm_figure.rs",
+        "svg",
+        "to split: axes, the two curves, the labels",
+    ),
+    (
         "gpu/pipeline.rs",
         "run_unscoped",
         "to split: the GPU path is being reworked",
