@@ -118,52 +118,14 @@ pub fn run(args: Args) -> Result<()> {
                 .with_context(|| format!("--technique {spec}")),
         })
         .collect::<Result<_>>()?;
-    let bias = Bias {
-        pcf_epsilon: args.pcf_epsilon,
-        slope_scale: args.slope_scale,
-        technique_epsilon: args.technique_epsilon,
-        technique_slope_scale: args.technique_slope_scale,
-        receiver: args.pcf_receiver,
-    };
-    bias.validate()?;
-    let subsample = match (args.stride, args.sample) {
-        (Some(k), _) => Subsample::Stride(k),
-        (None, Some(f)) => Subsample::Random {
-            fraction: f,
-            seed: args.seed,
-        },
-        (None, None) => Subsample::All,
-    };
+    let (bias, subsample) = bias_and_subsample(&args)?;
     // The scenes (eye-view geometry) before any rendering or evaluation.
     let scenes: Option<Vec<Scene>> = match (&args.scenes, &args.stacks) {
         (Some(p), _) => Some(render::load_scenes(p, &[], None).context("--scenes")?),
         (None, None) => Some(render::embedded_scenes()?),
         (None, Some(_)) => None,
     };
-    let mut stacks = match (&args.scenes, &scenes) {
-        (Some(p), Some(sc)) if args.stacks.is_none() => {
-            eprintln!(
-                "evaluate: rendering the scenes of {} at {1}×{1}",
-                p.display(),
-                args.resolution
-            );
-            let st: Vec<DepthStack> = sc
-                .iter()
-                .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
-                .map(|(s, i)| render::try_render_view(s, i, args.resolution))
-                .collect::<Result<_>>()?;
-            require_fragments(&st, Some(p))?;
-            st
-        }
-        _ => stacks_or_default(args.stacks.as_deref(), args.resolution, "evaluate")?,
-    };
-    if let Some(only) = &args.only {
-        stacks.retain(|s| format!("{}/{}", s.meta.scene, s.meta.view).contains(only.as_str()));
-        if stacks.is_empty() {
-            bail!("--only '{only}': no view matches");
-        }
-        require_fragments(&stacks, args.stacks.as_deref())?;
-    }
+    let stacks = load_stacks(&args, scenes.as_deref())?;
     let subjects: Vec<Subject> = names
         .iter()
         .zip(&techniques)
@@ -173,24 +135,8 @@ pub fn run(args: Args) -> Result<()> {
             None => Subject::Cdf,
         })
         .collect();
-    // The eye view of each stack: its scene and light (checked against the stack's frame).
-    let lights: Vec<Option<(&Scene, usize)>> = match (&scenes, &args.out) {
-        (Some(sc), Some(_)) => stacks
-            .iter()
-            .map(|st| match eye::light_of(sc, st)? {
-                Some(l) => Ok(Some(l)),
-                None => bail!(
-                    "--scenes: no scene named '{}' for stack {}/{} (scenes: {})",
-                    st.meta.scene,
-                    st.meta.scene,
-                    st.meta.view,
-                    sc.iter()
-                        .map(|s| s.name.as_str())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ),
-            })
-            .collect::<Result<_>>()?,
+    let lights = match (&scenes, &args.out) {
+        (Some(sc), Some(_)) => eye_lights(sc, &stacks)?,
         _ => vec![None; stacks.len()],
     };
     let plan = PicturePlan {
@@ -199,23 +145,15 @@ pub fn run(args: Args) -> Result<()> {
     };
     // The picture files before the evaluation: no name twice, none replaced without --force.
     let pictures_out = match &args.out {
-        Some(dir) => {
-            let od = OutDir::new(dir, args.force).context("--out")?;
-            let mut names = Vec::new();
-            for &subject in &subjects {
-                for (st, light) in stacks.iter().zip(&lights) {
-                    names.extend(plan.names(st, subject, light.is_some()));
-                }
-            }
-            od.reserve(names).context("--out")?;
-            if scenes.is_none() {
-                eprintln!(
-                    "evaluate: no eye-view pictures (they need the scenes of the stacks: pass \
-                     --scenes)"
-                );
-            }
-            Some(od)
-        }
+        Some(dir) => Some(reserve_pictures(
+            dir,
+            args.force,
+            &plan,
+            &stacks,
+            &lights,
+            &subjects,
+            scenes.is_some(),
+        )?),
         None => None,
     };
     // Every subject on the same fragments, built once (with their PCF reference).
@@ -262,6 +200,109 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// The biases (validated) and the fragment subsample of `args`.
+fn bias_and_subsample(args: &Args) -> Result<(Bias, Subsample)> {
+    let bias = Bias {
+        pcf_epsilon: args.pcf_epsilon,
+        slope_scale: args.slope_scale,
+        technique_epsilon: args.technique_epsilon,
+        technique_slope_scale: args.technique_slope_scale,
+        receiver: args.pcf_receiver,
+    };
+    bias.validate()?;
+    let subsample = match (args.stride, args.sample) {
+        (Some(k), _) => Subsample::Stride(k),
+        (None, Some(f)) => Subsample::Random {
+            fraction: f,
+            seed: args.seed,
+        },
+        (None, None) => Subsample::All,
+    };
+    Ok((bias, subsample))
+}
+
+/// The stacks to evaluate: the views of --scenes rendered at --resolution (without --stacks),
+/// else --stacks or the default dataset; then those --only keeps.
+fn load_stacks(args: &Args, scenes: Option<&[Scene]>) -> Result<Vec<DepthStack>> {
+    let mut stacks = match (&args.scenes, scenes) {
+        (Some(p), Some(sc)) if args.stacks.is_none() => {
+            eprintln!(
+                "evaluate: rendering the scenes of {} at {1}×{1}",
+                p.display(),
+                args.resolution
+            );
+            let st: Vec<DepthStack> = sc
+                .iter()
+                .flat_map(|s| (0..s.lights.len()).map(move |i| (s, i)))
+                .map(|(s, i)| render::try_render_view(s, i, args.resolution))
+                .collect::<Result<_>>()?;
+            require_fragments(&st, Some(p))?;
+            st
+        }
+        _ => stacks_or_default(args.stacks.as_deref(), args.resolution, "evaluate")?,
+    };
+    if let Some(only) = &args.only {
+        stacks.retain(|s| format!("{}/{}", s.meta.scene, s.meta.view).contains(only.as_str()));
+        if stacks.is_empty() {
+            bail!("--only '{only}': no view matches");
+        }
+        require_fragments(&stacks, args.stacks.as_deref())?;
+    }
+    Ok(stacks)
+}
+
+/// The eye view of each stack: its scene and light (checked against the stack's frame).
+fn eye_lights<'s>(
+    scenes: &'s [Scene],
+    stacks: &[DepthStack],
+) -> Result<Vec<Option<(&'s Scene, usize)>>> {
+    stacks
+        .iter()
+        .map(|st| match eye::light_of(scenes, st)? {
+            Some(l) => Ok(Some(l)),
+            None => bail!(
+                "--scenes: no scene named '{}' for stack {}/{} (scenes: {})",
+                st.meta.scene,
+                st.meta.scene,
+                st.meta.view,
+                scenes
+                    .iter()
+                    .map(|s| s.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        })
+        .collect()
+}
+
+/// The output folder with every picture name of the run reserved (no name twice, none
+/// replaced without `force`); says on stderr when there are no eye views (`has_scenes` false).
+fn reserve_pictures(
+    dir: &std::path::Path,
+    force: bool,
+    plan: &PicturePlan,
+    stacks: &[DepthStack],
+    lights: &[Option<(&Scene, usize)>],
+    subjects: &[Subject],
+    has_scenes: bool,
+) -> Result<OutDir> {
+    let od = OutDir::new(dir, force).context("--out")?;
+    let mut names = Vec::new();
+    for &subject in subjects {
+        for (st, light) in stacks.iter().zip(lights) {
+            names.extend(plan.names(st, subject, light.is_some()));
+        }
+    }
+    od.reserve(names).context("--out")?;
+    if !has_scenes {
+        eprintln!(
+            "evaluate: no eye-view pictures (they need the scenes of the stacks: pass \
+             --scenes)"
+        );
+    }
+    Ok(od)
 }
 
 /// The picture file of view `s`: `<scene>_<view>_<technique>.png`.

@@ -222,9 +222,11 @@ fn check(args: CheckArgs) -> Result<()> {
             let v = study::check_setting(&gpu, s, wgsl.as_deref(), stack, args.receivers)?;
             if !args.json {
                 println!(
-                    "{:<4} {}: map ≤ {:.1} steps, G ≤ {:.1e} from the model on its own map ({:.3} % beyond tolerance); whole model: mean {:.1e}, {:.3} % above 1/255",
+                    "{:<4} {}: encode ≤ {:.1} {}, map ≤ {:.1} steps, G ≤ {:.1e} from the model on its own map ({:.3} % beyond tolerance); whole model: mean {:.1e}, {:.3} % above 1/255",
                     if v.passed { "ok" } else { "FAIL" },
                     v.label,
+                    v.encode_steps,
+                    if v.encode_bound > 1.0 { "ulp" } else { "codes" },
                     v.map_steps,
                     v.g_max,
                     100.0 * v.g_outliers,

@@ -183,7 +183,7 @@ fn program(t: TechniqueKind, s: StorageKind) -> Result<Program> {
         technique: t,
         storage: s,
         ops: OpCount::of(f)?,
-        export_lines: crate::shader::glsl(&m)?.lines().count(),
+        export_lines: export::module_glsl_lines(&m)?,
     })
 }
 

@@ -59,6 +59,8 @@ pub struct PassTimes {
 /// What one run gives: the filtered, stored map (m values per texel, texel-major), G per
 /// receiver, and the pass times.
 pub struct Output {
+    /// The encoded, stored map before filtering: m values per texel, texel-major.
+    pub encoded: Vec<f32>,
     /// The filtered, stored map: m values per texel, texel-major.
     pub filtered: Vec<f32>,
     /// G per receiver.
@@ -258,7 +260,7 @@ impl Compiled {
     }
 
     /// Run the pipeline on a `width × height` depth map (row-major, the front layer) and look
-    /// up `receivers`; `read_map` also reads the filtered map back. A device error is one line.
+    /// up `receivers`; `read_map` also reads the encoded and the filtered maps back. A device error is one line.
     pub fn run(
         &self,
         gpu: &Gpu,
@@ -280,42 +282,10 @@ impl Compiled {
         receivers: &Receivers,
         read_map: bool,
     ) -> Result<Output> {
-        if depth.len() != width * height || width == 0 || height == 0 {
-            bail!(
-                "GPU pipeline: {} depths for a {width}×{height} map",
-                depth.len()
-            );
-        }
-        if receivers.texel.len() != receivers.zf.len()
-            || receivers.texel.iter().any(|&t| t as usize >= depth.len())
-        {
-            bail!("GPU pipeline: receivers do not fit the {width}×{height} map");
-        }
-        let max = gpu.device.limits().max_texture_dimension_2d as usize;
-        if width > max || height > max {
-            bail!("GPU pipeline: a {width}×{height} map exceeds the adapter's {max}² textures");
-        }
+        check_inputs(gpu, depth, (width, height), receivers)?;
         let size = (width as u32, height as u32);
         let dev = &gpu.device;
-        let depth_tex = dev.create_texture_with_data(
-            &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("depth"),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::R32Float,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
-            wgpu::util::TextureDataOrder::LayerMajor,
-            bytemuck::cast_slice(depth),
-        );
+        let depth_tex = depth_texture(gpu, depth, size);
         let maps: Vec<Vec<wgpu::Texture>> = (0..3)
             .map(|_| {
                 (0..self.k)
@@ -351,25 +321,7 @@ impl Compiled {
             &res(&views[1]),
         );
         let n = receivers.texel.len().max(1);
-        let mut frag_bytes = Vec::with_capacity(8 * n);
-        for (t, z) in receivers.texel.iter().zip(&receivers.zf) {
-            frag_bytes.extend_from_slice(&t.to_le_bytes());
-            frag_bytes.extend_from_slice(&z.to_le_bytes());
-        }
-        if receivers.texel.is_empty() {
-            frag_bytes.extend_from_slice(&[0u8; 8]);
-        }
-        let frags = dev.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("fragments"),
-            contents: &frag_bytes,
-            usage: wgpu::BufferUsages::STORAGE,
-        });
-        let out = dev.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("shadow"),
-            size: 4 * n as u64,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
+        let (frags, out) = fragment_buffers(gpu, receivers);
         let mut lr = res(&views[2]);
         lr.push(frags.as_entire_binding());
         lr.push(out.as_entire_binding());
@@ -386,27 +338,7 @@ impl Compiled {
         draw(&mut enc, &self.encode, &g_enc, &views[0], ts(0));
         draw(&mut enc, &self.filter_x, &g_fx, &views[1], ts(1));
         draw(&mut enc, &self.filter_y, &g_fy, &views[2], ts(2));
-        {
-            let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("lookup"),
-                timestamp_writes: queries
-                    .as_ref()
-                    .map(|set| wgpu::ComputePassTimestampWrites {
-                        query_set: set,
-                        beginning_of_pass_write_index: Some(6),
-                        end_of_pass_write_index: Some(7),
-                    }),
-            });
-            pass.set_pipeline(&self.lookup);
-            pass.set_bind_group(0, &g_look, &[]);
-            let groups = (n as u32).div_ceil(passes::LOOKUP_GROUP);
-            let (x, y) = if groups <= passes::LOOKUP_ROW {
-                (groups, 1)
-            } else {
-                (passes::LOOKUP_ROW, groups.div_ceil(passes::LOOKUP_ROW))
-            };
-            pass.dispatch_workgroups(x, y, 1);
-        }
+        self.lookup_pass(&mut enc, &g_look, queries.as_ref(), n);
         let shadow_rb = readback::staging(gpu, 4 * n as u64);
         enc.copy_buffer_to_buffer(&out, 0, &shadow_rb, 0, 4 * n as u64);
         let ts_rb = queries.as_ref().map(|set| {
@@ -426,38 +358,155 @@ impl Compiled {
         let mut shadow: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
         shadow.truncate(receivers.texel.len());
         let times = match ts_rb {
-            Some(rb) => {
-                let t: Vec<u64> = bytemuck::pod_collect_to_vec(&readback::read_buffer(gpu, &rb)?);
-                let s = |q: usize| {
-                    t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * gpu.timestamp_period * 1e-9
-                };
-                Some(PassTimes {
-                    encode: s(0),
-                    filter: s(1) + s(2),
-                    lookup: s(3),
-                })
-            }
+            Some(rb) => Some(read_times(gpu, &rb)?),
             None => None,
         };
-        let filtered = if read_map {
-            let per: Vec<Vec<f32>> = maps[2]
-                .iter()
-                .map(|t| readback::read_texture(gpu, t))
-                .collect::<Result<_>>()?;
-            let mut f = Vec::with_capacity(width * height * self.m);
-            for t in 0..width * height {
-                for c in 0..self.m {
-                    f.push(per[c / 4][4 * t + c % 4]);
-                }
-            }
-            f
+        let (encoded, filtered) = if read_map {
+            (
+                self.read_map(gpu, &maps[0], width * height)?,
+                self.read_map(gpu, &maps[2], width * height)?,
+            )
         } else {
-            Vec::new()
+            (Vec::new(), Vec::new())
         };
         Ok(Output {
+            encoded,
             filtered,
             shadow,
             times,
         })
     }
+
+    /// The lookup pass: one invocation per receiver, dispatched in rows of
+    /// [`passes::LOOKUP_ROW`] groups, timed into queries 6 and 7 when `queries` is given.
+    fn lookup_pass(
+        &self,
+        enc: &mut wgpu::CommandEncoder,
+        g_look: &wgpu::BindGroup,
+        queries: Option<&wgpu::QuerySet>,
+        n: usize,
+    ) {
+        let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("lookup"),
+            timestamp_writes: queries.map(|set| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: Some(6),
+                end_of_pass_write_index: Some(7),
+            }),
+        });
+        pass.set_pipeline(&self.lookup);
+        pass.set_bind_group(0, g_look, &[]);
+        let groups = (n as u32).div_ceil(passes::LOOKUP_GROUP);
+        let (x, y) = if groups <= passes::LOOKUP_ROW {
+            (groups, 1)
+        } else {
+            (passes::LOOKUP_ROW, groups.div_ceil(passes::LOOKUP_ROW))
+        };
+        pass.dispatch_workgroups(x, y, 1);
+    }
+
+    /// A map read back: `texels` texels of [`Self::channels`] channels each, from the RGBA
+    /// targets `maps`.
+    fn read_map(&self, gpu: &Gpu, maps: &[wgpu::Texture], texels: usize) -> Result<Vec<f32>> {
+        let per: Vec<Vec<f32>> = maps
+            .iter()
+            .map(|t| readback::read_texture(gpu, t))
+            .collect::<Result<_>>()?;
+        let mut f = Vec::with_capacity(texels * self.m);
+        for t in 0..texels {
+            for c in 0..self.m {
+                f.push(per[c / 4][4 * t + c % 4]);
+            }
+        }
+        Ok(f)
+    }
+}
+
+/// One-line errors for inputs the pipeline cannot take: a depth map of the wrong length,
+/// receivers outside it, a map larger than the adapter's textures.
+fn check_inputs(
+    gpu: &Gpu,
+    depth: &[f32],
+    (width, height): (usize, usize),
+    receivers: &Receivers,
+) -> Result<()> {
+    if depth.len() != width * height || width == 0 || height == 0 {
+        bail!(
+            "GPU pipeline: {} depths for a {width}×{height} map",
+            depth.len()
+        );
+    }
+    if receivers.texel.len() != receivers.zf.len()
+        || receivers.texel.iter().any(|&t| t as usize >= depth.len())
+    {
+        bail!("GPU pipeline: receivers do not fit the {width}×{height} map");
+    }
+    let max = gpu.device.limits().max_texture_dimension_2d as usize;
+    if width > max || height > max {
+        bail!("GPU pipeline: a {width}×{height} map exceeds the adapter's {max}² textures");
+    }
+    Ok(())
+}
+
+/// The front-layer depth map as an R32Float texture.
+fn depth_texture(gpu: &Gpu, depth: &[f32], size: (u32, u32)) -> wgpu::Texture {
+    gpu.device.create_texture_with_data(
+        &gpu.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("depth"),
+            size: wgpu::Extent3d {
+                width: size.0,
+                height: size.1,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::R32Float,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(depth),
+    )
+}
+
+/// The receivers as a storage buffer of (texel, z_f) pairs, and the shadow output buffer (one
+/// f32 each; one dummy entry when there are none).
+fn fragment_buffers(gpu: &Gpu, receivers: &Receivers) -> (wgpu::Buffer, wgpu::Buffer) {
+    let n = receivers.texel.len().max(1);
+    let mut frag_bytes = Vec::with_capacity(8 * n);
+    for (t, z) in receivers.texel.iter().zip(&receivers.zf) {
+        frag_bytes.extend_from_slice(&t.to_le_bytes());
+        frag_bytes.extend_from_slice(&z.to_le_bytes());
+    }
+    if receivers.texel.is_empty() {
+        frag_bytes.extend_from_slice(&[0u8; 8]);
+    }
+    let frags = gpu
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("fragments"),
+            contents: &frag_bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+        });
+    let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("shadow"),
+        size: 4 * n as u64,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    (frags, out)
+}
+
+/// The pass times from the resolved timestamp queries (pairs 0–3: encode, filter x, filter y,
+/// lookup), in seconds.
+fn read_times(gpu: &Gpu, rb: &wgpu::Buffer) -> Result<PassTimes> {
+    let t: Vec<u64> = bytemuck::pod_collect_to_vec(&readback::read_buffer(gpu, rb)?);
+    let s = |q: usize| t[2 * q + 1].saturating_sub(t[2 * q]) as f64 * gpu.timestamp_period * 1e-9;
+    Ok(PassTimes {
+        encode: s(0),
+        filter: s(1) + s(2),
+        lookup: s(3),
+    })
 }

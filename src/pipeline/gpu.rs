@@ -93,12 +93,20 @@ pub fn section(doc: &mut Document, o: &Outcome) {
     };
     let passed = o.verdicts.iter().filter(|v| v.passed).count();
     let worst_map = o.verdicts.iter().map(|v| v.map_steps).fold(0.0, f64::max);
+    let worst_encode = o
+        .verdicts
+        .iter()
+        .filter(|v| v.encode_bound > 1.0)
+        .map(|v| v.encode_steps)
+        .fold(0.0, f64::max);
     doc.paragraph(format!(
         "Adapter: {} ({}). The shadow-map pipeline of every technique × storage — encode, the \
          separable 9×9 Gaussian as two passes each stored in the format, the lookup of every \
          fragment — ran on this driver from the emitted WGSL and was compared with momentlab's \
-         CPU model of the same pipeline: {passed} of {} settings agree (filtered maps within \
-         {worst_map:.0} storage step; G within 10⁻⁵ plus four times each fragment's rounding \
+         CPU model of the same pipeline: {passed} of {} settings agree (encoded f32 maps within \
+         {worst_encode:.0} ulp, the encoders' built-ins not being correctly rounded; filtered \
+         maps within {worst_map:.1} storage step of the model's filtering of the GPU's encoded \
+         map; G within 10⁻⁵ plus four times each fragment's rounding \
          sensitivity on all but 0.1 % of fragments).{}",
         a.label(),
         a.driver,

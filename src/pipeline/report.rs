@@ -273,6 +273,32 @@ pub fn build(r: ReportInputs) -> Result<Document> {
     summary_section(&mut d, &r);
     d.toc();
 
+    paper_section(&mut d, &r);
+
+    techniques_section(&mut d, &r);
+    speed_section(&mut d, &r);
+    model_section(&mut d, &r);
+    eye_section(&mut d, &r);
+
+    light_view_section(&mut d, &r);
+    d.heading("Candidate sweep (Fig. 3 and Fig. 4 analogues)");
+    for n in r.search_notes {
+        d.paragraph(n.clone());
+    }
+    full_sweeps_section(&mut d, r.out);
+    include_folder(&mut d, r.search_report, r.out)?;
+
+    d.heading("Quantization transforms θ (Fig. 5 analogue) and 16-bit moment shadow maps");
+    include_folder(&mut d, &r.out.join("theta"), r.out)?;
+    include_folder(&mut d, &r.out.join("quantize"), r.out)?;
+
+    d.heading("Stability: where each method fails");
+    include_folder(&mut d, &r.out.join("stability"), r.out)?;
+    Ok(d)
+}
+
+/// The paper's headline numbers (b_MSM, b_TMSM, the sweep, θ gains) beside this run's.
+fn paper_section(d: &mut Document, r: &ReportInputs) {
     d.heading("The paper's numbers side by side with ours");
     let find = |n: &str, p: &str| r.all.iter().find(|m| m.name == n && m.precision == p);
     let err_of = |n: &str, p: &str| find(n, p).map_or("n/a".to_string(), |m| pct(m.error));
@@ -314,8 +340,11 @@ pub fn build(r: ReportInputs) -> Result<Document> {
         ]);
     }
     d.table(&["quantity", "paper", "momentlab (this run)"], rows);
-    gap_section(&mut d, &r);
+    gap_section(d, r);
+}
 
+/// Every technique against PCF on the same fragments: error, its sensitivity to the PCF ε, leak, speed, bits.
+fn techniques_section(d: &mut Document, r: &ReportInputs) {
     d.heading("Techniques against PCF on the same fragments");
     let lp_grid = r.chosen_grid.iter().map(|x| x.1).max().unwrap_or(0);
     d.paragraph(format!(
@@ -372,6 +401,10 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             })
             .collect(),
     );
+}
+
+/// The speed-accuracy chart, the error histograms, the TMSM geometry picture and the Pareto front.
+fn speed_section(d: &mut Document, r: &ReportInputs) {
     d.heading("Speed against accuracy");
     d.figure(
         "speed_accuracy.svg",
@@ -406,9 +439,12 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             .collect::<Vec<_>>()
             .join(", ")
     ));
+}
 
+/// No more model than a scene needs: the tuned settings and the LP grid convergence test.
+fn model_section(d: &mut Document, r: &ReportInputs) {
     d.heading("No more model than a scene needs");
-    tuned_section(&mut d, r.tuning);
+    tuned_section(d, r.tuning);
     let grid_tol = r.config.tolerance / 10.0;
     d.paragraph(format!(
         "LP grid: b_MSM evaluated with n = {} grid points (every {}-th fragment); the chosen n \
@@ -451,9 +487,10 @@ pub fn build(r: ReportInputs) -> Result<Document> {
          scene's curve settles; the chosen n is the smallest within the tolerance of the \
          finest grid, and a curve can rise before it settles (snapping to the grid).",
     );
+}
 
-    eye_section(&mut d, &r);
-
+/// The light-view pictures of Hamburger 4MSM, one per view.
+fn light_view_section(d: &mut Document, r: &ReportInputs) {
     d.heading("Light-view pictures (Hamburger 4MSM)");
     d.paragraph(
         "Seen from the light. Panels, left to right: front depth (near = bright), layer count, \
@@ -470,21 +507,6 @@ pub fn build(r: ReportInputs) -> Result<Document> {
             ),
         );
     }
-
-    d.heading("Candidate sweep (Fig. 3 and Fig. 4 analogues)");
-    for n in r.search_notes {
-        d.paragraph(n.clone());
-    }
-    full_sweeps_section(&mut d, r.out);
-    include_folder(&mut d, r.search_report, r.out)?;
-
-    d.heading("Quantization transforms θ (Fig. 5 analogue) and 16-bit moment shadow maps");
-    include_folder(&mut d, &r.out.join("theta"), r.out)?;
-    include_folder(&mut d, &r.out.join("quantize"), r.out)?;
-
-    d.heading("Stability: where each method fails");
-    include_folder(&mut d, &r.out.join("stability"), r.out)?;
-    Ok(d)
 }
 
 /// Provenance on the first screen: version, commit, command, CPU, threads, date.

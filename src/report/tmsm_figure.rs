@@ -57,15 +57,23 @@ pub fn svg() -> Result<String> {
     if !sol.g.is_finite() || sol.support.is_empty() {
         bail!("tmsm figure: no minimiser for the example ({:?})", sol.case);
     }
-    let a = std::f64::consts::PI * ZF;
-    let (cx, cy, r) = (215.0, 225.0, 135.0);
-    let at = |s: f64, rho: f64| (cx + rho * r * s.cos(), cy - rho * r * s.sin());
-    let s_of = |z: f64| TAU * z - a;
     let mut o = String::new();
     let _ = writeln!(
         o,
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"820\" height=\"440\" viewBox=\"0 0 820 440\" font-family=\"sans-serif\" font-size=\"13\">\n<rect width=\"820\" height=\"440\" fill=\"white\"/>"
     );
+    circle_panel(&mut o, &sol);
+    bound_panel(&mut o, b, &sol)?;
+    Ok(o)
+}
+
+/// The left panel: the depths on the circle, the shadowed arc and its chord, the input
+/// distribution, its rotated moments c₁, c₂ and the minimiser of the mass on the shadowed arc.
+fn circle_panel(o: &mut String, sol: &tmsm::Detail<f64>) {
+    let a = std::f64::consts::PI * ZF;
+    let (cx, cy, r) = (215.0, 225.0, 135.0);
+    let at = |s: f64, rho: f64| (cx + rho * r * s.cos(), cy - rho * r * s.sin());
+    let s_of = |z: f64| TAU * z - a;
     let _ = writeln!(
         o,
         "<text x=\"215\" y=\"24\" text-anchor=\"middle\" font-size=\"15\">depths on the circle: z ↦ e^(i(2πz − a)), a = πz_f</text>"
@@ -80,8 +88,8 @@ pub fn svg() -> Result<String> {
             "<path d=\"M {x0:.2} {y0:.2} A {r} {r} 0 {large} 0 {x1:.2} {y1:.2}\" fill=\"none\" stroke=\"{colour}\" stroke-width=\"{width}\"/>"
         );
     };
-    arc(&mut o, a, TAU - a, "#cfcfcf", 7.0);
-    arc(&mut o, -a, a, "#404040", 7.0);
+    arc(o, a, TAU - a, "#cfcfcf", 7.0);
+    arc(o, -a, a, "#404040", 7.0);
     // The chord Re = cos a between the ends of the shadowed arc.
     let (xa, ya) = at(a, 1.0);
     let (_, yb) = at(-a, 1.0);
@@ -112,10 +120,10 @@ pub fn svg() -> Result<String> {
             y + 4.0
         );
     };
-    label(&mut o, a, 1.13, &format!("z_f = {ZF}"), "#000");
-    label(&mut o, -a, 1.13, "seam: z = 0 ≡ 1", "#000");
-    label(&mut o, -0.35, 0.55, "shadowed arc", "#404040");
-    label(&mut o, 2.5, 0.75, "lit arc", "#808080");
+    label(o, a, 1.13, &format!("z_f = {ZF}"), "#000");
+    label(o, -a, 1.13, "seam: z = 0 ≡ 1", "#000");
+    label(o, -0.35, 0.55, "shadowed arc", "#404040");
+    label(o, 2.5, 0.75, "lit arc", "#808080");
     // Input Diracs.
     for &(z, w) in &DIRACS {
         let (x, y) = at(s_of(z), 1.0);
@@ -124,7 +132,7 @@ pub fn svg() -> Result<String> {
             "<circle cx=\"{x:.2}\" cy=\"{y:.2}\" r=\"{:.2}\" fill=\"#1f5fbf\" fill-opacity=\"0.8\"/>",
             3.0 + 14.0 * w.sqrt()
         );
-        label(&mut o, s_of(z), 1.16, &format!("z = {z}"), "#1f5fbf");
+        label(o, s_of(z), 1.16, &format!("z = {z}"), "#1f5fbf");
     }
     // The minimiser.
     for &(z, w) in &sol.support {
@@ -163,7 +171,11 @@ pub fn svg() -> Result<String> {
         branch(sol.case),
         cdf(&DIRACS, ZF)
     );
-    // Right panel: G and F_Z over z_f.
+}
+
+/// The right panel: the depth CDF F_Z and the sharp bound G over z_f, with the example's z_f
+/// marked; closes the document.
+fn bound_panel(o: &mut String, b: [f64; 4], sol: &tmsm::Detail<f64>) -> Result<()> {
     let (px, py, pw, ph) = (470.0, 60.0, 320.0, 300.0);
     let to = |zf: f64, g: f64| (px + pw * zf, py + ph * (1.0 - g));
     let _ = writeln!(
@@ -245,7 +257,7 @@ pub fn svg() -> Result<String> {
         px + 8.0,
         py + 36.0
     );
-    Ok(o)
+    Ok(())
 }
 
 #[cfg(test)]

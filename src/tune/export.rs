@@ -880,9 +880,14 @@ pub struct Exported<'a> {
 /// Lines of the GLSL file [`write`] emits for setting `s` (0 where it has no shader code).
 pub fn glsl_lines(s: &Setting) -> Result<usize> {
     Ok(match module(s, header(s))? {
-        Some(m) => shader_texts(&m)?[0].lines().count(),
+        Some(m) => module_glsl_lines(&m)?,
         None => 0,
     })
+}
+
+/// Lines of module `m` printed as GLSL (`shadow.glsl`): the one measure of an export's size.
+pub fn module_glsl_lines(m: &Module) -> Result<usize> {
+    Ok(crate::shader::glsl(m)?.lines().count())
 }
 
 /// Largest GLSL export (lines of `shadow.glsl`) that is not flagged. The largest export of a

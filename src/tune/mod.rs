@@ -558,17 +558,70 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         floor.push(row);
     }
 
-    // Screening: the whole grid, plus each family's α floors, on every k-th fragment of each
-    // scene.
+    let screen = screen_fragments(&sample, opts.screen_per_scene);
+    let grid = screen_grid(&families, &floor, &fam_index);
+    bar.phase("tune: screening the grid", grid.len() as u64);
+    let screened = score_all(&grid, &moments, &sample, &screen, (bar, false))?;
+
+    let mut confirm = shortlist(&floor, &families, (&grid, &screened), &fam_index, opts.keep);
+    let n_searched = confirm.len();
+    for (_, r) in &refs {
+        push_new(&mut confirm, (fam_index(&r.family), *r));
+    }
+    bar.phase("tune: confirming on the whole sample", confirm.len() as u64);
+    let confirmed = score_all(&confirm, &moments, &sample, &all, (bar, true))?;
+    bar.finish();
+
+    let run = Confirmed {
+        opts,
+        sample: &sample,
+        moments: &moments,
+        families: &families,
+        refs: &refs,
+        floor: &floor,
+        ns: &ns,
+        confirm: &confirm,
+        confirmed: &confirmed,
+        n_searched,
+    };
+    let scenes = (0..nscenes)
+        .map(|t| run.target(t))
+        .collect::<Result<Vec<_>>>()?;
+    let overall = run.target(nscenes)?;
+    Ok(Tuning {
+        tolerance: opts.tolerance,
+        max_noise: opts.max_noise,
+        fragments_per_scene: opts.fragments_per_scene,
+        screen_per_scene: opts.screen_per_scene,
+        seed: opts.seed,
+        families: families.len(),
+        settings_screened: grid.len(),
+        settings_confirmed: n_searched,
+        scenes,
+        overall,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// The screening fragments: about `per_scene` of each scene, every k-th of its fragments.
+fn screen_fragments(sample: &Sample, per_scene: usize) -> Vec<usize> {
     let mut screen = Vec::new();
-    for s in 0..nscenes {
+    for s in 0..sample.scenes.len() {
         let of = sample.of_scene(s);
-        let k = of
-            .len()
-            .div_ceil(opts.screen_per_scene.min(of.len()).max(1));
+        let k = of.len().div_ceil(per_scene.min(of.len()).max(1));
         screen.extend(of.into_iter().step_by(k.max(1)));
     }
-    let mut grid: Vec<(usize, Setting)> = Vec::new();
+    screen
+}
+
+/// The screening grid: per family its technique's α grid plus every target's α floor, each α
+/// with the family's bias grid ([`space::grid_at`]), tagged with the family's index.
+fn screen_grid(
+    families: &[Family],
+    floor: &[Vec<Option<f64>>],
+    fam_index: &dyn Fn(&Family) -> usize,
+) -> Vec<(usize, Setting)> {
+    let mut grid = Vec::new();
     for (k, f) in families.iter().enumerate() {
         let mut alphas: Vec<f64> = f.technique.alphas().to_vec();
         alphas.extend(floor.iter().filter_map(|row| row[k]));
@@ -578,16 +631,27 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
             grid.push((fam_index(f), s));
         }
     }
-    bar.phase("tune: screening the grid", grid.len() as u64);
-    let screened = score_all(&grid, &moments, &sample, &screen, (bar, false))?;
+    grid
+}
 
-    // Per target and family, the `keep` best settings of the screen at or above the α floor.
-    let mut confirm: Vec<(usize, Setting)> = Vec::new();
-    let push = |c: &mut Vec<(usize, Setting)>, x: (usize, Setting)| {
-        if !c.iter().any(|y| y.1 == x.1) {
-            c.push(x);
-        }
-    };
+/// Add `x` unless its setting is already listed.
+fn push_new(c: &mut Vec<(usize, Setting)>, x: (usize, Setting)) {
+    if !c.iter().any(|y| y.1 == x.1) {
+        c.push(x);
+    }
+}
+
+/// The settings to confirm: per target (each scene, then all) and family, the `keep` best of
+/// the screen at or above the target's α floor, each setting once.
+fn shortlist(
+    floor: &[Vec<Option<f64>>],
+    families: &[Family],
+    (grid, screened): (&[(usize, Setting)], &[Vec<Acc>]),
+    fam_index: &dyn Fn(&Family) -> usize,
+    keep: usize,
+) -> Vec<(usize, Setting)> {
+    let nscenes = floor.len() - 1;
+    let mut confirm = Vec::new();
     for (target, floors) in floor.iter().enumerate() {
         let err = |accs: &Vec<Acc>| {
             if target == nscenes {
@@ -605,23 +669,46 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
                 .filter(|&g| grid[g].0 == fi && grid[g].1.alpha >= least)
                 .collect();
             rows.sort_by(|&a, &b| err(&screened[a]).total_cmp(&err(&screened[b])));
-            for &g in rows.iter().take(opts.keep) {
-                push(&mut confirm, grid[g]);
+            for &g in rows.iter().take(keep) {
+                push_new(&mut confirm, grid[g]);
             }
         }
     }
-    let n_searched = confirm.len();
-    for (_, r) in &refs {
-        push(&mut confirm, (fam_index(&r.family), *r));
-    }
-    bar.phase("tune: confirming on the whole sample", confirm.len() as u64);
-    let confirmed = score_all(&confirm, &moments, &sample, &all, (bar, true))?;
-    bar.finish();
+    confirm
+}
 
-    let target = |t: usize| -> Result<Target> {
-        let idx = target_idx(t);
+/// The confirmed settings of a search and what choosing among them needs: the sample, the
+/// moments of each family, the α floors and the GPU cost per family.
+struct Confirmed<'a> {
+    opts: &'a Options,
+    sample: &'a Sample,
+    moments: &'a [Moments],
+    families: &'a [Family],
+    refs: &'a [(String, Setting)],
+    floor: &'a [Vec<Option<f64>>],
+    ns: &'a [f64],
+    confirm: &'a [(usize, Setting)],
+    confirmed: &'a [Vec<Acc>],
+    n_searched: usize,
+}
+
+impl Confirmed<'_> {
+    /// The fragments of target `t`: scene `t`, or the whole sample for `t` = number of scenes.
+    fn indices(&self, t: usize) -> Vec<usize> {
+        if t == self.sample.scenes.len() {
+            (0..self.sample.len()).collect()
+        } else {
+            self.sample.of_scene(t)
+        }
+    }
+
+    /// Target `t`'s choice: among the confirmed settings within the noise bound, the cheapest
+    /// within the tolerance of the best, its runner-up of another technique or storage, the
+    /// paired differences to both and to each reference, the Pareto front and the α floors.
+    fn target(&self, t: usize) -> Result<Target> {
+        let idx = self.indices(t);
         let acc_of = |accs: &Vec<Acc>| {
-            if t == nscenes {
+            if t == self.sample.scenes.len() {
                 let mut a = Acc::new(true);
                 accs.iter().for_each(|x| a.merge(x));
                 a
@@ -631,22 +718,24 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         };
         let row = |k: usize| {
             scored(
-                &confirm[k].1,
-                &acc_of(&confirmed[k]),
-                ns[confirm[k].0],
-                opts.max_noise,
+                &self.confirm[k].1,
+                &acc_of(&self.confirmed[k]),
+                self.ns[self.confirm[k].0],
+                self.opts.max_noise,
             )
         };
-        let all_rows: Vec<Scored> = (0..n_searched).map(row).collect();
+        let all_rows: Vec<Scored> = (0..self.n_searched).map(row).collect();
         // Only settings within the noise bound compete.
-        let ok: Vec<usize> = (0..n_searched).filter(|&k| all_rows[k].feasible).collect();
+        let ok: Vec<usize> = (0..self.n_searched)
+            .filter(|&k| all_rows[k].feasible)
+            .collect();
         let rows: Vec<Scored> = ok.iter().map(|&k| all_rows[k].clone()).collect();
-        let name = if t == nscenes {
+        let name = if t == self.sample.scenes.len() {
             "all".to_string()
         } else {
-            sample.scenes[t].clone()
+            self.sample.scenes[t].clone()
         };
-        let Some(c) = cheapest_within(&rows, opts.tolerance) else {
+        let Some(c) = cheapest_within(&rows, self.opts.tolerance) else {
             let least = all_rows
                 .iter()
                 .min_by(|a, b| a.noise_share.total_cmp(&b.noise_share))
@@ -659,16 +748,16 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
                 })
                 .unwrap_or_default();
             bail!(
-                "{name}: no setting keeps the noise bound (at most {:.3} % of fragments more than 1/255 from exact moments){least}; raise --max-noise or allow 32-bit storage",
-                100.0 * opts.max_noise
-            );
+            "{name}: no setting keeps the noise bound (at most {:.3} % of fragments more than 1/255 from exact moments){least}; raise --max-noise or allow 32-bit storage",
+            100.0 * self.opts.max_noise
+        );
         };
         let b = (0..rows.len())
             .min_by(|&i, &j| rows[i].error.total_cmp(&rows[j].error))
             .expect("rows");
         let errs = |k: usize| -> Result<Vec<f64>> {
-            let (fi, s) = &confirm[k];
-            fragment_scores(s, &moments[*fi], &sample, &idx)
+            let (fi, s) = &self.confirm[k];
+            fragment_scores(s, &self.moments[*fi], self.sample, &idx)
         };
         let chosen_errs = errs(ok[c])?;
         let same = |k: usize| {
@@ -677,14 +766,15 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         };
         let others: Vec<usize> = (0..rows.len()).filter(|&k| !same(k)).collect();
         let sub: Vec<Scored> = others.iter().map(|&k| rows[k].clone()).collect();
-        let runner = cheapest_within(&sub, opts.tolerance).map(|k| others[k]);
+        let runner = cheapest_within(&sub, self.opts.tolerance).map(|k| others[k]);
         let runner_pair = match runner {
             Some(r) => Some(Paired::of(&chosen_errs, &errs(ok[r])?)),
             None => None,
         };
         let mut references = Vec::new();
-        for (name, r) in &refs {
-            let k = confirm
+        for (name, r) in self.refs.iter() {
+            let k = self
+                .confirm
                 .iter()
                 .position(|x| x.1 == *r)
                 .expect("reference confirmed");
@@ -704,32 +794,18 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
             chosen_minus_runner_up: runner_pair,
             pareto: pareto(&rows).into_iter().map(|k| rows[k].clone()).collect(),
             references,
-            alpha_floor: families
+            alpha_floor: self
+                .families
                 .iter()
-                .zip(&floor[t])
+                .zip(&self.floor[t])
                 .map(|(f, a)| AlphaFloor {
                     family: f.label(),
                     alpha: *a,
                 })
                 .collect(),
-            infeasible: n_searched - ok.len(),
+            infeasible: self.n_searched - ok.len(),
         })
-    };
-    let scenes = (0..nscenes).map(target).collect::<Result<Vec<_>>>()?;
-    let overall = target(nscenes)?;
-    Ok(Tuning {
-        tolerance: opts.tolerance,
-        max_noise: opts.max_noise,
-        fragments_per_scene: opts.fragments_per_scene,
-        screen_per_scene: opts.screen_per_scene,
-        seed: opts.seed,
-        families: families.len(),
-        settings_screened: grid.len(),
-        settings_confirmed: n_searched,
-        scenes,
-        overall,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+    }
 }
 
 #[cfg(test)]

@@ -970,37 +970,11 @@ const LONG_FUNCTIONS: &[(&str, &str, &str)] = &[
         "func",
         "one match over the IR's statements, printed in order (WGSL)",
     ),
-    // To split; their modules are being reworked elsewhere (the command line moves to the
-    // binary, the report and the deep-EXR reader are rewritten).
-    (
-        "cli/evaluate.rs",
-        "run",
-        "to split when the command line moves to the binary",
-    ),
-    (
-        "pipeline/report.rs",
-        "build",
-        "to split: one section of the report per function",
-    ),
+    // To split.
     (
         "search/sweep.rs",
         "run_sweep",
         "to split: setup, racing loop, results",
-    ),
-    (
-        "tune/mod.rs",
-        "tune",
-        "to split: candidates, measurement, choice",
-    ),
-    (
-        "report/tmsm_figure.rs",
-        "svg",
-        "to split: axes, the two curves, the labels",
-    ),
-    (
-        "gpu/pipeline.rs",
-        "run_unscoped",
-        "to split: the GPU path is being reworked",
     ),
 ];
 
