@@ -32,6 +32,7 @@
 #![warn(missing_docs)]
 
 mod certify;
+pub mod corpus;
 mod cpu;
 mod dense;
 mod error;

@@ -653,23 +653,7 @@ fn top_level_modules_never_import_a_later_layer() {
 /// Imports of a later layer made by unit tests (`#[cfg(test)]` items, `tests.rs` files), kept
 /// for now: (file under src/, module imported, why). The test fails on any other, and on a
 /// listed one that is gone.
-const TEST_BACKWARD_IMPORTS: &[(&str, &str, &str)] = &[
-    (
-        "lp/fast/escalate/band.rs",
-        "bench",
-        "LP unit tests draw their problems from bench::corpus (which needs basis::Catalog)",
-    ),
-    (
-        "lp/fast/escalate/scaled/tests.rs",
-        "bench",
-        "LP unit tests draw their problems from bench::corpus (which needs basis::Catalog)",
-    ),
-    (
-        "lp/fast/recognise.rs",
-        "bench",
-        "LP unit tests draw their problems from bench::corpus (which needs basis::Catalog)",
-    ),
-];
+const TEST_BACKWARD_IMPORTS: &[(&str, &str, &str)] = &[];
 
 #[test]
 fn unit_tests_import_a_later_layer_only_where_listed() {

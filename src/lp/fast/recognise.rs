@@ -303,7 +303,7 @@ fn partition_point(n: usize, below: impl Fn(usize) -> bool) -> usize {
 #[cfg(test)]
 mod tests {
     use super::{partition_point, quadratic_roots};
-    use crate::bench::corpus::{moments_groups, problem, Kind};
+    use crate::lp::corpus::{moments_groups, problem, Kind};
     use crate::lp::{distribution_moments, FastSolver, GridTable, MomentSolver, Status};
     use crate::Grid;
     use rand::{Rng, SeedableRng};

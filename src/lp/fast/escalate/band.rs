@@ -445,7 +445,7 @@ impl FastSolver {
 #[cfg(test)]
 mod tests {
     use super::{end_points, pick_band};
-    use crate::bench::corpus::{problem, Kind};
+    use crate::lp::corpus::{problem, Kind};
     use crate::lp::fast::escalate::exact::{ExactAnswer, ExactSimplex};
     use crate::lp::{distribution_moments, FastSolver, GridTable, MomentSolver, Status};
     use crate::Grid;

@@ -114,7 +114,7 @@ fn infeasible_moments_give_a_farkas_ray() {
 /// infeasible warm start).
 #[test]
 fn full_pass_matches_the_scan_and_partial_picks_are_eligible() {
-    use crate::bench::corpus::{problem, Kind};
+    use crate::lp::corpus::{problem, Kind};
     use rand::SeedableRng;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     let mut checks = (0, 0);
@@ -171,8 +171,8 @@ fn full_pass_matches_the_scan_and_partial_picks_are_eligible() {
 /// dual bound).
 #[test]
 fn partial_pricing_reaches_the_optimal_value_of_full_pricing() {
-    use crate::bench::corpus::{problem, Kind};
     use crate::lp::certify::TOL_GAP;
+    use crate::lp::corpus::{problem, Kind};
     use rand::{Rng, SeedableRng};
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let kinds = [
