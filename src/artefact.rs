@@ -5,13 +5,17 @@
 //!   and an advisory lock for folders that grow across runs (results);
 //! * [`input`]: the one bounded reader — every JSON or text input, with a named size [`Limit`],
 //!   regular files only;
+//! * [`Checkpoint`] (module [`checkpoint`]): the completed units of a long command, so that the
+//!   same command after a kill resumes;
 //! * JSON lines appended and flushed per batch (resumable sweeps) and read back with a torn
 //!   last line dropped.
 
+pub mod checkpoint;
 pub mod input;
 pub mod interrupt;
 pub mod out;
 
+pub use checkpoint::Checkpoint;
 pub use input::{check_regular, read_bytes, read_input, read_text, Limit};
 pub use out::{check_name, safe_name, DirLock, OutDir, LOCK_FILE};
 

@@ -558,50 +558,128 @@ pub struct Entry {
     pub t16: Box<dyn Technique>,
 }
 
-/// Evaluate every technique (spec name, technique) on every sample and mode. `progress` is
-/// called with the number of samples finished (from worker threads).
+/// One unit of the study as a checkpoint keeps it: per input of the family, in input order,
+/// the sharp bound and G per applicable mode (in [`Mode::ALL`] order), as float bits (G may be
+/// NaN or infinite).
+pub type UnitBits = Vec<(u64, Vec<u64>)>;
+
+/// Where completed units of the study — one technique on the inputs of one family — are kept
+/// across runs (a checkpoint). Keys are `<technique>.<family>`.
+pub trait UnitStore: Sync {
+    /// The unit `key` if an earlier run completed it.
+    fn get(&self, key: &str) -> Result<Option<UnitBits>>;
+    /// Unit `key` is complete.
+    fn put(&self, key: &str, unit: &UnitBits) -> Result<()>;
+}
+
+/// One technique on one sample: the sharp bound and G per applicable mode.
+fn evaluate_one(cfg: &Config, e: &Entry, q: &Quant, s: &Sample, solver: &str) -> TechResult {
+    let t = e.t32.as_ref();
+    let sharp = sharp_bound(t, s, cfg.grid_points, solver);
+    let b = moments(t, &s.atoms);
+    let mut ev = t.evaluator();
+    let mut ev16 = e.t16.evaluator();
+    let gs = Mode::ALL
+        .iter()
+        .filter(|&&m| q.applies(m))
+        .map(|&m| {
+            let bq = q.quantize(&b, m);
+            let g = if matches!(m, Mode::U16 | Mode::U16Theta) {
+                ev16.shadow(&bq, s.zf)
+            } else {
+                ev.shadow(&bq, s.zf)
+            };
+            (m, g)
+        })
+        .collect();
+    (sharp, gs)
+}
+
+/// Evaluate every technique (spec name, technique) on every sample and mode. The work runs in
+/// units — one technique on the samples of one family — kept in `store` when given: a unit
+/// found there is not evaluated again, every other one is recorded when complete. Each
+/// (technique, sample) result depends on nothing else, so the report equals that of an
+/// uninterrupted run. `progress` is called with the number of (sample, technique) pairs
+/// finished (from worker threads).
 pub fn run(
     cfg: &Config,
     techniques: &[Entry],
     samples: &[Sample],
     progress: &(dyn Fn(usize) + Sync),
+    store: Option<&dyn UnitStore>,
 ) -> Result<Report> {
     let solver = oracle_solver();
     let quants: Vec<Quant> = techniques
         .iter()
         .map(|e| Quant::new(&e.name, e.t32.as_ref()))
         .collect();
-    // Per sample: for each technique, the sharp bound and G per applicable mode.
-    let per_sample: Vec<Vec<TechResult>> = samples
+    let units: Vec<(usize, Scenario)> = (0..techniques.len())
+        .flat_map(|t| Scenario::ALL.iter().map(move |&f| (t, f)))
+        .collect();
+    let members: Vec<Vec<usize>> = Scenario::ALL
+        .iter()
+        .map(|&f| {
+            (0..samples.len())
+                .filter(|&i| samples[i].scenario == f)
+                .collect()
+        })
+        .collect();
+    let family = |f: Scenario| Scenario::ALL.iter().position(|&x| x == f).unwrap();
+    let results: Vec<Vec<TechResult>> = units
         .par_iter()
-        .map(|s| {
-            let r = techniques
-                .iter()
-                .zip(&quants)
-                .map(|(e, q)| {
-                    let t = e.t32.as_ref();
-                    let sharp = sharp_bound(t, s, cfg.grid_points, &solver);
-                    let b = moments(t, &s.atoms);
-                    let mut ev = t.evaluator();
-                    let mut ev16 = e.t16.evaluator();
-                    let gs = Mode::ALL
-                        .iter()
-                        .filter(|&&m| q.applies(m))
-                        .map(|&m| {
-                            let bq = q.quantize(&b, m);
-                            let g = if matches!(m, Mode::U16 | Mode::U16Theta) {
-                                ev16.shadow(&bq, s.zf)
-                            } else {
-                                ev.shadow(&bq, s.zf)
-                            };
-                            (m, g)
-                        })
-                        .collect();
-                    (sharp, gs)
+        .map(|&(t, f)| -> Result<Vec<TechResult>> {
+            let idx = &members[family(f)];
+            let key = format!("{}.{}", techniques[t].name, f.name());
+            let modes: Vec<Mode> = Mode::ALL
+                .into_iter()
+                .filter(|&m| quants[t].applies(m))
+                .collect();
+            if let Some(u) = store.map(|s| s.get(&key)).transpose()?.flatten() {
+                if u.len() != idx.len() || u.iter().any(|(_, g)| g.len() != modes.len()) {
+                    anyhow::bail!("checkpoint: unit {key} does not fit the study");
+                }
+                progress(idx.len());
+                return Ok(u
+                    .iter()
+                    .map(|(sharp, g)| {
+                        let gs = modes.iter().zip(g).map(|(&m, &b)| (m, f64::from_bits(b)));
+                        (f64::from_bits(*sharp), gs.collect())
+                    })
+                    .collect());
+            }
+            let r: Vec<TechResult> = idx
+                .par_iter()
+                .map(|&i| {
+                    let r = evaluate_one(cfg, &techniques[t], &quants[t], &samples[i], &solver);
+                    progress(1);
+                    r
                 })
                 .collect();
-            progress(1);
-            r
+            if let Some(s) = store {
+                let bits = r
+                    .iter()
+                    .map(|(sharp, gs)| {
+                        (sharp.to_bits(), gs.iter().map(|g| g.1.to_bits()).collect())
+                    })
+                    .collect();
+                s.put(&key, &bits)?;
+            }
+            Ok(r)
+        })
+        .collect::<Result<_>>()?;
+    // Per sample: for each technique, the sharp bound and G per applicable mode.
+    let mut slots: Vec<Vec<Option<TechResult>>> = vec![vec![None; techniques.len()]; samples.len()];
+    for (&(t, f), r) in units.iter().zip(results) {
+        for (&i, v) in members[family(f)].iter().zip(r) {
+            slots[i][t] = Some(v);
+        }
+    }
+    let per_sample: Vec<Vec<TechResult>> = slots
+        .into_iter()
+        .map(|v| {
+            v.into_iter()
+                .map(|r| r.expect("every unit evaluated"))
+                .collect()
         })
         .collect();
     let nt = techniques.len();

@@ -6,7 +6,7 @@ use super::common::{
     usize_in,
 };
 use anyhow::{bail, Context, Result};
-use momentlab::artefact::OutDir;
+use momentlab::artefact::{Checkpoint, OutDir};
 use momentlab::metrics::eye;
 use momentlab::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use momentlab::progress::Bar;
@@ -143,11 +143,14 @@ pub fn run(args: Args) -> Result<()> {
         eye_resolution: args.eye_resolution,
         layers: args.layer_pictures.unwrap_or(0),
     };
-    // The picture files before the evaluation: no name twice, none replaced without --force.
+    // With --out, the checkpoint, then the picture files before the evaluation: no name twice,
+    // none replaced without --force (but those an interrupted run of this command wrote).
+    let cp = open_checkpoint(&args, &names, (&bias, &subsample), &stacks)?;
+    let resuming = cp.as_ref().is_some_and(|c| c.resuming());
     let pictures_out = match &args.out {
         Some(dir) => Some(reserve_pictures(
             dir,
-            args.force,
+            args.force || resuming,
             &plan,
             &stacks,
             &lights,
@@ -156,6 +159,13 @@ pub fn run(args: Args) -> Result<()> {
         )?),
         None => None,
     };
+    if let Some(cp) = &cp {
+        cp.start()?;
+        let units = stacks.len() * (subjects.len() + 1);
+        if let Some(note) = cp.note("evaluate", units, "units (technique × view, pictures)") {
+            eprintln!("{note}");
+        }
+    }
     // Every subject on the same fragments, built once (with their PCF reference).
     let bar = Arc::new(Bar::new(&format!("evaluate {}", names.join(", ")), 0));
     let pb = bar.clone();
@@ -168,7 +178,9 @@ pub fn run(args: Args) -> Result<()> {
         })),
         ..Default::default()
     };
-    let reports = metrics::evaluate_subjects(&stacks, &subjects, &opts)?;
+    let store = cp.as_ref().map(Views);
+    let store = store.as_ref().map(|v| v as &dyn metrics::ViewStore);
+    let reports = metrics::evaluate_subjects_with(&stacks, &subjects, &opts, store)?;
     bar.finish();
     if reports.iter().any(|r| r.fragments == 0) {
         bail!("no fragment was evaluated (--stride / --sample leave none); nothing to report");
@@ -182,7 +194,10 @@ pub fn run(args: Args) -> Result<()> {
         }
     }
     if let Some(od) = &pictures_out {
-        write_pictures(od, &stacks, &lights, &subjects, &bias, &plan)?;
+        write_pictures(od, &stacks, &lights, &subjects, &bias, &plan, cp.as_ref())?;
+    }
+    if let Some(cp) = cp {
+        cp.finish()?;
     }
     if args.json {
         let text = match reports.as_slice() {
@@ -200,6 +215,33 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// With --out, the checkpoint of the evaluation (not yet started): one unit per technique and
+/// view, and one per view's pictures, valid for the same techniques, biases, subsampling,
+/// stacks (by content), scenes and picture options.
+fn open_checkpoint(
+    args: &Args,
+    names: &[String],
+    (bias, subsample): (&Bias, &Subsample),
+    stacks: &[DepthStack],
+) -> Result<Option<Checkpoint>> {
+    let Some(dir) = &args.out else {
+        return Ok(None);
+    };
+    OutDir::new(dir, args.force).context("--out")?;
+    let stack_ids: Vec<String> = stacks
+        .iter()
+        .map(|s| format!("{}/{} {}", s.meta.scene, s.meta.view, s.digest()))
+        .collect();
+    let params = serde_json::json!({
+        "techniques": names, "bias": bias, "subsample": subsample,
+        "stacks": stack_ids, "scenes": args.scenes,
+        "eye_resolution": args.eye_resolution, "layer_pictures": args.layer_pictures,
+    });
+    Ok(Some(
+        Checkpoint::open(dir, "evaluate", params, args.force).context("--out")?,
+    ))
 }
 
 /// The biases (validated) and the fragment subsample of `args`.
@@ -339,6 +381,20 @@ impl PicturePlan {
     }
 }
 
+/// The units of an evaluation kept in its checkpoint.
+struct Views<'a>(&'a Checkpoint);
+
+impl metrics::ViewStore for Views<'_> {
+    fn get(&self, key: &str) -> Result<Option<metrics::ViewReport>> {
+        self.0.get(key)
+    }
+    fn put(&self, key: &str, report: &metrics::ViewReport) -> Result<()> {
+        self.0.put(key, report)
+    }
+}
+
+/// Write the pictures of every view; with a checkpoint, the pictures of a view written by an
+/// interrupted run of the same command (unit `pictures.<view index>`) are kept as they are.
 fn write_pictures(
     od: &OutDir,
     stacks: &[DepthStack],
@@ -346,10 +402,18 @@ fn write_pictures(
     subjects: &[Subject],
     bias: &Bias,
     plan: &PicturePlan,
+    cp: Option<&Checkpoint>,
 ) -> Result<()> {
     let bar = Bar::new("pictures (views)", stacks.len() as u64);
     let mut files = 0;
-    for (st, light) in stacks.iter().zip(lights) {
+    for (v, (st, light)) in stacks.iter().zip(lights).enumerate() {
+        let key = format!("pictures.{v}");
+        if let Some(n) = cp.map(|c| c.get::<usize>(&key)).transpose()?.flatten() {
+            files += n;
+            bar.inc(1);
+            continue;
+        }
+        let before = files;
         let cmp = match light {
             Some((sc, i)) => Some(eye::EyeComparison::new(
                 sc,
@@ -376,6 +440,9 @@ fn write_pictures(
                 pictures::write_png_to(od, name, &pictures::layer_picture(st, k, &sh)?)?;
             }
             files += names.len();
+        }
+        if let Some(cp) = cp {
+            cp.put(&key, &(files - before))?;
         }
         bar.inc(1);
     }

@@ -137,11 +137,12 @@ fn note_line(s: &str) {
 fn dispatch(cli: Cli) -> Result<()> {
     // Long commands stop cleanly on SIGINT/SIGTERM (exit 130, one line; momentlab::artefact::interrupt).
     let long = match &cli.command {
-        Command::Theta(_) => Some(("theta", false)),
-        Command::Stability(_) => Some(("stability", false)),
-        Command::Evaluate(_) => Some(("evaluate", false)),
+        Command::Theta(_) => Some(("theta", true)),
+        Command::Stability(_) => Some(("stability", true)),
+        // Its checkpoint lives in --out.
+        Command::Evaluate(a) => Some(("evaluate", a.out.is_some())),
         Command::Tune(_) => Some(("tune", false)),
-        Command::Quantize(_) => Some(("quantize", false)),
+        Command::Quantize(a) => Some(("quantize", a.merge.is_none())),
         Command::Search(_) => Some(("search", true)),
         Command::Reproduce(_) => Some(("reproduce", true)),
         _ => None,

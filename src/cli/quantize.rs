@@ -6,7 +6,7 @@
 
 use super::common::resolution;
 use anyhow::{bail, Context, Result};
-use momentlab::artefact::OutDir;
+use momentlab::artefact::{Checkpoint, OutDir};
 use momentlab::pipeline::quantize::{self, Study, FILES};
 use momentlab::quantize::study::{Tech, DEFAULT_ALPHAS};
 use std::path::{Path, PathBuf};
@@ -81,7 +81,11 @@ pub fn run(args: Args) -> Result<()> {
     if techniques.is_empty() {
         bail!("--technique: empty list");
     }
-    let od = OutDir::new(&args.out, args.force).context("--out")?;
+    // Nothing in --out is replaced without --force, but what an interrupted study wrote there
+    // (its checkpoint then resumes, or refuses other parameters, once the stacks are loaded).
+    OutDir::new(&args.out, args.force).context("--out")?;
+    let resumable = args.merge.is_none() && Checkpoint::exists(&args.out, quantize::CHECKPOINT);
+    let od = OutDir::new(&args.out, args.force || resumable).context("--out")?;
     od.reserve(FILES).context("--out")?;
     let written = match &args.merge {
         Some(list) => {
@@ -98,6 +102,7 @@ pub fn run(args: Args) -> Result<()> {
                 alphas,
             },
             &od,
+            args.force,
         )?,
     };
     if args.json && args.merge.is_none() {

@@ -45,7 +45,7 @@ pub fn run(args: Args) -> Result<()> {
         techniques: technique_list(&args.technique),
         force: args.force,
     };
-    let pb = Bar::new("stability inputs", 0);
+    let pb = Bar::new("stability inputs × techniques", 0);
     let o = stability::study(&opts, &|n| pb.set_total(n as u64), &|n| pb.inc(n as u64))?;
     pb.finish();
     if args.json {

@@ -179,10 +179,13 @@ pub fn run(args: Args) -> Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("results/theta{tag}-seed{}", args.seed)));
-    // Before the search: --out is a folder, and nothing there is replaced without --force.
-    let od = OutDir::new(&dir, args.force).context("--out")?;
+    // Before the search: --out is a folder, and nothing there is replaced without --force
+    // (or, resuming an interrupted run of this command, the files that run wrote).
+    OutDir::new(&dir, args.force).context("--out")?;
+    let cp = theta::checkpoint(curve.as_ref(), &search, &dir, args.force).context("--out")?;
+    let od = OutDir::new(&dir, args.force || cp.resuming()).context("--out")?;
     od.reserve(theta::file_names(&tag)).context("--out")?;
-    let text = theta::search(curve.as_ref(), &search, &od)?;
+    let text = theta::search(curve.as_ref(), &search, &od, cp)?;
     if args.json {
         print!("{text}");
     }

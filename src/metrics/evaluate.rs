@@ -232,6 +232,32 @@ pub fn evaluate_subjects(
     subjects: &[Subject<'_>],
     opts: &EvalOptions,
 ) -> Result<Vec<EvalReport>> {
+    evaluate_subjects_with(stacks, subjects, opts, None)
+}
+
+/// Where completed units of an evaluation — one subject on one view — are kept across runs (a
+/// checkpoint). Keys are `<view index>.<scene>.<view>.<subject>`.
+pub trait ViewStore: Sync {
+    /// The report of unit `key` if an earlier run completed it.
+    fn get(&self, key: &str) -> Result<Option<ViewReport>>;
+    /// Unit `key` is complete.
+    fn put(&self, key: &str, report: &ViewReport) -> Result<()>;
+}
+
+/// [`evaluate_subjects`] with the units (subject × view) kept in `store`: a unit found there is
+/// not shaded again (a view whose units are all there is not even built), every other one is
+/// recorded when complete. A unit depends only on its view, subject and options, so the
+/// reports equal those of an uninterrupted run but for the times. Not with
+/// [`EvalOptions::keep_values`] (a stored unit keeps no values).
+pub fn evaluate_subjects_with(
+    stacks: &[DepthStack],
+    subjects: &[Subject<'_>],
+    opts: &EvalOptions,
+    store: Option<&dyn ViewStore>,
+) -> Result<Vec<EvalReport>> {
+    if store.is_some() && opts.keep_values {
+        bail!("an evaluation that keeps its values cannot be resumed");
+    }
     require_fragments(stacks)?;
     opts.bias.validate()?;
     opts.subsample.validate()?;
@@ -256,12 +282,37 @@ pub fn evaluate_subjects(
     let done = AtomicUsize::new(0);
     let mut views: Vec<Vec<ViewReport>> = subjects.iter().map(|_| Vec::new()).collect();
     for (v, (stack, picked)) in stacks.iter().zip(&picks).enumerate() {
-        let t0 = Instant::now();
-        let frags = fragments_at(stack, v, &opts.bias, picked);
-        let build = t0.elapsed().as_secs_f64();
+        let keys: Vec<String> = subjects
+            .iter()
+            .map(|s| format!("{v}.{}.{}.{}", stack.meta.scene, stack.meta.view, s.name()))
+            .collect();
+        let mut stored: Vec<Option<ViewReport>> = match store {
+            Some(st) => keys.iter().map(|k| st.get(k)).collect::<Result<_>>()?,
+            None => vec![None; subjects.len()],
+        };
+        let mut frags = None;
+        let mut build = 0.0;
         for (k, &subject) in subjects.iter().enumerate() {
+            if let Some(r) = stored[k].take() {
+                let d = done.fetch_add(picked.len(), Ordering::Relaxed) + picked.len();
+                if let Some(cb) = &opts.progress {
+                    cb(d, planned);
+                }
+                views[k].push(r);
+                continue;
+            }
+            let frags = frags.get_or_insert_with(|| {
+                let t0 = Instant::now();
+                let f = fragments_at(stack, v, &opts.bias, picked);
+                build = t0.elapsed().as_secs_f64();
+                f
+            });
             let progress = (&done, planned);
-            views[k].push(shade_view(stack, &frags, subject, opts, progress, build));
+            let r = shade_view(stack, frags, subject, opts, progress, build);
+            if let Some(st) = store {
+                st.put(&keys[k], &r)?;
+            }
+            views[k].push(r);
         }
     }
     Ok(subjects

@@ -2,8 +2,10 @@
 
 use super::*;
 
-/// Result for one view.
-#[derive(Clone, Debug, Serialize)]
+/// Result for one view. It reads back from its JSON (a checkpoint of `evaluate`): a mean JSON
+/// wrote as null (NaN: every output non-finite; JSON has no NaN) reads as NaN, the kept values
+/// as none.
+#[derive(Clone, Debug, Serialize, serde::Deserialize)]
 pub struct ViewReport {
     /// Scene name.
     pub scene: String,
@@ -34,14 +36,17 @@ pub struct ViewReport {
     pub sum_abs_error: f64,
     /// Mean |G − PCF| over the finite fragments (0 without fragments, NaN when every output
     /// was non-finite).
+    #[serde(deserialize_with = "nan_if_null")]
     pub error: f64,
     /// Σ |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`].
     pub sum_abs_error_scaled: [f64; 2],
     /// Mean |G − PCF| with PCF's ε scaled by [`EPSILON_FACTORS`] (reference sensitivity).
+    #[serde(deserialize_with = "nans_if_null")]
     pub error_scaled: [f64; 2],
     /// Σ max(0, PCF − G): light leaked (G below the reference).
     pub sum_leak: f64,
     /// Mean max(0, PCF − G) over the finite fragments: the light-leaking part of `error`.
+    #[serde(deserialize_with = "nan_if_null")]
     pub leak: f64,
     /// Wall time of the view (fragments, moment maps, shading), seconds.
     pub seconds: f64,
@@ -50,6 +55,18 @@ pub struct ViewReport {
     /// Per-fragment values, kept when asked for (not serialized).
     #[serde(skip)]
     pub values: Option<Vec<FragmentValue>>,
+}
+
+/// A float written as null (NaN) reads back as NaN.
+fn nan_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    use serde::Deserialize;
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+}
+
+/// [`nan_if_null`] for a pair.
+fn nans_if_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<[f64; 2], D::Error> {
+    use serde::Deserialize;
+    Ok(<[Option<f64>; 2]>::deserialize(d)?.map(|x| x.unwrap_or(f64::NAN)))
 }
 
 /// Result over all views.

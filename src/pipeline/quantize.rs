@@ -3,7 +3,7 @@
 //! ([`run`]) and `momentlab quantize` call these with typed options.
 
 use super::Plan;
-use crate::artefact::OutDir;
+use crate::artefact::{Checkpoint, OutDir};
 use crate::metrics::{Bias, Subsample};
 use crate::quantize::curve::MonomialCurve;
 use crate::quantize::study::{self, sweep, Sweep, Tech};
@@ -65,9 +65,16 @@ fn write(od: &OutDir, json: &serde_json::Value, md: String, all: &[Sweep]) -> Re
     })
 }
 
+/// The checkpoint of the study in its output folder.
+pub const CHECKPOINT: &str = "quantize";
+
 /// Run the study and write [`FILES`] into `od`. Every θ is read and verified before the stacks
-/// are loaded or rendered.
-pub fn study(s: &Study, od: &OutDir) -> Result<Written> {
+/// are loaded or rendered. The sweeps of each technique are kept in the checkpoint
+/// [`CHECKPOINT`] of `od`'s folder, valid for the same stacks (by content), θ, techniques,
+/// stride and α; a technique found there is not swept again. A checkpoint of other parameters
+/// is refused, or with `discard` replaced. The outputs of `od` may exist only where a
+/// checkpoint does ([`Checkpoint::exists`]) or `discard`.
+pub fn study(s: &Study, od: &OutDir, discard: bool) -> Result<Written> {
     if s.techniques.is_empty() {
         bail!("--technique: empty list");
     }
@@ -86,23 +93,36 @@ pub fn study(s: &Study, od: &OutDir) -> Result<Written> {
     } else {
         Subsample::All
     };
+    let views: Vec<String> = stacks
+        .iter()
+        .map(|v| format!("{}/{} {}", v.meta.scene, v.meta.view, v.digest()))
+        .collect();
+    let names: Vec<&str> = s.techniques.iter().map(|t| t.name()).collect();
+    let params = serde_json::json!({
+        "stacks": views, "theta": thetas, "techniques": names, "stride": s.stride,
+        "alphas": s.alphas,
+    });
+    let cp = Checkpoint::open(od.root(), CHECKPOINT, params, discard)?;
+    cp.start()?;
+    if let Some(note) = cp.note("quantize", s.techniques.len(), "techniques") {
+        eprintln!("{note}");
+    }
     let t0 = Instant::now();
     let mut all: Vec<Sweep> = Vec::new();
     for (tech, ours) in s.techniques.iter().zip(&thetas) {
+        if let Some(done) = cp.get::<Vec<Sweep>>(tech.name())? {
+            all.extend(done);
+            continue;
+        }
         let configs = study::configs(*tech, ours);
         eprintln!(
             "quantize: {} ({} configurations)...",
             tech.name(),
             configs.len()
         );
-        all.extend(sweep(
-            &stacks,
-            *tech,
-            &configs,
-            &s.alphas,
-            &Bias::default(),
-            &sub,
-        )?);
+        let sw = sweep(&stacks, *tech, &configs, &s.alphas, &Bias::default(), &sub)?;
+        cp.put(tech.name(), &sw)?;
+        all.extend(sw);
     }
     if all.first().is_none_or(|s| s.fragments == 0) {
         bail!("the depth stacks have no fragments to evaluate (empty or all background)");
@@ -128,6 +148,7 @@ pub fn study(s: &Study, od: &OutDir) -> Result<Written> {
         &s.alphas,
     );
     let w = write(od, &json, md, &all)?;
+    cp.finish()?;
     eprintln!("quantize: {seconds:.1} s, wrote {}", od.root().display());
     Ok(w)
 }
@@ -218,7 +239,7 @@ pub fn run(plan: &Plan, stacks: &Path, theta_dir: &Path, out: &Path) -> Result<(
         stride: plan.quantize_stride,
         alphas: study::DEFAULT_ALPHAS.to_vec(),
     };
-    print!("{}", study(&s, &od)?.markdown);
+    print!("{}", study(&s, &od, true)?.markdown);
     Ok(())
 }
 

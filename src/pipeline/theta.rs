@@ -4,7 +4,7 @@
 //! Step 5 of the pipeline ([`run`]) and `momentlab theta` call these with typed options.
 
 use super::Plan;
-use crate::artefact::{read_json, OutDir};
+use crate::artefact::{read_json, Checkpoint, OutDir};
 use crate::progress::Bar;
 use crate::quantize::codegen::{self, ChannelOrder};
 use crate::quantize::{curve, fig5, optimize, theta, volume, Curve};
@@ -122,25 +122,56 @@ fn process_cpu_seconds() -> Option<f64> {
     Some((ut + st) / 100.0)
 }
 
+/// The checkpoint of the search for `curve` with `s` in output folder `out`:
+/// `checkpoint/theta{tag}`, one unit per start (`start-<k>`), valid for the same basis and
+/// search options. `force`: a checkpoint of other options is discarded instead of refused.
+pub fn checkpoint(curve: &dyn Curve, s: &Search, out: &Path, force: bool) -> Result<Checkpoint> {
+    let o = &s.options;
+    let params = json!({
+        "basis": curve.names(), "seed": o.seed, "restarts": o.restarts,
+        "max_sweeps": o.max_sweeps, "tol_bits": o.tol_bits, "margin": o.margin,
+        "hops": o.hops, "hop_sigma": o.hop_sigma, "only_starts": o.only_starts,
+    });
+    Checkpoint::open(out, &format!("theta{}", snippet_tag(curve)), params, force)
+}
+
+/// The starts of a search kept in its checkpoint.
+struct Starts<'a>(&'a Checkpoint);
+
+impl optimize::StartStore for Starts<'_> {
+    fn get(&self, k: usize) -> Result<Option<optimize::StartState>> {
+        self.0.get(&format!("start-{k}"))
+    }
+    fn put(&self, k: usize, state: &optimize::StartState) -> Result<()> {
+        self.0.put(&format!("start-{k}"), state)
+    }
+}
+
 /// Search θ for `curve` and write the snippets, then `theta{tag}.json` (last, so the JSON
-/// marks a finished search) into `od`; returns the JSON text.
-pub fn search(curve: &dyn Curve, s: &Search, od: &OutDir) -> Result<String> {
+/// marks a finished search) into `od`; returns the JSON text. Every converged start is kept in
+/// `cp` ([`checkpoint`]) and a start found there is not run again; `cp` is removed at the end.
+pub fn search(curve: &dyn Curve, s: &Search, od: &OutDir, cp: Checkpoint) -> Result<String> {
     let command = crate::report::provenance::command_line();
     let opts = &s.options;
     let m = curve.dim();
     let tag = snippet_tag(curve);
     let names = file_names(&tag);
     let n_starts = opts.only_starts.as_ref().map_or(opts.restarts, |v| v.len());
+    cp.start()?;
+    if let Some(note) = cp.note("theta", n_starts, "starts") {
+        eprintln!("{note}");
+    }
     let pb = Bar::new(&format!("theta m={m} starts"), n_starts as u64);
     let t0 = Instant::now();
     let cpu0 = process_cpu_seconds();
     let best = std::sync::Mutex::new(f64::NEG_INFINITY);
-    let out = optimize::optimize(curve, opts, &|_k, g| {
+    let progress = |_k: usize, g: f64| {
         let mut b = best.lock().unwrap_or_else(|e| e.into_inner());
         *b = b.max(g);
         pb.set_label(&format!("theta m={m} starts (best {:.4} bits)", *b));
         pb.inc(1);
-    })?;
+    };
+    let out = optimize::optimize_with(curve, opts, &progress, Some(&Starts(&cp)))?;
     pb.finish();
     let seconds = t0.elapsed().as_secs_f64();
     let cpu_seconds = process_cpu_seconds().zip(cpu0).map(|(a, b)| a - b);
@@ -197,6 +228,7 @@ pub fn search(curve: &dyn Curve, s: &Search, od: &OutDir) -> Result<String> {
     j["snippet_channel_order"] = json!(order);
     let text = serde_json::to_string_pretty(&j)? + "\n";
     od.write_text(&names[0], &text)?;
+    cp.finish()?;
     eprintln!(
         "theta m={m}: {gain:.6} bits, max violation {:.3e}, {seconds:.1} s wall{}, best basin \
          reached by {}/{} starts (within {} bits), wrote {}",
@@ -367,7 +399,9 @@ pub fn run(plan: &Plan, dir: &Path) -> Result<Vec<ThetaRow>> {
     for (m, s) in runs {
         let file = dir.join(format!("theta{m}.json"));
         if !file.exists() {
-            search(&curve::MonomialCurve::power(m)?, &s, &od)?;
+            let curve = curve::MonomialCurve::power(m)?;
+            let cp = checkpoint(&curve, &s, dir, true)?;
+            search(&curve, &s, &od, cp)?;
         }
         #[derive(Deserialize)]
         struct T {

@@ -428,6 +428,74 @@ pub fn optimize(
     opts: &Options,
     progress: &(dyn Fn(usize, f64) + Sync),
 ) -> Result<Outcome> {
+    optimize_with(curve, opts, progress, None)
+}
+
+/// A converged start as a checkpoint stores it: its gain and rows (the row vectors and their
+/// cutting-plane points), as float bits so that a resumed search continues exactly.
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
+pub struct StartState {
+    gain: u64,
+    rows: Vec<(Vec<u64>, Vec<(u64, Vec<u64>)>)>,
+    lps: usize,
+}
+
+impl StartState {
+    fn of(g: f64, rows: &[Row], lps: usize) -> StartState {
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<u64>>();
+        StartState {
+            gain: g.to_bits(),
+            rows: rows
+                .iter()
+                .map(|r| {
+                    let pts = r.pts.iter().map(|(z, q)| (z.to_bits(), bits(q))).collect();
+                    (bits(&r.a), pts)
+                })
+                .collect(),
+            lps,
+        }
+    }
+
+    /// (gain, rows, LPs), or None when the state does not fit a basis of `m` functions.
+    fn restore(&self, m: usize) -> Option<(f64, Vec<Row>, usize)> {
+        let floats = |v: &[u64]| v.iter().map(|&b| f64::from_bits(b)).collect::<Vec<f64>>();
+        let rows: Vec<Row> = self
+            .rows
+            .iter()
+            .map(|(a, pts)| Row {
+                a: floats(a),
+                pts: pts
+                    .iter()
+                    .map(|(z, q)| (f64::from_bits(*z), floats(q)))
+                    .collect(),
+            })
+            .collect();
+        let fits = rows.len() == m
+            && rows
+                .iter()
+                .all(|r| r.a.len() == m && r.pts.iter().all(|p| p.1.len() == m));
+        fits.then_some((f64::from_bits(self.gain), rows, self.lps))
+    }
+}
+
+/// Where completed starts are kept across runs (a checkpoint): [`optimize_with`] takes a
+/// start from it instead of running it, and records every start it runs.
+pub trait StartStore: Sync {
+    /// Start `k` if an earlier run completed it.
+    fn get(&self, k: usize) -> Result<Option<StartState>>;
+    /// Start `k` has converged.
+    fn put(&self, k: usize, state: &StartState) -> Result<()>;
+}
+
+/// [`optimize`] with the starts kept in `store`: a start found there is not run again, every
+/// other start is recorded as soon as it converges. Each start depends only on (seed, start
+/// index, options), so the outcome equals that of an uninterrupted run.
+pub fn optimize_with(
+    curve: &dyn Curve,
+    opts: &Options,
+    progress: &(dyn Fn(usize, f64) + Sync),
+    store: Option<&dyn StartStore>,
+) -> Result<Outcome> {
     let m = curve.dim();
     if m == 0 {
         bail!("empty basis");
@@ -451,7 +519,14 @@ pub fn optimize(
     let init_pts = initial_points(&frame, curve);
     let runs: Vec<(f64, Vec<Row>, usize)> = starts
         .par_iter()
-        .map(|&k| {
+        .map(|&k| -> Result<(f64, Vec<Row>, usize)> {
+            if let Some(st) = store.map(|s| s.get(k)).transpose()?.flatten() {
+                if let Some((g, rows, lps)) = st.restore(m) {
+                    progress(k, g + frame_gain(&frame));
+                    return Ok((g, rows, lps));
+                }
+                bail!("checkpoint: start {k} does not fit a basis of {m} functions");
+            }
             let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
                 opts.seed
                     .wrapping_mul(0x9E37_79B9_7F4A_7C15)
@@ -484,10 +559,13 @@ pub fn optimize(
                     rows = trial;
                 }
             }
+            if let Some(s) = store {
+                s.put(k, &StartState::of(g, &rows, lps))?;
+            }
             progress(k, g + frame_gain(&frame));
-            (g, rows, lps)
+            Ok((g, rows, lps))
         })
-        .collect();
+        .collect::<Result<_>>()?;
     let mut lps: usize = runs.iter().map(|r| r.2).sum();
     let start_gains: Vec<f64> = runs.iter().map(|r| r.0 + frame_gain(&frame)).collect();
     let best = (0..runs.len())

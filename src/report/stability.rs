@@ -2,6 +2,7 @@
 //! [`crate::stability`], docs/stability.md) and write `stability.json`,
 //! `stability.md` and the SVG heat maps of mean |G − sharp bound| into a folder.
 
+use crate::artefact::Checkpoint;
 use crate::stability::{self, Config, Entry, Mode, Report, Scenario};
 use crate::technique::by_name;
 use crate::technique::registry::{build, Params};
@@ -90,18 +91,29 @@ pub fn study(
             opts.techniques.join(",")
         );
     }
-    let od = crate::artefact::OutDir::new(&opts.out, opts.force).context("--out")?;
-    od.reserve(FILES).context("--out")?;
     let cfg = Config {
         samples: opts.samples,
         seed: opts.seed,
         grid_points: opts.grid,
         ..Config::default()
     };
+    // The checkpoint (one unit per technique and family), then the outputs: nothing is replaced
+    // without --force but what an interrupted run of this study wrote.
+    crate::artefact::OutDir::new(&opts.out, opts.force).context("--out")?;
+    let names: Vec<&str> = techs.iter().map(|e| e.name.as_str()).collect();
+    let params = serde_json::json!({ "config": cfg, "techniques": names });
+    let cp = Checkpoint::open(&opts.out, "stability", params, opts.force).context("--out")?;
+    let od = crate::artefact::OutDir::new(&opts.out, opts.force || cp.resuming())?;
+    od.reserve(FILES).context("--out")?;
+    cp.start()?;
+    let units = techs.len() * stability::Scenario::ALL.len();
+    if let Some(note) = cp.note("stability", units, "units (technique × family)") {
+        eprintln!("{note}");
+    }
     let samples = stability::generate(&cfg);
-    started(samples.len());
+    started(samples.len() * techs.len());
     let t0 = std::time::Instant::now();
-    let report = stability::run(&cfg, &techs, &samples, progress)?;
+    let report = stability::run(&cfg, &techs, &samples, progress, Some(&Units(&cp)))?;
     let secs = t0.elapsed().as_secs_f64();
     let md = markdown(&report, secs, opts);
     od.write_text("stability.md", &md)?;
@@ -113,11 +125,24 @@ pub fn study(
     }
     // Last: its presence marks a finished study (the pipeline's step keeps the folder then).
     od.write_json("stability.json", &report)?;
+    cp.finish()?;
     Ok(Outcome {
         inputs: samples.len(),
         techniques: techs.len(),
         seconds: secs,
     })
+}
+
+/// The units of the study kept in its checkpoint.
+struct Units<'a>(&'a Checkpoint);
+
+impl stability::UnitStore for Units<'_> {
+    fn get(&self, key: &str) -> Result<Option<stability::UnitBits>> {
+        self.0.get(key)
+    }
+    fn put(&self, key: &str, unit: &stability::UnitBits) -> Result<()> {
+        self.0.put(key, unit)
+    }
 }
 
 fn pct(x: f64) -> String {

@@ -106,6 +106,24 @@ pub struct DepthStack {
 }
 
 impl DepthStack {
+    /// FNV-1a (64 bits, per 32-bit word) of the stack: its metadata as JSON, then the bits of
+    /// every depth and slope value. A fingerprint of the data (what a checkpoint of a run on the
+    /// stack is valid for), as 16 hex digits.
+    pub fn digest(&self) -> String {
+        let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+        let mut eat = |w: u32| h = (h ^ w as u64).wrapping_mul(0x0100_0000_01b3);
+        for b in serde_json::to_vec(&self.meta).unwrap_or_default() {
+            eat(b as u32);
+        }
+        for layer in self.depth.iter().chain(&self.dzdu).chain(&self.dzdv) {
+            eat(layer.len() as u32);
+            for v in layer {
+                eat(v.to_bits());
+            }
+        }
+        format!("{h:016x}")
+    }
+
     /// width · height.
     pub fn texel_count(&self) -> usize {
         self.meta.width * self.meta.height
