@@ -19,3 +19,4 @@ mod module_graph;
 mod readme_figures;
 mod report_browser;
 mod reproduce_tiny;
+mod resume;
