@@ -436,9 +436,12 @@ pub fn optimize(
 #[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct StartState {
     gain: u64,
-    rows: Vec<(Vec<u64>, Vec<(u64, Vec<u64>)>)>,
+    rows: Vec<RowBits>,
     lps: usize,
 }
+
+/// A row as float bits: its vector and its cutting-plane points (z, q(z)).
+type RowBits = (Vec<u64>, Vec<(u64, Vec<u64>)>);
 
 impl StartState {
     fn of(g: f64, rows: &[Row], lps: usize) -> StartState {

@@ -134,7 +134,7 @@ fn mask_text(s: &str) -> String {
         let digits = after.bytes().take_while(|b| b.is_ascii_digit()).count();
         out.push_str(&rest[..i + 4]);
         if digits > 0 && after[digits..].starts_with(" s") {
-            out.push_str("N");
+            out.push('N');
             rest = &after[digits..];
         } else {
             rest = after;

@@ -45,7 +45,7 @@ fn harness_flags_nan_out_of_range_and_overshadowing_and_passes_exact_tmsm() {
             Box::new(Tmsm::new(0.0, false)),
         ),
     ];
-    let r = stability::run(&cfg, &techs, &samples, &|_| {}).unwrap();
+    let r = stability::run(&cfg, &techs, &samples, &|_| {}, None).unwrap();
     let f64_of = |t: usize| &r.by_mode[t].iter().find(|e| e.0 == Mode::F64).unwrap().1;
     assert_eq!(f64_of(0).nan_share, 1.0);
     assert_eq!(f64_of(1).outside_share, 1.0);
@@ -104,7 +104,7 @@ fn certified_oracle_settles_stress_inputs_and_matches_unique_distributions() {
             t16: momentlab::technique::by_name(n).unwrap(),
         })
         .collect();
-    let r = stability::run(&cfg, &techs, &samples, &|_| {}).unwrap();
+    let r = stability::run(&cfg, &techs, &samples, &|_| {}, None).unwrap();
     for (t, name) in names.iter().enumerate() {
         let f64_row = &r.by_mode[t].iter().find(|e| e.0 == Mode::F64).unwrap().1;
         assert_eq!(f64_row.count, 1000, "{name}");
