@@ -595,6 +595,59 @@ fn evaluate_one(cfg: &Config, e: &Entry, q: &Quant, s: &Sample, solver: &str) ->
     (sharp, gs)
 }
 
+/// One unit of the study: a technique on the samples `idx` of one family, kept as `key`.
+struct Unit<'a> {
+    entry: &'a Entry,
+    quant: &'a Quant,
+    idx: &'a [usize],
+    key: &'a str,
+}
+
+/// The results of `u` on its samples: from `store` when an earlier run completed it, else
+/// evaluated (in parallel over the samples) and recorded there.
+fn run_unit(
+    cfg: &Config,
+    samples: &[Sample],
+    u: &Unit,
+    solver: &str,
+    (progress, store): (&(dyn Fn(usize) + Sync), Option<&dyn UnitStore>),
+) -> Result<Vec<TechResult>> {
+    let (idx, key) = (u.idx, u.key);
+    let modes: Vec<Mode> = Mode::ALL
+        .into_iter()
+        .filter(|&m| u.quant.applies(m))
+        .collect();
+    if let Some(kept) = store.map(|s| s.get(key)).transpose()?.flatten() {
+        if kept.len() != idx.len() || kept.iter().any(|(_, g)| g.len() != modes.len()) {
+            anyhow::bail!("checkpoint: unit {key} does not fit the study");
+        }
+        progress(idx.len());
+        return Ok(kept
+            .iter()
+            .map(|(sharp, g)| {
+                let gs = modes.iter().zip(g).map(|(&m, &b)| (m, f64::from_bits(b)));
+                (f64::from_bits(*sharp), gs.collect())
+            })
+            .collect());
+    }
+    let r: Vec<TechResult> = idx
+        .par_iter()
+        .map(|&i| {
+            let r = evaluate_one(cfg, u.entry, u.quant, &samples[i], solver);
+            progress(1);
+            r
+        })
+        .collect();
+    if let Some(s) = store {
+        let bits = r
+            .iter()
+            .map(|(sharp, gs)| (sharp.to_bits(), gs.iter().map(|g| g.1.to_bits()).collect()))
+            .collect();
+        s.put(key, &bits)?;
+    }
+    Ok(r)
+}
+
 /// Evaluate every technique (spec name, technique) on every sample and mode. The work runs in
 /// units — one technique on the samples of one family — kept in `store` when given: a unit
 /// found there is not evaluated again, every other one is recorded when complete. Each
@@ -627,44 +680,15 @@ pub fn run(
     let family = |f: Scenario| Scenario::ALL.iter().position(|&x| x == f).unwrap();
     let results: Vec<Vec<TechResult>> = units
         .par_iter()
-        .map(|&(t, f)| -> Result<Vec<TechResult>> {
-            let idx = &members[family(f)];
+        .map(|&(t, f)| {
             let key = format!("{}.{}", techniques[t].name, f.name());
-            let modes: Vec<Mode> = Mode::ALL
-                .into_iter()
-                .filter(|&m| quants[t].applies(m))
-                .collect();
-            if let Some(u) = store.map(|s| s.get(&key)).transpose()?.flatten() {
-                if u.len() != idx.len() || u.iter().any(|(_, g)| g.len() != modes.len()) {
-                    anyhow::bail!("checkpoint: unit {key} does not fit the study");
-                }
-                progress(idx.len());
-                return Ok(u
-                    .iter()
-                    .map(|(sharp, g)| {
-                        let gs = modes.iter().zip(g).map(|(&m, &b)| (m, f64::from_bits(b)));
-                        (f64::from_bits(*sharp), gs.collect())
-                    })
-                    .collect());
-            }
-            let r: Vec<TechResult> = idx
-                .par_iter()
-                .map(|&i| {
-                    let r = evaluate_one(cfg, &techniques[t], &quants[t], &samples[i], &solver);
-                    progress(1);
-                    r
-                })
-                .collect();
-            if let Some(s) = store {
-                let bits = r
-                    .iter()
-                    .map(|(sharp, gs)| {
-                        (sharp.to_bits(), gs.iter().map(|g| g.1.to_bits()).collect())
-                    })
-                    .collect();
-                s.put(&key, &bits)?;
-            }
-            Ok(r)
+            let unit = Unit {
+                entry: &techniques[t],
+                quant: &quants[t],
+                idx: &members[family(f)],
+                key: &key,
+            };
+            run_unit(cfg, samples, &unit, &solver, (progress, store))
         })
         .collect::<Result<_>>()?;
     // Per sample: for each technique, the sharp bound and G per applicable mode.
