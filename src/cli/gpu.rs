@@ -50,7 +50,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 3, value_parser = usize_in(1, 100))]
     pub repeats: usize,
     /// Timed runs per point whose shadow map's edge is at least --large-from (1..=100).
-    #[arg(long, default_value_t = 1, value_parser = usize_in(1, 100))]
+    #[arg(long, default_value_t = 2, value_parser = usize_in(1, 100))]
     pub repeats_large: usize,
     /// The edge (texels) from which a point counts as large.
     #[arg(long, default_value_t = 2048, value_parser = usize_in(1, 16384))]

@@ -15,13 +15,14 @@ const OPEN: &str = "<!-- generated:";
 const CLOSE: &str = "<!-- end -->";
 
 /// The names of the blocks [`render`] knows, in README order.
-pub const NAMES: [&str; 6] = [
+pub const NAMES: [&str; 7] = [
     "quickstart",
     "techniques",
     "paper",
     "sweeps",
     "tune",
     "theta",
+    "gpu-bench",
 ];
 
 /// Nanoseconds at a sensible precision: integers from 100 ns, three significant digits below.
@@ -61,7 +62,8 @@ pub fn render(name: &str, reports: &Path) -> Result<String> {
         "sweeps" => sweeps(reports),
         "tune" => tune(reports),
         "theta" => theta(reports),
-        "gpu" => super::gpu::readme_block(reports),
+        "gpu" => super::gpu::docs_block(reports),
+        "gpu-bench" => super::gpu::readme_bench(reports),
         "race-times" => race_times(reports),
         "race-orders" => race_orders(reports),
         "stability" => super::docs_figures::stability(reports),

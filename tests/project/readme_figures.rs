@@ -371,3 +371,32 @@ fn docs_lp_layout_lists_every_file_of_src_lp() {
     files.sort();
     assert_eq!(listed, files, "docs/lp.md's layout table against src/lp/");
 }
+
+/// README shows every GPU bench under reports/gpu/ as the paper's Figure 7 analogue: its
+/// `gpu-bench` block names the adapter and shows the three panels (time per frame against
+/// shadow-map size, filter size, output resolution), whose files exist.
+#[test]
+fn readme_shows_every_gpu_bench_as_the_figure_7_analogue() {
+    let blocks = readme::blocks(&readme_text()).unwrap();
+    let block = &blocks.iter().find(|b| b.0 == "gpu-bench").unwrap().1;
+    let dir = root().join("reports/gpu");
+    let mut n = 0;
+    for e in std::fs::read_dir(&dir).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_none_or(|x| x != "json") {
+            continue;
+        }
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+        let name = v["adapter"]["name"].as_str().unwrap();
+        assert!(block.contains(&format!("**{name}**")), "{name}: {block}");
+        let stem = p.file_stem().unwrap().to_string_lossy();
+        for axis in ["size", "filter", "output"] {
+            let f = format!("reports/gpu/{stem}_{axis}.svg");
+            assert!(block.contains(&format!("]({f})")), "{f}: {block}");
+            assert!(root().join(&f).is_file(), "{f}");
+        }
+        n += 1;
+    }
+    assert!(n >= 1, "no bench under reports/gpu");
+}
