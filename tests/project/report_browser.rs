@@ -395,7 +395,6 @@ fn assert_report(v: &serde_json::Value, html: &str, what: &str) {
 /// loaded from a copy of its page outside the repository whose `<base>` is the committed
 /// report's folder, so its relative links resolve to the committed files.
 #[test]
-#[ignore = "reports/default predates the generator's Summary, contents and panel labels; run with --ignored once it is regenerated"]
 fn committed_report_loads_in_headless_chromium() {
     let Some(bin) = browser() else {
         if std::env::var("MOMENTLAB_REQUIRE_BROWSER").as_deref() == Ok("1") {
