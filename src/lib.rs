@@ -10,7 +10,9 @@
 //!
 //! * [`grid`]: the discrete depth set I of Algorithm 1.
 //! * [`basis`]: the catalog of candidate functions b_j(z), formulas, m-subsets (candidates).
+//! * [`linalg`]: the shared dense linear algebra (small LUs, 3-vectors, slices' dot products).
 //! * [`lp`]: Algorithm 1 (the discretized general moment problem): reference and fast solver.
+//! * [`bench`]: problem corpora and timing loops of `momentlab bench` (LP, shadow lookups).
 //! * [`technique`]: the [`technique::Technique`] trait shared by LP candidates and closed-form
 //!   solvers (Hamburger/Hausdorff MSM, TMSM, VSM, ESM, EVSM, CSM).
 //! * [`render`], [`stack`]: the reference ray caster and depth-stack files (OpenEXR + JSON).
@@ -18,6 +20,8 @@
 //! * [`metrics`]: error of a technique against PCF over all fragments of all layers.
 //! * [`quantize`]: optimal affine quantization transforms θ.
 //! * [`search`]: the candidate sweep (racing, shards, resumable).
+//! * [`tune`]: technique × storage × biases per scene on the pipeline model, with noise as
+//!   error, and the shader export of the chosen setting.
 //! * [`gpu`]: the shadow-map pipeline and the emitted shader code run by a GPU driver (wgpu).
 //! * [`shader`]: straight-line f32 shader functions printed as GLSL/HLSL and interpreted in f32.
 //! * [`stability`]: the stress harness — every technique on random and adversarial inputs,

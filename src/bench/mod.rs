@@ -1,9 +1,10 @@
 //! The LP benchmarks' library (`momentlab bench lp`) and the test corpora: problem generators
 //! ([`instances`]: built-in smooth functions, Dirac mixtures, 9×9 Gaussian kernel patches;
-//! [`corpus`]: the adversarial corpus, the moments-only corpus and real filter windows) and
+//! [`corpus`]: the adversarial set of bases over [`crate::lp::corpus`]'s problem kinds, the
+//! moments-only corpus and real filter windows) and
 //! the timing loops ([`kernels`]: reference, warm, cold and distribution start side by side;
-//! [`timing`]: a corpus with mean and tail, microlp in the same run). Kept out of [`crate::lp`],
-//! which solves and certifies and needs none of this.
+//! [`timing`]: a corpus with mean and tail, microlp in the same run). The problems themselves are
+//! [`crate::lp::corpus`], so the LP's unit tests draw them without this module.
 
 pub mod corpus;
 pub mod instances;

@@ -1,6 +1,6 @@
 //! `momentlab bench lp`: median µs per LP of the reference and fast solvers on realistic
 //! moment vectors (9×9 Gaussian kernels over depth maps with 1–3 clusters), their ratio measured
-//! in the same run. The timing loop lives in [`momentlab::lp::bench`].
+//! in the same run. The timing loop lives in [`momentlab::bench::timing`].
 
 use super::common::{resolution, usize_in};
 use anyhow::{bail, Result};
