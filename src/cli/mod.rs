@@ -141,7 +141,8 @@ fn dispatch(cli: Cli) -> Result<()> {
         Command::Stability(_) => Some(("stability", true)),
         // Its checkpoint lives in --out.
         Command::Evaluate(a) => Some(("evaluate", a.out.is_some())),
-        Command::Tune(_) => Some(("tune", false)),
+        // Its checkpoint lives in --out.
+        Command::Tune(a) => Some(("tune", a.out.is_some())),
         Command::Quantize(a) => Some(("quantize", a.merge.is_none())),
         Command::Search(_) => Some(("search", true)),
         Command::Reproduce(_) => Some(("reproduce", true)),

@@ -3,7 +3,7 @@
 
 use super::common::{non_negative, stacks_or_default, usize_in, MAX_INPUTS, MAX_RESOLUTION};
 use anyhow::{Context, Result};
-use momentlab::artefact::OutDir;
+use momentlab::artefact::{Checkpoint, OutDir};
 use momentlab::progress::Bar;
 use momentlab::tune::space::{parse_list, StorageKind, TechniqueKind};
 use momentlab::tune::{self, table::table, Options};
@@ -86,11 +86,19 @@ pub fn options(args: &Args) -> Result<Options> {
     Ok(opts)
 }
 
+/// The checkpoint of a tuning in --out.
+const CHECKPOINT: &str = "tune";
+
 pub fn run(args: Args) -> Result<()> {
     let opts = options(&args)?;
     let out = match &args.out {
         Some(dir) => {
-            let o = OutDir::new(dir, args.force).context("--out")?;
+            // Nothing in --out is replaced without --force, but what an interrupted tuning
+            // wrote there (its checkpoint then resumes, or refuses other parameters, once the
+            // stacks are loaded).
+            OutDir::new(dir, args.force).context("--out")?;
+            let resumable = Checkpoint::exists(dir, CHECKPOINT);
+            let o = OutDir::new(dir, args.force || resumable).context("--out")?;
             o.reserve(["tune.json"]).context("--out")?;
             Some(o)
         }
@@ -121,12 +129,48 @@ pub fn run(args: Args) -> Result<()> {
     if args.stacks.is_some() {
         reserve_export(&tune::sample::scene_names(&stacks))?;
     }
+    // With --out, the checkpoint: one unit per target (scene, all) and family of the α floors,
+    // per setting screened and per setting confirmed; valid for the same options and stacks
+    // (by content).
+    let cp = match &args.out {
+        Some(dir) => {
+            let stack_ids: Vec<String> = stacks
+                .iter()
+                .map(|s| format!("{}/{} {}", s.meta.scene, s.meta.view, s.digest()))
+                .collect();
+            let params = serde_json::json!({
+                "technique": opts.techniques.iter().map(|t| t.name()).collect::<Vec<_>>(),
+                "storages": opts.storages.iter().map(|s| s.name()).collect::<Vec<_>>(),
+                "tolerance": opts.tolerance.to_bits(), "max_noise": opts.max_noise.to_bits(),
+                "fragments": opts.fragments_per_scene, "screen": opts.screen_per_scene,
+                "keep": opts.keep, "seed": opts.seed, "speed_inputs": opts.speed_inputs,
+                "stacks": stack_ids,
+            });
+            let cp = Checkpoint::open(dir, CHECKPOINT, params, args.force).context("--out")?;
+            cp.start()?;
+            if cp.resuming() {
+                eprintln!(
+                    "tune: resuming the interrupted run in {}: {} units (α floors, screened and \
+                     confirmed settings) done",
+                    cp.dir().display(),
+                    cp.done()
+                );
+            }
+            Some(cp)
+        }
+        None => None,
+    };
     let bar = Bar::new("tune", 0);
-    let t = tune::tune(&stacks, &opts, &bar)?;
+    let store = cp.as_ref().map(Units);
+    let store = store.as_ref().map(|u| u as &dyn tune::units::UnitStore);
+    let t = tune::tune_with(&stacks, &opts, &bar, store)?;
     if let Some(o) = &out {
         tune::export::write(o, EXPORT_DIR, &t)?;
         // Last: a folder with tune.json holds the whole tuning.
         o.write_json("tune.json", &t)?;
+    }
+    if let Some(cp) = cp {
+        cp.finish()?;
     }
     if args.json {
         println!("{}", serde_json::to_string_pretty(&t)?);
@@ -134,4 +178,16 @@ pub fn run(args: Args) -> Result<()> {
     }
     print!("{}", table(&t));
     Ok(())
+}
+
+/// The units of a tuning kept in its checkpoint.
+struct Units<'a>(&'a Checkpoint);
+
+impl tune::units::UnitStore for Units<'_> {
+    fn get(&self, key: &str) -> Result<Option<serde_json::Value>> {
+        self.0.get(key)
+    }
+    fn put(&self, key: &str, value: &serde_json::Value) -> Result<()> {
+        self.0.put(key, value)
+    }
 }

@@ -24,6 +24,7 @@ pub mod sample;
 pub mod score;
 pub mod space;
 pub mod table;
+pub mod units;
 
 use crate::progress::Bar;
 use crate::stack::DepthStack;
@@ -349,23 +350,61 @@ pub fn references() -> Vec<(String, Setting)> {
 }
 
 /// Per-scene accumulators of each setting on fragments `idx` (parallel over settings); `keep`
-/// keeps every fragment's noise for quantiles.
+/// keeps every fragment's noise for quantiles. Setting `g` is unit `<phase>.<g>` of `store`.
 fn score_all(
     settings: &[(usize, Setting)],
     moments: &[Moments],
-    sample: &Sample,
-    idx: &[usize],
+    (sample, idx): (&Sample, &[usize]),
     (bar, keep): (&Bar, bool),
+    (phase, store): (&str, Option<&dyn units::UnitStore>),
 ) -> Result<Vec<Vec<Acc>>> {
     settings
         .par_iter()
-        .map(|(fi, s)| {
-            let m = &moments[*fi];
-            let o = score::outcomes(s, (&m.stored, &m.exact), sample, idx)?;
+        .enumerate()
+        .map(|(g, (fi, s))| {
+            let accs = units::accs(store, &format!("{phase}.{g}"), || {
+                let m = &moments[*fi];
+                let o = score::outcomes(s, (&m.stored, &m.exact), sample, idx)?;
+                Ok(score::accumulate(&o, sample, idx, keep))
+            })?;
             bar.inc(1);
-            Ok(score::accumulate(&o, sample, idx, keep))
+            Ok(accs)
         })
         .collect()
+}
+
+/// The noise floor of α per target (each scene, then all scenes) and family, on the target's
+/// whole sample ([`smallest_feasible_alpha`]); target `t`, family `k` is unit `floor.<t>.<k>`
+/// of `store`.
+fn alpha_floors(
+    families: &[Family],
+    moments: &[Moments],
+    fam_index: &dyn Fn(&Family) -> usize,
+    (sample, max_noise): (&Sample, f64),
+    (bar, store): (&Bar, Option<&dyn units::UnitStore>),
+) -> Result<Vec<Vec<Option<f64>>>> {
+    let nscenes = sample.scenes.len();
+    bar.phase(
+        "tune: smallest α within the noise bound",
+        ((nscenes + 1) * families.len()) as u64,
+    );
+    let mut floor = Vec::with_capacity(nscenes + 1);
+    for t in 0..=nscenes {
+        let idx: Vec<usize> = if t == nscenes {
+            (0..sample.len()).collect()
+        } else {
+            sample.of_scene(t)
+        };
+        let mut row = Vec::with_capacity(families.len());
+        for (k, f) in families.iter().enumerate() {
+            row.push(units::floor(store, &format!("floor.{t}.{k}"), || {
+                smallest_feasible_alpha(&moments[fam_index(f)], sample, &idx, max_noise)
+            })?);
+            bar.inc(1);
+        }
+        floor.push(row);
+    }
+    Ok(floor)
 }
 
 /// Per-fragment scores (leak + darkening + noise, 1 where not finite) of `s` on `idx`.
@@ -493,6 +532,19 @@ pub fn pareto(rows: &[Scored]) -> Vec<usize> {
 
 /// Run the search on `stacks`; progress on `bar`.
 pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> {
+    tune_with(stacks, opts, bar, None)
+}
+
+/// [`tune`] with its units (α floors, screened and confirmed settings; [`units`]) kept in
+/// `store`: a unit found there is not computed again, every other one is recorded when
+/// complete, so the tuning equals that of an uninterrupted run but for `seconds`. The store
+/// must hold units of the same options and stacks only.
+pub fn tune_with(
+    stacks: &[DepthStack],
+    opts: &Options,
+    bar: &Bar,
+    store: Option<&dyn units::UnitStore>,
+) -> Result<Tuning> {
     let start = Instant::now();
     let families = opts.check()?;
     crate::metrics::require_fragments(stacks)?;
@@ -530,38 +582,24 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
     }
 
     // The noise floor of α per target and family, on the target's whole sample.
-    let all: Vec<usize> = (0..sample.len()).collect();
-    let target_idx = |t: usize| -> Vec<usize> {
-        if t == nscenes {
-            all.clone()
-        } else {
-            sample.of_scene(t)
-        }
-    };
-    bar.phase(
-        "tune: smallest α within the noise bound",
-        ((nscenes + 1) * families.len()) as u64,
-    );
-    let mut floor: Vec<Vec<Option<f64>>> = Vec::new();
-    for t in 0..=nscenes {
-        let idx = target_idx(t);
-        let mut row = Vec::new();
-        for f in &families {
-            row.push(smallest_feasible_alpha(
-                &moments[fam_index(f)],
-                &sample,
-                &idx,
-                opts.max_noise,
-            )?);
-            bar.inc(1);
-        }
-        floor.push(row);
-    }
+    let floor = alpha_floors(
+        &families,
+        &moments,
+        &fam_index,
+        (&sample, opts.max_noise),
+        (bar, store),
+    )?;
 
     let screen = screen_fragments(&sample, opts.screen_per_scene);
     let grid = screen_grid(&families, &floor, &fam_index);
     bar.phase("tune: screening the grid", grid.len() as u64);
-    let screened = score_all(&grid, &moments, &sample, &screen, (bar, false))?;
+    let screened = score_all(
+        &grid,
+        &moments,
+        (&sample, &screen),
+        (bar, false),
+        ("screen", store),
+    )?;
 
     let mut confirm = shortlist(&floor, &families, (&grid, &screened), &fam_index, opts.keep);
     let n_searched = confirm.len();
@@ -569,7 +607,14 @@ pub fn tune(stacks: &[DepthStack], opts: &Options, bar: &Bar) -> Result<Tuning> 
         push_new(&mut confirm, (fam_index(&r.family), *r));
     }
     bar.phase("tune: confirming on the whole sample", confirm.len() as u64);
-    let confirmed = score_all(&confirm, &moments, &sample, &all, (bar, true))?;
+    let all: Vec<usize> = (0..sample.len()).collect();
+    let confirmed = score_all(
+        &confirm,
+        &moments,
+        (&sample, &all),
+        (bar, true),
+        ("confirm", store),
+    )?;
     bar.finish();
 
     let run = Confirmed {

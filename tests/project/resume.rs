@@ -259,7 +259,7 @@ fn kill_and_resume(command: &str, checkpoint: &str, args: &[&str], stdout_json: 
                     resumed_with_units += 1;
                     assert!(
                         r.stderr.contains(&format!(
-                            "{command}: resuming the interrupted run in out/checkpoint/{checkpoint}: {had} of"
+                            "{command}: resuming the interrupted run in out/checkpoint/{checkpoint}: {had} "
                         )),
                         "{what}: {}",
                         r.stderr
@@ -379,6 +379,29 @@ fn quantize_resumes_after_kills() {
         ],
         false,
         59,
+    );
+}
+
+#[test]
+fn tune_resumes_after_kills() {
+    kill_and_resume(
+        "tune",
+        "tune",
+        &[
+            "--resolution",
+            "32",
+            "--technique",
+            "vsm,hamburger4",
+            "--storages",
+            "f32,unorm16",
+            "--fragments",
+            "512",
+            "--screen",
+            "128",
+            "--json",
+        ],
+        true,
+        60,
     );
 }
 
