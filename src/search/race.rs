@@ -172,8 +172,8 @@ pub fn normal_quantile(p: f64) -> f64 {
     }
 }
 
-/// δ per test: α split evenly over `stages` planned looks (a stage's block is one or two looks,
-/// [`looks`]), the `candidates` tested in the stage and `shards` shards (Bonferroni).
+/// δ per test: α split evenly over `stages` planned looks (stage 0's block is one look, a later
+/// block up to [`EARLY_LOOKS`] + 1, [`looks`]), the `candidates` tested in the stage and `shards` shards (Bonferroni).
 pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) -> f64 {
     alpha / (stages.max(1) * candidates.max(1) * shards.max(1)) as f64
 }

@@ -65,8 +65,8 @@ pub struct Row {
     /// Standard error of `diff`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub diff_se: Option<f64>,
-    /// Eliminated: the look of stage `stage` that removed it (0: the first or only look, 1: the
-    /// whole block after an early look) and the one-sided lower confidence bound of `diff` at
+    /// Eliminated: the look of stage `stage` that removed it (0: the first or only look, j: the
+    /// j-th look after it, the last being the whole block) and the one-sided lower confidence bound of `diff` at
     /// the stage's δ that was above 0 (the evidence: diff ∈ [diff_lower, ∞)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub look: Option<usize>,

@@ -521,7 +521,7 @@ fn exhaustive(
 }
 
 /// The statistics file of look `j` of racing stage `k`: `stage{k}.jsonl` for the first (or
-/// only) look, `stage{k}.look{j}.jsonl` for the second.
+/// only) look, `stage{k}.look{j}.jsonl` for the later ones (j ≥ 1).
 pub fn stage_file(dir: &Path, k: usize, j: usize) -> std::path::PathBuf {
     if j == 0 {
         dir.join(format!("stage{k}.jsonl"))
@@ -595,17 +595,36 @@ fn score_block(
         units: (todo.len() * block.len()) as u64,
     });
     if !todo.is_empty() {
-        let e_ref = ctx
+        // The reference's errors, scored once: where it is also a candidate of the block (the
+        // stage's leader, the survivor the completion scores) its row reuses them. Every
+        // (candidate, chunk) is scored by a fresh solver, so these are the same bits a second
+        // scoring would give.
+        let refs = ctx
             .scorer
             .errors_many(&ctx.subs(&[reference]), block, &|_| {})?;
-        let e_ref = &e_ref[0].errors;
+        let e_ref = &refs[0];
         let tick = ctx.tick();
         for batch in todo.chunks(ctx.batch) {
-            let errs = ctx.scorer.errors_many(&ctx.subs(batch), block, &tick)?;
+            let others: Vec<u64> = batch.iter().copied().filter(|&i| i != reference).collect();
+            let mut errs = ctx
+                .scorer
+                .errors_many(&ctx.subs(&others), block, &tick)?
+                .into_iter();
+            if others.len() < batch.len() {
+                tick(block.len() as u64);
+            }
             let rows: Vec<StageRow> = batch
                 .iter()
-                .zip(errs)
-                .map(|(&index, e)| StageRow::paired(index, &e.errors, e_ref, e.failures, e.seconds))
+                .map(|&index| {
+                    let own;
+                    let e = if index == reference {
+                        e_ref
+                    } else {
+                        own = errs.next().expect("one result per candidate");
+                        &own
+                    };
+                    StageRow::paired(index, &e.errors, &e_ref.errors, e.failures, e.seconds)
+                })
                 .collect();
             if let Err(Stopped) = w.append(path, &rows)? {
                 return Ok(Err(Stopped));

@@ -152,7 +152,7 @@ mod tests {
         let stage0 = row(0, 100, 0.004, 1) + &row(1, 100, 0.001, 0) + &row(2, 100, 0.003, 0);
         std::fs::write(dir.join("stage0.jsonl"), stage0).unwrap();
         std::fs::write(dir.join("stage1.jsonl"), row(1, 400, 0.002, 0)).unwrap();
-        // The early look's second half of stage 1: LPs and time add, the candidate once.
+        // A later look of stage 1: LPs and time add, the candidate once.
         std::fs::write(dir.join("stage1.look1.jsonl"), row(1, 400, 0.002, 0)).unwrap();
         let rows = stage_family_times(&dir, &table, 2).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();

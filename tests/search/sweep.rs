@@ -29,8 +29,9 @@ fn config(s: &Scorer, m: usize) -> SweepConfig {
     let mut c = SweepConfig::new(m, s, "synthetic");
     c.first_sample = 40;
     c.growth = 2;
-    // Every block after stage 0 of ≥ 40 fragments is tested on its first half too (the early
-    // look); stage 0's block is the common sample, one look.
+    // Every block after stage 0 is tested first on its prefixes of 1/8, 1/4 and 1/2 that hold
+    // ≥ 20 fragments (the early looks), then whole; stage 0's block is the common sample, one
+    // look.
     c.early_look = 20;
     c.pilot = 4;
     c.batch = 3;

@@ -1,5 +1,6 @@
 //! The racing driver of [`super::run_sweep`] (module docs of [`super`]): stage k scores its
-//! candidates on block k of the stratified order in one or two looks, eliminates by the
+//! candidates on block k of the stratified order in one look or, after stage 0, on its
+//! geometric prefixes and then the whole block ([`race::looks`]), eliminates by the
 //! stage's [`race::Rule`] (evidence only), records the eliminated candidates' rows with their
 //! evidence and the [`StageLog`]; the survivors are then completed on every fragment they have
 //! not seen and form the tie set. Stage 0's block is the common sample (one look, every
@@ -35,7 +36,8 @@ struct Left {
 }
 
 /// What the looks of one stage left: the survivors, every candidate's statistics on the
-/// block, the eliminated with their evidence, and how many left at the early look.
+/// block, the eliminated with their evidence, and how many left at an early look (any look
+/// before the whole block).
 struct StageOutcome {
     alive: Vec<u64>,
     acc: HashMap<u64, StageRow>,
@@ -257,8 +259,8 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
     }
 
     /// The looks of stage k on `block` ([`race::looks`]): candidates are tested by `rule` on
-    /// each look's fragments so far (the first half, then the whole block); the LP budget can
-    /// stop the stage before a look.
+    /// each look's fragments so far (the prefixes of 1/8, 1/4 and 1/2 that are large enough,
+    /// then the whole block); the LP budget can stop the stage before a look.
     fn looks(
         &self,
         w: &mut Writer,
