@@ -851,7 +851,7 @@ pub(crate) mod tests {
         a.lock().unwrap();
         // Within one process the lock nests (the sweep takes it again under search's lock);
         // the nested holder leaves the lock file to the outer one. Another process is refused:
-        // tests/project/cli_bad_input.rs starts two writers on one results folder.
+        // tests/project/bad_input/shards.rs starts two writers on one results folder.
         let b = OutDir::new(&d, false).unwrap();
         b.lock().unwrap();
         drop(b);

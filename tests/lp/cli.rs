@@ -369,7 +369,7 @@ fn candidates_subcommands() {
     );
     for (args, want) in [
         (vec!["candidates", "index", "66045"], "out of range"),
-        // Usage errors (exit 2) are tested in tests/project/cli_bad_input.rs.
+        // Usage errors (exit 2) are tested in tests/project/bad_input/per_command.rs.
         (
             vec!["candidates", "subset", "z,blorp"],
             "'blorp' is not a catalog function name",

@@ -12,7 +12,7 @@ mod common;
 mod cli;
 
 mod artefact_hygiene;
-mod cli_bad_input;
+mod bad_input;
 mod docs_figures;
 mod docs_hygiene;
 mod module_graph;

@@ -186,7 +186,7 @@ fn render_cli_rejects_bad_input_with_one_line() {
     );
     let e = run(&["render", "--only", "nope", "--out", o]);
     assert!(e.contains("--only nope") && e.contains("city"), "{e}");
-    // `--resolution 0` is a usage error (exit 2): tests/project/cli_bad_input.rs.
+    // `--resolution 0` is a usage error (exit 2): tests/project/bad_input/per_command.rs.
     let e = run(&["render", "--scenes", "/nonexistent/dir", "--out", o]);
     assert!(e.contains("/nonexistent/dir"), "{e}");
 
