@@ -145,7 +145,7 @@ pub struct Plan {
 }
 
 /// (m, restarts, start) of the recorded seed-1 searches at the start that reached the best
-/// basin (reports/theta/theta6.json; re-checked by tests/theta/optimum.rs).
+/// basin (reports/theta/theta6.json; re-checked by tests/quantize/optimum.rs).
 pub const THETA_BEST_STARTS: [(usize, usize, usize); 1] = [(6, 200, 17)];
 
 impl Plan {

@@ -163,6 +163,6 @@ fn committed_tune_exports_are_current_and_compile() {
     assert!(
         stale.is_empty(),
         "{stale:?}: shader files differ from what `tune` writes for setting.json; run \
-         MOMENTLAB_UPDATE_SHADERS=1 cargo test --release --test theta committed_shaders"
+         MOMENTLAB_UPDATE_SHADERS=1 cargo test --release --test shader committed_shaders"
     );
 }
