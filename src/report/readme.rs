@@ -322,9 +322,19 @@ fn host(v: &Value) -> (u64, String) {
     )
 }
 
+/// The wall time `--plan` forecast (wall_m<M>.json's "plan") and its difference to the
+/// measured `secs`, e.g. "58 s (+4 %)"; "–" when not recorded.
+fn plan_vs(v: &Value, secs: f64) -> String {
+    let plan = v.get("plan").and_then(Value::as_str);
+    match plan.and_then(|p| Some((p, parse_duration(p)?))) {
+        Some((p, planned)) => format!("{p} ({:+.0} %)", 100.0 * (planned / secs - 1.0)),
+        None => "–".to_string(),
+    }
+}
+
 fn sweeps(reports: &Path) -> Result<String> {
     let mut s = String::from(
-        "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. | race wall time |\n| ---: | ---: | ---: | ---: | --- | ---: | ---: |\n",
+        "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. | race wall time | `--plan` forecast (vs the wall time) |\n| ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |\n",
     );
     let mut hosts = None;
     let mut notes = Vec::new();
@@ -333,16 +343,17 @@ fn sweeps(reports: &Path) -> Result<String> {
         let Some(x) = sweep_summary(reports, m)? else {
             continue;
         };
-        let wall = match sweep_wall(reports, m)? {
+        let (wall, plan) = match sweep_wall(reports, m)? {
             Some((v, file)) => {
                 hosts = Some(host(&v));
-                minutes(f(&v, "seconds", &file)?) + shared(&v)
+                let secs = f(&v, "seconds", &file)?;
+                (minutes(secs) + shared(&v), plan_vs(&v, secs))
             }
-            None => "–".to_string(),
+            None => ("–".to_string(), "–".to_string()),
         };
         let _ = writeln!(
             s,
-            "| {m} | {} | {} | {} | ({}) | {} % ± {} % | {wall} |",
+            "| {m} | {} | {} | {} | ({}) | {} % ± {} % | {wall} | {plan} |",
             x.candidates, x.sampled, x.tied, x.functions, x.error, x.se
         );
         notes.extend(x.msm.iter().map(|l| format!("m = {m}: b_MSM (LP) {l}")));
@@ -351,7 +362,7 @@ fn sweeps(reports: &Path) -> Result<String> {
     if let Some((threads, cpu)) = hosts {
         let _ = writeln!(
             s,
-            "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`).{}",
+            "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`); the forecast is the expected row of `search --m M --plan`, run by the script just before on the same machine.{}",
             capped.iter().map(|c| format!(" {c}.")).collect::<String>()
         );
     }
@@ -378,11 +389,7 @@ fn race_times(reports: &Path) -> Result<String> {
         notes.extend(x.capped_note(m));
         let solves = f(&v, "lp_solves", &file)?;
         let secs = f(&v, "seconds", &file)?;
-        let plan = v.get("plan").and_then(Value::as_str);
-        let plan = match plan.and_then(|p| Some((p, parse_duration(p)?))) {
-            Some((p, planned)) => format!("{p} ({:+.0} %)", 100.0 * (planned / secs - 1.0)),
-            None => "–".to_string(),
-        };
+        let plan = plan_vs(&v, secs);
         let _ = writeln!(
             s,
             "| m = {m} | {:.1} M | {} | {} | {plan} | ({}) | {} % | {} |",
