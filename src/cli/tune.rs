@@ -6,6 +6,7 @@ use anyhow::{Context, Result};
 use momentlab::artefact::{Checkpoint, OutDir};
 use momentlab::progress::Bar;
 use momentlab::tune::space::{parse_list, StorageKind, TechniqueKind};
+use momentlab::tune::units::CHECKPOINT;
 use momentlab::tune::{self, table::table, Options};
 use std::path::PathBuf;
 
@@ -86,9 +87,6 @@ pub fn options(args: &Args) -> Result<Options> {
     Ok(opts)
 }
 
-/// The checkpoint of a tuning in --out.
-const CHECKPOINT: &str = "tune";
-
 pub fn run(args: Args) -> Result<()> {
     let opts = options(&args)?;
     let out = match &args.out {
@@ -134,18 +132,7 @@ pub fn run(args: Args) -> Result<()> {
     // (by content).
     let cp = match &args.out {
         Some(dir) => {
-            let stack_ids: Vec<String> = stacks
-                .iter()
-                .map(|s| format!("{}/{} {}", s.meta.scene, s.meta.view, s.digest()))
-                .collect();
-            let params = serde_json::json!({
-                "technique": opts.techniques.iter().map(|t| t.name()).collect::<Vec<_>>(),
-                "storages": opts.storages.iter().map(|s| s.name()).collect::<Vec<_>>(),
-                "tolerance": opts.tolerance.to_bits(), "max_noise": opts.max_noise.to_bits(),
-                "fragments": opts.fragments_per_scene, "screen": opts.screen_per_scene,
-                "keep": opts.keep, "seed": opts.seed, "speed_inputs": opts.speed_inputs,
-                "stacks": stack_ids,
-            });
+            let params = tune::units::params(&opts, &stacks);
             let cp = Checkpoint::open(dir, CHECKPOINT, params, args.force).context("--out")?;
             cp.start()?;
             if cp.resuming() {
@@ -161,8 +148,7 @@ pub fn run(args: Args) -> Result<()> {
         None => None,
     };
     let bar = Bar::new("tune", 0);
-    let store = cp.as_ref().map(Units);
-    let store = store.as_ref().map(|u| u as &dyn tune::units::UnitStore);
+    let store = cp.as_ref().map(|c| c as &dyn tune::units::UnitStore);
     let t = tune::tune_with(&stacks, &opts, &bar, store)?;
     if let Some(o) = &out {
         tune::export::write(o, EXPORT_DIR, &t)?;
@@ -178,16 +164,4 @@ pub fn run(args: Args) -> Result<()> {
     }
     print!("{}", table(&t));
     Ok(())
-}
-
-/// The units of a tuning kept in its checkpoint.
-struct Units<'a>(&'a Checkpoint);
-
-impl tune::units::UnitStore for Units<'_> {
-    fn get(&self, key: &str) -> Result<Option<serde_json::Value>> {
-        self.0.get(key)
-    }
-    fn put(&self, key: &str, value: &serde_json::Value) -> Result<()> {
-        self.0.put(key, value)
-    }
 }

@@ -2,7 +2,7 @@
 //! scene (`tune/tune.json`: technique × storage × biases, [`crate::tune`]) and the
 //! recommendation per scene, which is the tuned setting (`recommend.json`).
 
-use crate::artefact::{write_json, write_text, OutDir};
+use crate::artefact::{write_json, write_text, Checkpoint, OutDir};
 use crate::progress::Bar;
 use crate::report::chart;
 use crate::report::pareto::Entry;
@@ -96,10 +96,27 @@ pub fn tuning(
         cost: Some(crate::gpu::cost::tune_cost),
         ..Options::default()
     };
+    // The search's units in a checkpoint of the report folder, so that a killed run continues
+    // the search ([`tune::units`]); a checkpoint of other options is replaced.
+    let cp = Checkpoint::open(
+        out,
+        tune::units::CHECKPOINT,
+        tune::units::params(&opts, stacks),
+        true,
+    )?;
+    cp.start()?;
+    if cp.resuming() {
+        eprintln!(
+            "tune: resuming the interrupted search in {}: {} units done",
+            cp.dir().display(),
+            cp.done()
+        );
+    }
     let bar = Bar::new("tune", 0);
-    let t = tune::tune(stacks, &opts, &bar)?;
+    let t = tune::tune_with(stacks, &opts, &bar, Some(&cp))?;
     tune::export::write(&od, EXPORT_DIR, &t)?;
     od.write_json(TUNE_FILE, &t)?;
+    cp.finish()?;
     Ok(t)
 }
 
@@ -137,5 +154,22 @@ mod tests {
             "tuned before the check"
         );
         fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// The step keeps its units in a checkpoint while it runs and removes it when `tune.json`
+    /// is written; a second call reads the tuning back.
+    #[test]
+    fn tuning_leaves_no_checkpoint_and_is_read_back() {
+        let out = std::env::temp_dir().join(format!("momentlab-tune-cp-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&out);
+        fs::create_dir_all(&out).unwrap();
+        let stacks = crate::render::default_dataset(16).unwrap();
+        let plan = Plan::of(Preset::Tiny, Some(16));
+        let t = tuning(&stacks, &plan, 0.002, &out).unwrap();
+        assert!(out.join(TUNE_FILE).exists());
+        assert!(!Checkpoint::exists(&out, tune::units::CHECKPOINT));
+        let again = tuning(&stacks, &plan, 0.002, &out).unwrap();
+        assert_eq!(again.seconds, t.seconds, "read back, not searched again");
+        fs::remove_dir_all(&out).unwrap();
     }
 }

@@ -26,6 +26,35 @@ pub trait UnitStore: Sync {
     fn put(&self, key: &str, value: &serde_json::Value) -> Result<()>;
 }
 
+impl UnitStore for crate::artefact::Checkpoint {
+    fn get(&self, key: &str) -> Result<Option<serde_json::Value>> {
+        crate::artefact::Checkpoint::get(self, key)
+    }
+    fn put(&self, key: &str, value: &serde_json::Value) -> Result<()> {
+        crate::artefact::Checkpoint::put(self, key, value)
+    }
+}
+
+/// The checkpoint's name in an output folder.
+pub const CHECKPOINT: &str = "tune";
+
+/// What a tuning's units depend on: the options (but the cost model, a pure function) and the
+/// stacks by content. A checkpoint of other parameters is not resumed.
+pub fn params(opts: &super::Options, stacks: &[crate::stack::DepthStack]) -> serde_json::Value {
+    let stack_ids: Vec<String> = stacks
+        .iter()
+        .map(|s| format!("{}/{} {}", s.meta.scene, s.meta.view, s.digest()))
+        .collect();
+    serde_json::json!({
+        "technique": opts.techniques.iter().map(|t| t.name()).collect::<Vec<_>>(),
+        "storages": opts.storages.iter().map(|s| s.name()).collect::<Vec<_>>(),
+        "tolerance": opts.tolerance.to_bits(), "max_noise": opts.max_noise.to_bits(),
+        "fragments": opts.fragments_per_scene, "screen": opts.screen_per_scene,
+        "keep": opts.keep, "seed": opts.seed, "speed_inputs": opts.speed_inputs,
+        "stacks": stack_ids,
+    })
+}
+
 /// An [`Acc`] with its floats as bits.
 #[derive(Serialize, Deserialize)]
 struct AccBits {
