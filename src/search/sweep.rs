@@ -51,7 +51,7 @@ mod racing;
 const FINAL_FILE: &str = "final.jsonl";
 use super::config::SweepConfig;
 use super::race::{Bound, Moments, StageStats};
-use super::Scorer;
+use super::{Dataset, Scorer};
 use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
 use racing::Race;
@@ -89,6 +89,32 @@ pub struct SweepSummary {
     /// What racing resolved (None: exhaustive or merged).
     #[serde(default)]
     pub race: Option<RaceSummary>,
+}
+
+impl SweepSummary {
+    /// The counts of a run that scored `scored` candidates with `lp_solves` LP solves on
+    /// `data`; the per-candidate counts, stages and race are left empty.
+    fn counts(data: &Dataset, scored: u64, lp_solves: u64) -> SweepSummary {
+        let nontrivial = data.fragments().len() as u64;
+        SweepSummary {
+            candidates: 0,
+            degenerate: 0,
+            duplicates: 0,
+            stages: Vec::new(),
+            full: 0,
+            nontrivial_fragments: nontrivial,
+            all_fragments: data.total_count(),
+            nontrivial_population: data.nontrivial_population(),
+            lp_solves,
+            sampled_share: if scored * nontrivial == 0 {
+                0.0
+            } else {
+                lp_solves as f64 / (scored * nontrivial) as f64
+            },
+            merged_shards: None,
+            race: None,
+        }
+    }
 }
 
 /// What the race decided and whether its budget bound.
@@ -318,45 +344,9 @@ macro_rules! tryst {
 
 /// Run (or resume) the sweep described by `cfg` into `dir`.
 pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) -> Result<Outcome> {
-    // --- configuration -------------------------------------------------------------------------
-    let expected = SweepConfig {
-        functions: scorer.table().names().to_vec(),
-        table_fingerprint: format!("{:016x}", scorer.table().fingerprint()),
-        grid: scorer.table().grid().len(),
-        dataset_fingerprint: format!("{:016x}", scorer.data().fingerprint()),
-        solver: scorer.solver().to_string(),
-        chunk: scorer.chunk(),
-        ..cfg.clone()
-    };
-    if let Some(f) = expected.first_difference(cfg) {
-        bail!("search config field '{f}' does not match the data/catalog/scorer given");
-    }
-    let nf = cfg.functions.len();
-    bc::check_m(nf, cfg.m)?;
-    cfg.parameters().check()?;
+    let _lock = open_results(cfg, scorer, dir)?;
     let [shard_i, shard_n] = cfg.shard;
     let data = scorer.data();
-    if data.total_count() == 0 {
-        bail!("the dataset has no fragments");
-    }
-    // One writer per results folder: a second run into it at the same time is refused.
-    let _lock = crate::artefact::OutDir::new(dir, true)?;
-    _lock
-        .lock()
-        .with_context(|| format!("results {}", dir.display()))?;
-    let cfg_path = dir.join(CONFIG_FILE);
-    if cfg_path.exists() {
-        let old: SweepConfig = read_json(&cfg_path)?;
-        if let Some(f) = old.first_difference(cfg) {
-            bail!(
-                "{} holds a run with a different configuration (field '{f}'); \
-                 use another --results directory or delete it",
-                dir.display()
-            );
-        }
-    } else {
-        write_json(&cfg_path, cfg)?;
-    }
 
     // --- candidates and flags -----------------------------------------------------------------
     let all = super::select::selected(cfg)?;
@@ -376,24 +366,7 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
     let mut w = Writer { hooks, batches: 0 };
     let names = |i: u64| scorer.table().names_of(&subsets[&i]);
 
-    let mut active: Vec<u64> = Vec::new();
-    let mut flag_rows = Vec::new();
-    let (mut n_degenerate, mut n_duplicate) = (0, 0);
-    for ((i, _), &(degenerate, duplicate_of)) in mine.iter().zip(&flags) {
-        if !degenerate && duplicate_of.is_none() {
-            active.push(*i);
-            continue;
-        }
-        n_degenerate += degenerate as u64;
-        n_duplicate += duplicate_of.is_some() as u64;
-        if !done.contains(i) {
-            flag_rows.push(Row {
-                degenerate,
-                duplicate_of,
-                ..Row::plain(*i, names(*i))
-            });
-        }
-    }
+    let (active, flag_rows, n_degenerate, n_duplicate) = sort_flags(&mine, &flags, &done, &names);
     for batch in flag_rows.chunks(1000) {
         tryst!(w.append(&results, batch));
         done.extend(batch.iter().map(|r| r.index));
@@ -423,27 +396,88 @@ pub fn run_sweep(cfg: &SweepConfig, scorer: &Scorer, dir: &Path, hooks: &Hooks) 
         (r.lp_solves, r.summary.tied, r.stage_sizes, Some(r.summary))
     };
 
-    let scored = active.len() as u64;
     let summary = SweepSummary {
         candidates: mine.len() as u64,
         degenerate: n_degenerate,
         duplicates: n_duplicate,
         stages,
         full,
-        nontrivial_fragments: nontrivial,
-        all_fragments: data.total_count(),
-        nontrivial_population: data.nontrivial_population(),
-        lp_solves,
-        sampled_share: if scored * nontrivial == 0 {
-            0.0
-        } else {
-            lp_solves as f64 / (scored * nontrivial) as f64
-        },
-        merged_shards: None,
         race: race_summary,
+        ..SweepSummary::counts(data, active.len() as u64, lp_solves)
     };
     write_json(&dir.join(COMPLETE_FILE), &summary)?;
     Ok(Outcome::Complete(summary))
+}
+
+/// Check `cfg` against the data, catalog and scorer given, take the results folder's lock
+/// (one writer per folder: a second run into it at the same time is refused) and write its
+/// configuration, or check it against the one there (a resumed run must be the same run).
+fn open_results(cfg: &SweepConfig, scorer: &Scorer, dir: &Path) -> Result<crate::artefact::OutDir> {
+    let expected = SweepConfig {
+        functions: scorer.table().names().to_vec(),
+        table_fingerprint: format!("{:016x}", scorer.table().fingerprint()),
+        grid: scorer.table().grid().len(),
+        dataset_fingerprint: format!("{:016x}", scorer.data().fingerprint()),
+        solver: scorer.solver().to_string(),
+        chunk: scorer.chunk(),
+        ..cfg.clone()
+    };
+    if let Some(f) = expected.first_difference(cfg) {
+        bail!("search config field '{f}' does not match the data/catalog/scorer given");
+    }
+    let nf = cfg.functions.len();
+    bc::check_m(nf, cfg.m)?;
+    cfg.parameters().check()?;
+    if scorer.data().total_count() == 0 {
+        bail!("the dataset has no fragments");
+    }
+    // One writer per results folder: a second run into it at the same time is refused.
+    let lock = crate::artefact::OutDir::new(dir, true)?;
+    lock.lock()
+        .with_context(|| format!("results {}", dir.display()))?;
+    let cfg_path = dir.join(CONFIG_FILE);
+    if cfg_path.exists() {
+        let old: SweepConfig = read_json(&cfg_path)?;
+        if let Some(f) = old.first_difference(cfg) {
+            bail!(
+                "{} holds a run with a different configuration (field '{f}'); \
+                 use another --results directory or delete it",
+                dir.display()
+            );
+        }
+    } else {
+        write_json(&cfg_path, cfg)?;
+    }
+    Ok(lock)
+}
+
+/// The candidates to score (neither degenerate nor a duplicate), and the rows of the flagged
+/// ones not yet written, with the counts of each flag.
+fn sort_flags(
+    mine: &[(u64, Vec<usize>)],
+    flags: &[(bool, Option<u64>)],
+    done: &BTreeSet<u64>,
+    names: &dyn Fn(u64) -> Vec<String>,
+) -> (Vec<u64>, Vec<Row>, u64, u64) {
+    let mut active: Vec<u64> = Vec::new();
+    let mut flag_rows = Vec::new();
+    let (mut n_degenerate, mut n_duplicate) = (0, 0);
+    for ((i, _), &(degenerate, duplicate_of)) in mine.iter().zip(flags) {
+        if !degenerate && duplicate_of.is_none() {
+            active.push(*i);
+            continue;
+        }
+        n_degenerate += degenerate as u64;
+        n_duplicate += duplicate_of.is_some() as u64;
+        if !done.contains(i) {
+            flag_rows.push(Row {
+                degenerate,
+                duplicate_of,
+                ..Row::plain(*i, names(*i))
+            });
+        }
+    }
+    (active, flag_rows, n_degenerate, n_duplicate)
 }
 
 /// What the scoring helpers share.

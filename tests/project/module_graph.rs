@@ -954,12 +954,6 @@ const LONG_FUNCTIONS: &[(&str, &str, &str)] = &[
         "func",
         "one match over the IR's statements, printed in order (WGSL)",
     ),
-    // To split.
-    (
-        "search/sweep.rs",
-        "run_sweep",
-        "to split: setup, racing loop, results",
-    ),
 ];
 
 /// Largest file of src/lp/ in lines: each mechanism of the LP in a file a reader can hold.
