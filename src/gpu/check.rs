@@ -263,11 +263,6 @@ pub fn check(
     let half = half_rounding(gpu)?;
     let kernel = Gaussian::paper();
     let st = (program.storage, half);
-    // The model's whole pipeline from the depths, in both operation orders.
-    let maps: Vec<Vec<f32>> = ORDERS
-        .iter()
-        .map(|&o| stored::filtered_map(enc, o, st, &kernel, depth, size))
-        .collect::<Result<_>>()?;
     // Stage 1, encode: the GPU's stored texels against the model's, in ulp of each value.
     let encoded: Vec<Vec<f32>> = ORDERS
         .iter()
@@ -283,12 +278,11 @@ pub fn check(
     // Stage 2, filter: the model's two passes over the GPU's own encoded map.
     let w = stored::weights_f32(&kernel);
     let dims = (size.0, size.1, m);
+    // The model's whole pipeline from the depths (unfused), for the whole-model figures.
+    let whole_map = stored::filter_map(&encoded[0], dims, &w, Order::Unfused, st);
     let refiltered: Vec<Vec<f32>> = ORDERS
         .iter()
-        .map(|&o| {
-            let h = stored::filter_pass(&out.encoded, dims, &w, false, o, st);
-            stored::filter_pass(&h, dims, &w, true, o, st)
-        })
+        .map(|&o| stored::filter_map(&out.encoded, dims, &w, o, st))
         .collect();
     // channel scales for the f32 tolerance
     let mut scale = vec![0.0f32; m];
@@ -308,7 +302,7 @@ pub fn check(
         .map(|&o| model_shadow(program.module, o, &out.filtered, m, receivers))
         .collect::<Result<_>>()?;
     let sens = sensitivity(program.module, &out.filtered, m, receivers, &own[0])?;
-    let whole = model_shadow(program.module, Order::Unfused, &maps[0], m, receivers)?;
+    let whole = model_shadow(program.module, Order::Unfused, &whole_map, m, receivers)?;
     let n = receivers.texel.len().max(1);
     let (mut g_max, mut g_excess, mut g_worst, mut outliers) = (0.0f64, 0.0f64, 0usize, 0usize);
     let (mut p_max, mut p_sum, mut p_above) = (0.0f64, 0.0f64, 0usize);

@@ -216,8 +216,20 @@ pub fn filter_pass(
     out
 }
 
-/// The stored, filtered map of a front-layer depth map: [`encode_map`], then [`filter_pass`]
-/// along x and along y.
+/// The separable filter of a stored map: [`filter_pass`] along x, stored, then along y,
+/// stored, as a two-pass blur writes its targets.
+pub fn filter_map(
+    map: &[f32],
+    dims: (usize, usize, usize),
+    weights: &[f32],
+    order: Order,
+    storage: (Storage, HalfRounding),
+) -> Vec<f32> {
+    let h = filter_pass(map, dims, weights, false, order, storage);
+    filter_pass(&h, dims, weights, true, order, storage)
+}
+
+/// The stored, filtered map of a front-layer depth map: [`encode_map`], then [`filter_map`].
 pub fn filtered_map(
     encode: &Func,
     order: Order,
@@ -235,15 +247,7 @@ pub fn filtered_map(
     let m = encode.n_outputs();
     let w = weights_f32(kernel);
     let s = encode_map(encode, order, storage, depth)?;
-    let h = filter_pass(&s, (width, height, m), &w, false, order, storage);
-    Ok(filter_pass(
-        &h,
-        (width, height, m),
-        &w,
-        true,
-        order,
-        storage,
-    ))
+    Ok(filter_map(&s, (width, height, m), &w, order, storage))
 }
 
 #[cfg(test)]
@@ -362,8 +366,7 @@ mod tests {
                 let map: Vec<f32> = (0..width * height * m)
                     .map(|_| store(storage, st.1, rnd() * 1.3 - 0.1))
                     .collect();
-                let h = filter_pass(&map, (width, height, m), &w, false, order, st);
-                let v = filter_pass(&h, (width, height, m), &w, true, order, st);
+                let v = filter_map(&map, (width, height, m), &w, order, st);
                 let mut out = [0.0f32; 3];
                 for y in 0..height {
                     for xx in 0..width {

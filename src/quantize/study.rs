@@ -87,7 +87,7 @@ impl Tech {
 
 /// Filtered, decoded moment maps of a front-depth map: per texel θ(b(z0)) (f64, rounded to
 /// f32) stored in `storage`, the two separable passes of `kernel` in f32 each stored in
-/// `storage` ([`pipeline::filter_pass`], taps unfused), θ⁻¹ of the filtered texel in f64.
+/// `storage` ([`pipeline::filter_map`], taps unfused), θ⁻¹ of the filtered texel in f64.
 /// `Storage::Exact` is the reference: the same filter in f64 without any rounding.
 /// Result: `[t][j]`.
 pub fn decoded_moments(
@@ -134,8 +134,7 @@ pub fn decoded_moments(
     }
     let w = pipeline::weights_f32(kernel);
     let dims = (width, height, m);
-    let h = pipeline::filter_pass(&texels, dims, &w, false, Order::Unfused, st);
-    let v = pipeline::filter_pass(&h, dims, &w, true, Order::Unfused, st);
+    let v = pipeline::filter_map(&texels, dims, &w, Order::Unfused, st);
     v.chunks(m)
         .map(|c| decode(&c.iter().map(|&x| x as f64).collect::<Vec<_>>()))
         .collect()
