@@ -4,9 +4,16 @@
 use momentlab::search::plan::{Plan, Schedule};
 use momentlab::search::SweepOptions;
 
-/// Calibration sample: candidates (stratified by family) × fragments, solved on all threads
-/// (≈ 1 s).
-pub const CALIBRATION: [usize; 2] = [64, 1024];
+/// Calibration sample: candidates (stratified by family), solved on all threads on stage 0's
+/// block size of fragments (≈ 1 s; [`calibration`]).
+pub const CALIBRATION_CANDIDATES: usize = 64;
+
+/// The calibration sample of `opts`: [`CALIBRATION_CANDIDATES`] × the first `first_sample`
+/// fragments of the racing order, as dense in the sorted order as stage 0's block (a sparser
+/// block costs more per LP: fewer neighbours share a distribution or a warm start).
+pub fn calibration(opts: &SweepOptions) -> [usize; 2] {
+    [CALIBRATION_CANDIDATES, opts.first_sample.max(1)]
+}
 
 /// Safety factor on the estimated time of a task for `--time`.
 const TIME_MARGIN: f64 = 1.5;
@@ -134,9 +141,22 @@ fn print_proxy(p: &momentlab::search::plan::Proxy, opts: &SweepOptions, secs: f6
         count(p.lp_solves),
     );
     let (lps, cost_by_family, _) = p.expected();
+    if let Some(r) = p.forecast.as_ref().and_then(|f| f.refinement.as_ref()) {
+        println!(
+            "plan: estimates refined on {} fresh fragments ({} LP solves, {:.1} s): the {} candidates nearest the proxy's winner pool their gaps and spreads there with the proxy's; {} drawn over the rest calibrate the others' gaps towards {:+.5} + {:.3}·gap and their spreads towards × {:.3} (each by its share of the fragments)",
+            count(r.fragments as u64),
+            count(r.lp_solves),
+            r.seconds,
+            r.closest,
+            r.drawn,
+            r.line.0,
+            r.line.1,
+            r.spread
+        );
+    }
     match &p.forecast {
         Some(f) => println!(
-            "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
+            "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads, refined): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
             f.runs,
             stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
             count(lps),

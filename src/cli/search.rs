@@ -315,7 +315,7 @@ pub fn run(args: Args) -> Result<()> {
             &table,
             stacks.as_deref(),
             &opts,
-            super::plan::CALIBRATION,
+            super::plan::calibration(&opts),
             (args.plan_proxy > 0).then_some(args.plan_proxy),
         )?;
         super::plan::print(&plan, &opts, setup);

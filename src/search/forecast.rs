@@ -34,6 +34,8 @@ pub struct Estimate {
     pub sd: f64,
     /// Per-fragment standard deviation of its errors (for unpaired tests).
     pub esd: f64,
+    /// Fragments the gap was measured on (over the looks it shared with the winner).
+    pub fragments: u64,
 }
 
 /// The candidates' estimates from the statistics of every look of a race (`looks[l]`: each
@@ -86,6 +88,7 @@ pub fn estimates(looks: &[Vec<StageStats>], winner: u64) -> Vec<Estimate> {
             },
             sd: a.sd.map_or(median, |x| x.1),
             esd: a.esd.1,
+            fragments: a.n,
         })
         .collect();
     out.sort_by_key(|e| e.index);
@@ -473,6 +476,7 @@ mod tests {
                 gap: if i == 0 { 0.0 } else { 1.0 },
                 sd: 0.1,
                 esd: 0.5,
+                fragments: 0,
             })
             .collect();
         let s = Shape {
@@ -500,6 +504,7 @@ mod tests {
                 gap: 0.0,
                 sd: 0.2,
                 esd: 0.3,
+                fragments: 0,
             })
             .collect();
         let f = simulate(&est, &shape(8192), 16, 3);
@@ -542,12 +547,14 @@ mod tests {
             gap: -10.0,
             sd,
             esd: 1.0,
+            fragments: 0,
         }];
         est.extend((1..=k as u64).map(|index| Estimate {
             index,
             gap: -10.0 + z * sd / n.sqrt(),
             sd,
             esd: 1.0,
+            fragments: 0,
         }));
         let runs = 2000;
         let f = simulate(&est, &s, runs, 11);

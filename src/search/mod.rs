@@ -7,6 +7,8 @@
 //! * candidates ↔ indices: [`crate::basis::candidates`] (colex numbering, as `momentlab candidates`).
 //! * [`dataset`]: the sampled fragments with their depth distributions on the grid.
 //! * [`score`]: Algorithm 1 errors |G − PCF| of one candidate over a list of fragments.
+//! * [`plan`], [`forecast`] and [`refine`]: what a race will cost (`search --plan`), from a
+//!   proxy race whose estimates are refined on fresh fragments and the run simulated on them.
 //! * [`race`]: the racing statistics (paired tests with a stated confidence, the cap, the plan).
 //! * [`sweep`]: racing with elimination by evidence, resumable results files, shards.
 //! * [`tieset`]: the race's answer as sets (winner, tied for first, eliminated) and its check
@@ -25,6 +27,7 @@ pub mod merge;
 pub mod plan;
 pub mod race;
 pub mod reference;
+pub mod refine;
 pub mod results;
 pub mod run;
 pub mod score;

@@ -16,6 +16,7 @@
 
 use super::config::SweepConfig;
 use super::forecast;
+use super::refine;
 use super::results::{read_rows, Row};
 use super::select;
 use super::sweep::{race_looks, run_sweep, Hooks, Outcome};
@@ -296,6 +297,8 @@ pub struct Expected {
     pub cost_by_family: Vec<(&'static str, u64)>,
     /// Mean candidates entering each stage.
     pub stages: Vec<f64>,
+    /// The estimates' refinement on fresh fragments ([`refine`]; None when too few were left).
+    pub refinement: Option<refine::Refinement>,
 }
 
 impl Proxy {
@@ -309,6 +312,9 @@ impl Proxy {
         }
     }
 }
+
+/// The fresh block of the refinement ([`refine`]), in stage-0 blocks (`first_sample`).
+pub const REFINE_BLOCKS: usize = 2;
 
 /// Simulated runs of the race behind the plan's expected cost ([`super::forecast::simulate`]).
 pub const FORECAST_RUNS: usize = 64;
@@ -374,8 +380,20 @@ pub fn proxy_race(
     let lp_solves = summary.lp_solves * s;
     let candidates: u64 = by_family.iter().map(|x| x.1).sum();
     let winner = summary.race.as_ref().and_then(|r| r.winner);
-    let forecast = winner.filter(|_| !looks.is_empty()).map(|w| {
+    let mut expected = None;
+    if let Some(w) = winner.filter(|_| !looks.is_empty()) {
         let est = forecast::estimates(&looks, w);
+        // The next fragments of the race's order, which the proxy never saw.
+        let end = (keep + REFINE_BLOCKS * cfg.first_sample).min(order.len());
+        let mut fresh = order[keep..end].to_vec();
+        fresh.sort_unstable();
+        let n = scorer.table().len();
+        let cols = |i: u64| crate::basis::candidates::index_to_subset(n, cfg.m, i);
+        let (est, refinement) =
+            match refine::refine(scorer, &est, w, &fresh, cfg.first_sample, &cols)? {
+                Some((e, r)) => (e, Some(r)),
+                None => (est, None),
+            };
         let shape = forecast::Shape::of(cfg, order.len());
         let f = forecast::simulate(&est, &shape, FORECAST_RUNS, cfg.seed);
         let lps = || est.iter().zip(&f.per_candidate).map(|(e, &n)| (e.index, n));
@@ -389,7 +407,7 @@ pub fn proxy_race(
         }));
         let lp_solves = f.lp_solves.round() as u64;
         let own: u64 = by_family.iter().map(|x| x.1).sum();
-        Expected {
+        expected = Some(Expected {
             runs: f.replicates,
             lp_solves,
             range: f.range,
@@ -397,8 +415,9 @@ pub fn proxy_race(
             cost_by_family,
             other: lp_solves.saturating_sub(own),
             stages: f.stages,
-        }
-    });
+            refinement,
+        });
+    }
     Ok(Proxy {
         share,
         fragments: keep as u64,
@@ -408,7 +427,7 @@ pub fn proxy_race(
         by_family,
         other: lp_solves.saturating_sub(candidates),
         seconds,
-        forecast,
+        forecast: expected,
     })
 }
 
