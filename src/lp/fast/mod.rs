@@ -51,7 +51,9 @@
 //!   rerun in accurate mode (see `finish_optimal`).
 //! * **Band solves** ([`band`]). Where the whole grid cannot resolve a steep function
 //!   (exp(40z) spans 10^17), the LP restricted to a band of the grid around the window is solved
-//!   in the band's own coordinates and its basis certified on the whole grid.
+//!   in the band's own coordinates and its basis certified on the whole grid; on a steep table,
+//!   where that basis does not certify, it starts the whole-grid run (a basis of the whole LP
+//!   whose weights solve it) in place of the crossover.
 //! * **Robustness.** An iteration cap with a cold restart (Bland's rule throughout), then the
 //!   scaled double-double simplex ([`escalate::scaled`]) and the exact simplex ([`escalate::exact`]);
 //!   what none of them certifies is `Failed` with the reason. Never an endless loop.

@@ -14,6 +14,9 @@ enum Start {
     Warm,
     /// The basis built from the moments ([`super::recognise`]).
     Given,
+    /// The band basis that did not certify on the whole grid (`bands.failed`, a steep
+    /// table's band tried first): primal feasible up to the band's rounding.
+    Band,
     /// The well-conditioned cold-start basis.
     Cold,
     /// The basis the previous attempt ended on.
@@ -60,6 +63,13 @@ impl FastSolver {
         let (mut start, warm_or_cold) = self.first_start(hint.is_some());
         if given {
             start = Start::Given;
+        } else if matches!(start, Start::Hint) && self.bands.failed.is_some() {
+            // The band tried first (a steep table) found an optimum of the LP on the band
+            // that the whole grid does not certify: a basis of the whole LP whose weights
+            // solve it, which starts the run in place of the crossover (the hint's crossover
+            // when it fails). Sweep fragments, m = 3, exp(±40z) tables: 2.3 → 1.2 crossover
+            // pivots per LP, escalations 1.06 % → 0.86 % of LPs.
+            start = Start::Band;
         }
         self.attempts_from(kf, hint, start, warm_or_cold)
     }
@@ -112,7 +122,9 @@ impl FastSolver {
                     if cold_runs >= 2 || stash.is_some() {
                         break;
                     }
-                    start = if matches!(start, Start::Hint | Start::Given) {
+                    start = if matches!(start, Start::Band) && hint.is_some() {
+                        Start::Hint
+                    } else if matches!(start, Start::Hint | Start::Given | Start::Band) {
                         warm_or_cold
                     } else {
                         Start::Cold
@@ -153,6 +165,12 @@ impl FastSolver {
             Start::Given => {
                 self.mark_basic(false);
                 self.basis.copy_from_slice(&self.recognise.basis);
+                self.mark_basic(true);
+            }
+            Start::Band => {
+                self.mark_basic(false);
+                let band = self.bands.failed.as_ref().expect("band basis");
+                self.basis.copy_from_slice(band);
                 self.mark_basic(true);
             }
             Start::Warm => {

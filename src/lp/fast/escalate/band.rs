@@ -14,8 +14,10 @@
 //!
 //! On a steep table ([`is_steep`]) a distribution start goes to its band first (measured on
 //! the stacks corpus with z, z², exp(±40z): 45 → 21 µs mean against trying the whole grid
-//! first); elsewhere the band is tried only after the whole-grid optimum failed to certify,
-//! before the accurate pivots and the escalation.
+//! first); a band basis that does not certify there starts the whole-grid run in place of the
+//! crossover (it is primal feasible for the whole LP; `Start::Band` in `fast/starts.rs`).
+//! Elsewhere the band is tried only after the whole-grid optimum failed to certify, before the
+//! accurate pivots and the escalation.
 //!
 //! Moments given alone that lie close to one grid point's column (a cluster: depths on a few
 //! neighbouring grid points, as under a flat receiver) go to a short band around that point
