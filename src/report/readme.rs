@@ -200,8 +200,6 @@ fn paper(reports: &Path) -> Result<String> {
     Ok(format!("{line}\n"))
 }
 
-/// The full sweeps of reports/search: one row per m from `search_m<m>.md`, with the wall time
-/// of the race from `wall_m<m>.json` (scripts/time-search.sh).
 /// What README and docs/search.md quote of a committed sweep report (search_m<m>.md).
 struct SweepSummary {
     candidates: String,
@@ -212,18 +210,27 @@ struct SweepSummary {
     tied: String,
     /// "- b_MSM (LP): …" lines, without the prefix.
     msm: Vec<String>,
-    /// Candidates the report's race left by a budget cap, without evidence (a report of the
-    /// earlier race; the race now eliminates only by evidence).
-    capped: Option<String>,
+    /// Candidates an LP budget (`--lp-budget`) left unresolved at the end of the race.
+    unresolved: Option<String>,
 }
 
 impl SweepSummary {
-    /// The note on a report of the earlier, capped race.
-    fn capped_note(&self, m: usize) -> Option<String> {
-        self.capped.as_ref().map(|n| {
+    /// The tie column: the tied set, or the unresolved one of a race an LP budget ended.
+    fn tied_or_unresolved(&self) -> String {
+        match &self.unresolved {
+            Some(n) => format!("{n} unresolved (LP budget)"),
+            None => self.tied.clone(),
+        }
+    }
+
+    /// The note on a race an LP budget ended.
+    fn unresolved_note(&self, m: usize) -> Option<String> {
+        self.unresolved.as_ref().map(|n| {
             format!(
-                "m = {m}: this report is of the earlier race with a budget cap ({n} candidates left \
-                 without evidence), not regenerated with the race that eliminates only by evidence"
+                "m = {m}: an LP budget (`--lp-budget`, the command in wall_m{m}.json) ended the race \
+                 with {n} candidates unresolved: none of them was eliminated, and the best candidate \
+                 is among them; its winner is the best of them by the error on the fragments each \
+                 was scored on"
             )
         })
     }
@@ -276,10 +283,11 @@ fn sweep_summary(reports: &Path, m: usize) -> Result<Option<SweepSummary>> {
             .filter_map(|l| l.strip_prefix("- b_MSM (LP): "))
             .map(|x| x.trim_end_matches('.').to_string())
             .collect(),
-        capped: text.lines().find_map(|l| {
-            l.strip_prefix("- ")?
-                .split_once(" candidates were **eliminated by the cap**")
-                .map(|x| x.0.to_string())
+        unresolved: text.lines().find_map(|l| {
+            let rest = l
+                .split_once("**Unresolved**: the LP budget ended the race with ")?
+                .1;
+            rest.split_once(" candidates left").map(|x| x.0.to_string())
         }),
     }))
 }
@@ -332,13 +340,15 @@ fn plan_vs(v: &Value, secs: f64) -> String {
     }
 }
 
+/// The full sweeps of reports/search: one row per m from `search_m<m>.md`, with the wall time
+/// of the race from `wall_m<m>.json` (scripts/time-search.sh).
 fn sweeps(reports: &Path) -> Result<String> {
     let mut s = String::from(
         "| m | candidates | fragments sampled | tied for first | winner | error ± s.e. | race wall time | `--plan` forecast (vs the wall time) |\n| ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: |\n",
     );
     let mut hosts = None;
     let mut notes = Vec::new();
-    let mut capped = Vec::new();
+    let mut budget = Vec::new();
     for m in 2..=4 {
         let Some(x) = sweep_summary(reports, m)? else {
             continue;
@@ -354,16 +364,21 @@ fn sweeps(reports: &Path) -> Result<String> {
         let _ = writeln!(
             s,
             "| {m} | {} | {} | {} | ({}) | {} % ± {} % | {wall} | {plan} |",
-            x.candidates, x.sampled, x.tied, x.functions, x.error, x.se
+            x.candidates,
+            x.sampled,
+            x.tied_or_unresolved(),
+            x.functions,
+            x.error,
+            x.se
         );
         notes.extend(x.msm.iter().map(|l| format!("m = {m}: b_MSM (LP) {l}")));
-        capped.extend(x.capped_note(m));
+        budget.extend(x.unresolved_note(m));
     }
     if let Some((threads, cpu)) = hosts {
         let _ = writeln!(
             s,
             "\nWall time of `momentlab search --m M --no-report` on the default dataset (rendering included), {threads} threads ({cpu}; reports/search/wall_m<M>.json, `scripts/time-search.sh M`); the forecast is the expected row of `search --m M --plan`, run by the script just before on the same machine.{}",
-            capped.iter().map(|c| format!(" {c}.")).collect::<String>()
+            budget.iter().map(|c| format!(" {c}.")).collect::<String>()
         );
     }
     for n in notes {
@@ -386,7 +401,7 @@ fn race_times(reports: &Path) -> Result<String> {
             continue;
         };
         hosts = Some(host(&v));
-        notes.extend(x.capped_note(m));
+        notes.extend(x.unresolved_note(m));
         let solves = f(&v, "lp_solves", &file)?;
         let secs = f(&v, "seconds", &file)?;
         let plan = plan_vs(&v, secs);
@@ -398,7 +413,7 @@ fn race_times(reports: &Path) -> Result<String> {
             minutes(secs) + shared(&v) + &cpu_time(&v),
             x.functions,
             x.error,
-            x.tied
+            x.tied_or_unresolved()
         );
     }
     if let Some((threads, cpu)) = hosts {
@@ -727,5 +742,34 @@ mod tests {
         assert_eq!(fmt_ns(8981.2), "8981");
         assert_eq!(fmt_ns(27.84), "27.8");
         assert_eq!(fmt_ns(6.87), "6.87");
+    }
+
+    /// A report whose race an LP budget ended: the tie column names the unresolved set and the
+    /// note says so; a resolved report keeps its tie set and has no note.
+    #[test]
+    fn a_budget_ended_race_is_reported_unresolved() {
+        let dir = std::env::temp_dir().join(format!("momentlab-readme-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("search")).unwrap();
+        let head = "The sweep's dataset holds 4096 of the non-trivial ones.\n\
+                    The winner of 666 scored candidates is 12 = (z, z^2) with 7.5 % ± 0.05 %.\n";
+        let ended =
+            "**Unresolved**: the LP budget ended the race with 321 candidates left; none.\n";
+        let tied = "40 candidates are statistically tied for first.\n";
+        std::fs::write(dir.join("search/search_m2.md"), format!("{head}{ended}")).unwrap();
+        let x = sweep_summary(&dir, 2).unwrap().unwrap();
+        assert_eq!(x.tied_or_unresolved(), "321 unresolved (LP budget)");
+        assert!(x
+            .unresolved_note(2)
+            .unwrap()
+            .contains("321 candidates unresolved"));
+        std::fs::write(dir.join("search/search_m2.md"), format!("{head}{tied}")).unwrap();
+        let x = sweep_summary(&dir, 2).unwrap().unwrap();
+        assert_eq!(x.tied_or_unresolved(), "40");
+        assert!(x.unresolved_note(2).is_none());
+        assert_eq!(
+            (x.candidates.as_str(), x.functions.as_str()),
+            ("666", "z, z^2")
+        );
+        std::fs::remove_dir_all(&dir).ok();
     }
 }
