@@ -450,6 +450,29 @@ mod tests {
             changed[0]["fast_us"]["mean"] = serde_json::json!(1234.5);
             assert!(!doc.contains(&super::markdown_rows(&changed).unwrap()));
         }
+        // The flat windows' cost against the stacks corpus's, per grid size.
+        let mean = |name: &str, row: &str| -> f64 {
+            let path = root.join("reports/bench").join(name);
+            let rows: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            let r = rows.as_array().unwrap().iter().find(|r| r["corpus"] == row);
+            r.unwrap_or_else(|| panic!("{name}: no row {row}"))["fast_us"]["mean"]
+                .as_f64()
+                .unwrap()
+        };
+        let ratio = |n: usize| {
+            let flat = mean("lp_moments.json", &format!("flat n = {n}"));
+            flat / mean("lp_stacks.json", &format!("stacks n = {n}"))
+        };
+        let sentence = format!(
+            "{:.1}× (n = 1024) and {:.1}× (n = 4096) the stacks corpus's mean",
+            ratio(1024),
+            ratio(4096)
+        );
+        assert!(
+            doc.contains(&sentence),
+            "docs/lp.md does not say {sentence}"
+        );
     }
 
     #[test]
