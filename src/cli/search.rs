@@ -91,11 +91,15 @@ pub struct Opts {
     /// each going on to the next and then to the whole block (0 = never).
     #[arg(long, default_value_t = momentlab::search::config::DEFAULT_EARLY_LOOK)]
     pub early_look: usize,
-    /// Confidence of the elimination tests, for all stages and candidates together
-    /// (Bonferroni): a candidate leaves by confidence only when it is worse than the stage
-    /// reference at this level (docs/search.md).
+    /// Confidence of the elimination tests: a candidate leaves by confidence only when it is
+    /// worse than the stage reference at this level (docs/search.md).
     #[arg(long, default_value_t = 0.99)]
     pub confidence: f64,
+    /// What --confidence covers: best (the best candidate survives the race; α split over the
+    /// looks) or all (no candidate anywhere is eliminated while as good as its reference; α
+    /// split over the looks, the candidates and the shards: wider tests, more LP solves).
+    #[arg(long, default_value = "best")]
+    pub correction: String,
     /// Bound of the tests: normal (paired mean ± z·s.e.) or bernstein (empirical Bernstein,
     /// distribution-free, wider).
     #[arg(long, default_value = "normal")]
@@ -213,6 +217,7 @@ fn load_data(
 /// Check the flags that the sweep's parameters do not cover before any expensive work.
 fn check_flags(args: &Opts) -> Result<()> {
     momentlab::search::race::Bound::parse(&args.bound).context("--bound")?;
+    momentlab::search::race::Correction::parse(&args.correction).context("--correction")?;
     if args.report_only && args.no_report {
         bail!("--report-only and --no-report contradict each other");
     }
@@ -374,6 +379,8 @@ fn sweep_options(args: &Opts) -> Result<SweepOptions> {
         early_look: args.early_look,
         confidence: args.confidence,
         bound: momentlab::search::race::Bound::parse(&args.bound).context("--bound")?,
+        correction: momentlab::search::race::Correction::parse(&args.correction)
+            .context("--correction")?,
         race_seed: args.race_seed,
         pilot: args.pilot,
         batch: args.batch,

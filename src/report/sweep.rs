@@ -6,7 +6,7 @@
 
 use super::sweep_charts::{fig4_data, plot_fig3, plot_fig4, plot_side_by_side};
 use crate::artefact::OutDir;
-use crate::search::race::normal_quantile;
+use crate::search::race::{normal_quantile, Correction};
 use crate::search::reference::{
     errors_of, fig3_panels, pick_kernels, rank_of, summarize, Reference, Summary,
 };
@@ -375,9 +375,7 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
             s,
             "A candidate leaves the race only by evidence: when it is worse than the stage's \
              reference with confidence; there is no cap. Budget: the sweep's sample of {} \
-             non-trivial fragments (`--max-fragments`){}. Tests: {} bound, {}, confidence {c:.0} % \
-             for all eliminations together (Bonferroni over the {} looks of the stages, the \
-             candidates of each stage and the shards). Stage 0's block is the common sample: one \
+             non-trivial fragments (`--max-fragments`){}. Tests: {} bound, {}, {}. Stage 0's block is the common sample: one \
              look, every candidate scored on all of it; a later block is tested on its prefixes of \
              1/8, 1/4 and 1/2 that hold at least `--early-look` fragments, the survivors of \
              each look on the next, then on the whole block.\n",
@@ -393,7 +391,7 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
             } else {
                 "independent intervals"
             },
-            r.looks
+            correction_text(r.correction, c, r.looks)
         );
         s.push_str("| stage | candidates | fragments | reference | z | eliminated by evidence |\n|---:|---:|---:|---:|---:|---:|\n");
         for (k, st) in r.stages.iter().enumerate() {
@@ -473,6 +471,22 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
     s
 }
 
+/// What the race's confidence `c` (percent) covers, with its split over `looks` planned looks.
+fn correction_text(correction: Correction, c: f64, looks: u64) -> String {
+    match correction {
+        Correction::Best => format!(
+            "confidence {c:.0} % that the best candidate survives (`--correction best`: it takes \
+             one test per look, so the Bonferroni split is over the {looks} looks of the stages \
+             only; an elimination of another candidate is evidence at the per-test level, not \
+             jointly with the others)"
+        ),
+        Correction::All => format!(
+            "confidence {c:.0} % for all eliminations together (`--correction all`: Bonferroni \
+             over the {looks} looks of the stages, the candidates of each stage and the shards)"
+        ),
+    }
+}
+
 /// Every elimination's evidence: per stage and look, how many left and the smallest lower
 /// bound; then the `limit` eliminated candidates with the lowest estimates, each with its
 /// look, reference, paired difference and the one-sided interval that removed it.
@@ -490,7 +504,7 @@ pub fn evidence_text(rows: &[Row], t: &TieSet, opts: &ReportOptions, limit: usiz
         "Each eliminated candidate carries the stage and look that removed it, its stage \
          reference, the paired difference Δ = error − error(reference) on the fragments of that \
          stage's looks so far with its standard error, and the one-sided interval [lower, ∞) of \
-         Δ at the stage's per-test level (the Bonferroni share of {c:.0} %) whose lower end was \
+         Δ at the stage's per-test level (its Bonferroni share of {c:.0} %) whose lower end was \
          above 0. All {} are listed in `eliminated_m{m}.csv` (and in the results' rows: `stage`, \
          `look`, `versus`, `diff`, `diff_se`, `diff_lower`).\n\n\
          | stage | look | eliminated | smallest lower bound (pp) | median lower bound (pp) |\n|---:|---:|---:|---:|---:|\n",

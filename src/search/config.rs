@@ -2,7 +2,7 @@
 //! (stored as `config.json`), and [`Parameters`], its racing and sharding parameters with their
 //! one validation.
 
-use super::race::Bound;
+use super::race::{Bound, Correction};
 use super::Scorer;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
@@ -60,8 +60,13 @@ pub struct SweepConfig {
     /// reads as 1).
     #[serde(default = "one")]
     pub early_looks: usize,
-    /// Confidence 1 − α of the elimination tests, for all stages and candidates together.
+    /// Confidence 1 − α of the elimination tests: that the best candidate survives, or with
+    /// [`Correction::All`] that no elimination anywhere is false.
     pub confidence: f64,
+    /// What the confidence covers ([`super::race::stage_delta`]; a folder from before the
+    /// choice reads as `all`).
+    #[serde(default = "Correction::legacy")]
+    pub correction: Correction,
     /// One-sided bound of the tests (normal approximation or empirical Bernstein).
     pub bound: Bound,
     /// Paired differences to the reference (true) or independent intervals (comparison only).
@@ -156,6 +161,7 @@ impl SweepConfig {
             early_look: DEFAULT_EARLY_LOOK,
             early_looks: super::race::EARLY_LOOKS,
             confidence: 0.99,
+            correction: Correction::Best,
             bound: Bound::Normal,
             paired: true,
             pilot: 32,

@@ -16,7 +16,7 @@
 //! replicates is the forecast; their spread is the race's spread over fragment orders.
 
 use super::config::SweepConfig;
-use super::race::{self, Bound, Moments, Rule, StageStats};
+use super::race::{self, Bound, Correction, Moments, Rule, StageStats};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
@@ -112,6 +112,8 @@ pub struct Shape {
     pub lp_budget: u64,
     /// Confidence 1 − α of the elimination tests.
     pub confidence: f64,
+    /// What the confidence covers.
+    pub correction: Correction,
     /// One-sided bound of the tests.
     pub bound: Bound,
     /// Paired differences (true) or independent intervals.
@@ -131,6 +133,7 @@ impl Shape {
             pilot: cfg.pilot,
             lp_budget: cfg.lp_budget,
             confidence: cfg.confidence,
+            correction: cfg.correction,
             bound: cfg.bound,
             paired: cfg.paired,
             shards: cfg.shard[1],
@@ -332,7 +335,13 @@ impl Sim<'_, '_> {
         self.run.stages.push(cur.len() as u64);
         let shape = self.shape;
         let rule = Rule {
-            delta: race::stage_delta(1.0 - shape.confidence, planned, cur.len(), shape.shards),
+            delta: race::stage_delta(
+                1.0 - shape.confidence,
+                planned,
+                cur.len(),
+                shape.shards,
+                shape.correction,
+            ),
             bound: shape.bound,
             paired: shape.paired,
             width: 1.0,
@@ -421,6 +430,7 @@ mod tests {
             pilot: 4,
             lp_budget: 0,
             confidence: 0.99,
+            correction: Correction::Best,
             bound: Bound::Normal,
             paired: true,
             shards: 1,
@@ -493,11 +503,15 @@ mod tests {
         assert_eq!(f.per_candidate[1], blocks as f64);
     }
 
-    /// Identical candidates never leave by confidence at δ ≈ 1e-4 (a few in a million looks):
-    /// every candidate runs every stage and is completed; an LP budget ends the race before
-    /// the look that would exceed it, without completing anyone.
+    /// Identical candidates never leave by confidence at δ ≈ 1e-5 (`all`: a few in a million
+    /// looks): every candidate runs every stage and is completed; an LP budget ends the race
+    /// before the look that would exceed it, without completing anyone.
     #[test]
     fn ties_run_every_stage_until_the_budget() {
+        let shape = |fragments| Shape {
+            correction: Correction::All,
+            ..shape(fragments)
+        };
         let est: Vec<Estimate> = (0..256u64)
             .map(|index| Estimate {
                 index,
@@ -538,7 +552,7 @@ mod tests {
         let (pilot, blocks) = race::blocks(s.fragments, s.first_sample, s.growth);
         assert_eq!((pilot.len(), blocks[0].len(), blocks.len()), (64, 64, 2));
         let k = 200;
-        let delta = race::stage_delta(0.01, 2, k + 1, 1);
+        let delta = race::stage_delta(0.01, 2, k + 1, 1, s.correction);
         let z = race::normal_quantile(1.0 - delta);
         let (sd, n) = (1.0, 64.0f64);
         // The reference (index 0, the pilot's only candidate) is far ahead of the others.

@@ -1,5 +1,5 @@
 //! Racing statistics (pure functions, no IO): when a candidate is worse than the stage reference
-//! with a stated confidence, how α is split over stages and candidates, the block plan, and
+//! with a stated confidence, how α is split over looks (and candidates), the block plan, and
 //! paired differences pooled over blocks.
 //!
 //! **Test.** On stage k's block (fresh fragments, disjoint from the blocks that chose the
@@ -8,12 +8,16 @@
 //! (paired), h the one-sided half-width ([`half_width`]). R_k is a real candidate, so then c is
 //! not the best.
 //!
-//! **Correction.** δ = α / (K · |C_k| · S) for K planned stages, |C_k| candidates of the stage and
-//! S shards (Bonferroni over stages, candidates and shards): with probability ≥ 1 − α no
-//! candidate anywhere is eliminated by confidence while it is at least as good as its stage
-//! reference, so the best candidate is among the survivors (the *certified set*). No candidate
-//! leaves for any other reason: there is no cap. A budget (`lp_budget` of the sweep) can only
-//! end the race early, leaving its survivors *unresolved*.
+//! **Correction** ([`Correction`], [`stage_delta`]). With `best` (the default), δ = α / L for L
+//! planned looks: the best candidate c* takes one test per look, each against a reference fixed
+//! before the look's fragments are seen, with μ_{c*} − μ_R ≤ 0; so it is eliminated with
+//! probability ≤ Σ δ = α, and it is among the survivors (the *certified set*) with probability
+//! ≥ 1 − α, however many candidates there are and in whichever shard it is. With `all`,
+//! δ = α / (L · |C_k| · S) for |C_k| candidates of the stage and S shards (Bonferroni over looks,
+//! candidates and shards): with probability ≥ 1 − α no candidate anywhere is eliminated while
+//! it is at least as good as its stage reference. No candidate leaves for any other reason:
+//! there is no cap. A budget (`lp_budget` of the sweep) can only end the race early, leaving
+//! its survivors *unresolved*.
 
 /// Count, Σx and Σx² of a sample.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -172,10 +176,54 @@ pub fn normal_quantile(p: f64) -> f64 {
     }
 }
 
-/// δ per test: α split evenly over `stages` planned looks (stage 0's block is one look, a later
-/// block up to [`EARLY_LOOKS`] + 1, [`looks`]), the `candidates` tested in the stage and `shards` shards (Bonferroni).
-pub fn stage_delta(alpha: f64, stages: usize, candidates: usize, shards: usize) -> f64 {
-    alpha / (stages.max(1) * candidates.max(1) * shards.max(1)) as f64
+/// What the confidence of the elimination tests covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Correction {
+    /// The best candidate survives with probability ≥ confidence: α split over the looks only.
+    Best,
+    /// No candidate is eliminated while at least as good as its reference, all together, with
+    /// probability ≥ confidence: α split over the looks, the candidates and the shards.
+    All,
+}
+
+impl Correction {
+    /// The correction named "best" or "all".
+    pub fn parse(s: &str) -> anyhow::Result<Correction> {
+        match s {
+            "best" => Ok(Correction::Best),
+            "all" => Ok(Correction::All),
+            _ => anyhow::bail!("unknown correction '{s}' (best or all)"),
+        }
+    }
+    /// "best" or "all".
+    pub fn name(&self) -> &'static str {
+        match self {
+            Correction::Best => "best",
+            Correction::All => "all",
+        }
+    }
+    /// The correction of a results folder written before the choice existed.
+    pub fn legacy() -> Correction {
+        Correction::All
+    }
+}
+
+/// δ per test: α split evenly over `looks` planned looks (stage 0's block is one look, a later
+/// block up to [`EARLY_LOOKS`] + 1, [`looks`]) and, with [`Correction::All`], over the
+/// `candidates` tested in the stage and the `shards` shards (Bonferroni).
+pub fn stage_delta(
+    alpha: f64,
+    looks: usize,
+    candidates: usize,
+    shards: usize,
+    correction: Correction,
+) -> f64 {
+    let tests = match correction {
+        Correction::Best => looks.max(1),
+        Correction::All => looks.max(1) * candidates.max(1) * shards.max(1),
+    };
+    alpha / tests as f64
 }
 
 /// Why a candidate left the race: the only reason is evidence.
@@ -517,7 +565,13 @@ mod tests {
 
     #[test]
     fn stage_delta_splits_alpha() {
-        assert!((stage_delta(0.01, 5, 1000, 2) - 1e-6).abs() < 1e-18);
-        assert_eq!(stage_delta(0.01, 0, 0, 0), 0.01);
+        assert!((stage_delta(0.01, 5, 1000, 2, Correction::All) - 1e-6).abs() < 1e-18);
+        assert_eq!(stage_delta(0.01, 0, 0, 0, Correction::All), 0.01);
+        // Only the best candidate's own tests count: the candidates and shards do not.
+        assert!((stage_delta(0.01, 5, 1000, 2, Correction::Best) - 2e-3).abs() < 1e-18);
+        assert_eq!(stage_delta(0.01, 0, 0, 0, Correction::Best), 0.01);
+        assert_eq!(Correction::parse("best").unwrap(), Correction::Best);
+        assert_eq!(Correction::parse("all").unwrap().name(), "all");
+        assert!(Correction::parse("holm").is_err());
     }
 }

@@ -53,8 +53,10 @@ pub struct SweepOptions {
     pub growth: usize,
     /// Early look (see [`SweepConfig::early_look`]).
     pub early_look: usize,
-    /// Confidence of the elimination tests (all stages and candidates together).
+    /// Confidence of the elimination tests.
     pub confidence: f64,
+    /// What the confidence covers (see [`SweepConfig::correction`]).
+    pub correction: super::race::Correction,
     /// One-sided bound of the tests.
     pub bound: super::race::Bound,
     /// Seed of the racing order (None: `seed`); the fragment sample keeps `seed`.
@@ -88,6 +90,7 @@ impl Default for SweepOptions {
             growth: 4,
             early_look: super::config::DEFAULT_EARLY_LOOK,
             confidence: 0.99,
+            correction: super::race::Correction::Best,
             bound: super::race::Bound::Normal,
             race_seed: None,
             pilot: 32,
@@ -259,6 +262,7 @@ pub fn sweep_config(opts: &SweepOptions, scorer: &Scorer) -> Result<SweepConfig>
         growth: opts.growth,
         early_look: opts.early_look,
         confidence: opts.confidence,
+        correction: opts.correction,
         bound: opts.bound,
         pilot: opts.pilot,
         batch: opts.batch,

@@ -10,15 +10,16 @@
 //! evenly spaced candidates on a separate pilot block; later: the leader by pooled mean after
 //! the previous stage) is scored on the block with every candidate c, which records the paired
 //! differences d = e_c − e_R. c leaves *by confidence* when μ_c − μ_R > 0 at confidence
-//! 1 − δ, δ = (1 − `confidence`) / (looks · candidates · shards) (Bonferroni over the planned
-//! looks, the stage's candidates and the shards; [`super::race`]); no candidate leaves for any
-//! other reason. Stage 0's block is the *common sample*: one look, every candidate scored on all
-//! of it (`common_*` of the rows, Fig. 4). Racing stops when one candidate is left (resolved) or
-//! the fragments run out (the fragment budget bound); the survivors are then completed on the
-//! fragments they have not seen (the pilot block, unused blocks), so they are scored on every
-//! fragment, and form the set *statistically tied for first*. With probability ≥ `confidence`
-//! (normal approximation of block means, or always with the Bernstein bound) no candidate is
-//! eliminated while it is at least as good as its reference; so the best candidate is among the
+//! 1 − δ, δ = (1 − `confidence`) / looks with `correction` best (the default), or
+//! / (looks · candidates · shards) with `all` ([`super::race::Correction`]); no candidate leaves
+//! for any other reason. Stage 0's block is the *common sample*: one look, every candidate scored
+//! on all of it (`common_*` of the rows, Fig. 4). Racing stops when one candidate is left
+//! (resolved) or the fragments run out (the fragment budget bound); the survivors are then
+//! completed on the fragments they have not seen (the pilot block, unused blocks), so they are
+//! scored on every fragment, and form the set *statistically tied for first*. With probability
+//! ≥ `confidence` (normal approximation of block means, or always with the Bernstein bound) the
+//! best candidate is never eliminated (with `all`: no candidate is eliminated while it is at
+//! least as good as its reference); so the best candidate is among the
 //! tied. An `lp_budget` can end the race before a look that would exceed it: the survivors are
 //! then *unresolved* (not completed, not eliminated), and the best is among them.
 //!
@@ -50,7 +51,7 @@ mod racing;
 /// Statistics of the survivors on the fragments they had not seen (completion block).
 const FINAL_FILE: &str = "final.jsonl";
 use super::config::SweepConfig;
-use super::race::{Bound, Moments, StageStats};
+use super::race::{Bound, Correction, Moments, StageStats};
 use super::{Dataset, Scorer};
 use crate::basis::candidates as bc;
 use anyhow::{bail, Context, Result};
@@ -122,6 +123,9 @@ impl SweepSummary {
 pub struct RaceSummary {
     /// Confidence 1 − α of the elimination tests.
     pub confidence: f64,
+    /// What the confidence covers (the best's survival, or every elimination).
+    #[serde(default = "Correction::legacy")]
+    pub correction: Correction,
     /// One-sided bound of the tests.
     pub bound: Bound,
     /// Paired differences to the reference (true) or independent intervals.
@@ -130,7 +134,8 @@ pub struct RaceSummary {
     pub pilot_fragments: u64,
     /// One log per stage run.
     pub stages: Vec<StageLog>,
-    /// Planned looks over all stages (the Bonferroni count of [`race::stage_delta`]).
+    /// Planned looks over all stages (the Bonferroni count of [`race::stage_delta`], times the
+    /// candidates and shards with [`Correction::All`]).
     #[serde(default)]
     pub looks: u64,
     /// Non-trivial fragments available (the kept sample: the fragment budget).

@@ -128,7 +128,7 @@ pub struct Validation {
     /// Confidence-eliminated candidates with an exhaustive error ≤ the race winner's.
     pub eliminated_better_than_winner: Vec<u64>,
     /// Confidence-eliminated candidates with an exhaustive error ≤ that of their stage
-    /// reference: the false eliminations the stated confidence bounds.
+    /// reference: the false eliminations (`--correction all` bounds them all together).
     pub false_eliminations: Vec<u64>,
     /// Candidates tied for first in the race.
     pub tied: usize,

@@ -204,6 +204,7 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
             self.planned_looks,
             self.cur.len(),
             cfg.shard[1],
+            cfg.correction,
         );
         let rule = race::Rule {
             delta,
@@ -463,6 +464,7 @@ impl<'r, 'a, 'h> Race<'r, 'a, 'h> {
         let sum = |f: fn(&StageLog) -> u64| self.logs.iter().map(f).sum::<u64>();
         let summary = RaceSummary {
             confidence: self.cfg.confidence,
+            correction: self.cfg.correction,
             bound: self.cfg.bound,
             paired: self.cfg.paired,
             pilot_fragments: if run { self.pilot.len() as u64 } else { 0 },
