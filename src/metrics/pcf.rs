@@ -98,15 +98,20 @@ pub fn pcf_at<const N: usize>(
             if lower {
                 // the lowest tangent plane met on the straight path to the tap: at each step
                 // of the longer axis the (one or two) texels the path passes between
-                let n = (xx as i64 - x as i64)
-                    .abs()
-                    .max((yy as i64 - y as i64).abs());
-                for j in 1..=n {
-                    let f = j as f64 / n as f64;
-                    let (px, py) = (x as f64 + dx * f, y as f64 + dy * f);
-                    for (qx, qy) in [(px.floor(), py.floor()), (px.ceil(), py.ceil())] {
-                        let k = qy as usize * width + qx as usize;
-                        delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
+                let (ox, oy) = (xx as i64 - x as i64, yy as i64 - y as i64);
+                match path_offsets(ox, oy) {
+                    Some(path) => {
+                        for &(qx, qy) in path {
+                            let k = (y as i64 + qy as i64) as usize * width
+                                + (x as i64 + qx as i64) as usize;
+                            delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
+                        }
+                    }
+                    None => {
+                        for (qx, qy) in path_texels(x, y, ox, oy) {
+                            let k = qy * width + qx;
+                            delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
+                        }
                     }
                 }
             }
@@ -123,6 +128,47 @@ pub fn pcf_at<const N: usize>(
         }
     }
     total
+}
+
+/// The texels the straight path from texel (x, y) to the tap at offset (ox, oy) passes
+/// between: at each step j = 1..=n of the longer axis, n = max(|ox|, |oy|), the floor and the
+/// ceiling of (x, y) + (ox, oy)·j/n (the same texel twice where that point is a texel).
+fn path_texels(x: usize, y: usize, ox: i64, oy: i64) -> impl Iterator<Item = (usize, usize)> {
+    let n = ox.abs().max(oy.abs());
+    let (dx, dy) = (ox as f64, oy as f64);
+    (1..=n).flat_map(move |j| {
+        let f = j as f64 / n as f64;
+        let (px, py) = (x as f64 + dx * f, y as f64 + dy * f);
+        [(px.floor(), py.floor()), (px.ceil(), py.ceil())].map(|(a, b)| (a as usize, b as usize))
+    })
+}
+
+/// Largest tap offset whose path [`path_offsets`] tabulates (the paper's kernel radius).
+const PATH_RADIUS: i64 = 4;
+
+/// [`path_texels`] as offsets from (x, y), tabulated once for |ox|, |oy| ≤ [`PATH_RADIUS`]
+/// (None beyond). The same texels for every (x, y): (ox, oy)·j/n with n ≤ 4 is an integer
+/// (computed exactly) or at least 1/4 from one, so ⌊x + v⌋ = x + ⌊v⌋ and ⌈x + v⌉ = x + ⌈v⌉
+/// (test `tabulated_paths_are_the_computed_ones`).
+fn path_offsets(ox: i64, oy: i64) -> Option<&'static [(i8, i8)]> {
+    use std::sync::OnceLock;
+    static TABLE: OnceLock<Vec<Vec<(i8, i8)>>> = OnceLock::new();
+    if ox.abs() > PATH_RADIUS || oy.abs() > PATH_RADIUS {
+        return None;
+    }
+    let side = 2 * PATH_RADIUS + 1;
+    let table = TABLE.get_or_init(|| {
+        let c = PATH_RADIUS as usize;
+        (0..side * side)
+            .map(|i: i64| {
+                let (ox, oy) = (i % side - PATH_RADIUS, i / side - PATH_RADIUS);
+                path_texels(c, c, ox, oy)
+                    .map(|(qx, qy)| ((qx as i64 - c as i64) as i8, (qy as i64 - c as i64) as i8))
+                    .collect()
+            })
+            .collect()
+    });
+    Some(&table[((oy + PATH_RADIUS) * side + ox + PATH_RADIUS) as usize])
 }
 
 /// PCF of fragment (texel, layer) of a stack with the paper's kernel (see [`pcf`]).
@@ -145,4 +191,38 @@ pub fn pcf_of(
         slope(stack.dzdv[layer][texel]),
         bias,
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tabulated paths are the computed ones at every texel of a map, edges included, and
+    /// at far coordinates; beyond the table's radius there is none.
+    #[test]
+    fn tabulated_paths_are_the_computed_ones() {
+        for (x, y) in [(0, 0), (1, 3), (4, 4), (511, 0), (4095, 4093), (1 << 30, 7)] {
+            for oy in -PATH_RADIUS..=PATH_RADIUS {
+                for ox in -PATH_RADIUS..=PATH_RADIUS {
+                    if (x as i64) + ox < 0 || (y as i64) + oy < 0 {
+                        continue;
+                    }
+                    let table: Vec<(usize, usize)> = path_offsets(ox, oy)
+                        .unwrap()
+                        .iter()
+                        .map(|&(qx, qy)| {
+                            (
+                                (x as i64 + qx as i64) as usize,
+                                (y as i64 + qy as i64) as usize,
+                            )
+                        })
+                        .collect();
+                    let computed: Vec<(usize, usize)> = path_texels(x, y, ox, oy).collect();
+                    assert_eq!(table, computed, "({x}, {y}) + ({ox}, {oy})");
+                    assert_eq!(computed.len(), 2 * ox.abs().max(oy.abs()) as usize);
+                }
+            }
+        }
+        assert!(path_offsets(5, 0).is_none() && path_offsets(0, -5).is_none());
+    }
 }
