@@ -448,11 +448,21 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
              of the shards' tied sets, each relative to its own shard's winner.\n"
         );
     }
+    let together = match opts.race.as_ref().map(|r| (r.correction, r.looks)) {
+        Some((Correction::All, _)) => format!(
+            "all these statements hold together with probability ≥ {c:.0} % (normal \
+             approximation of block means)"
+        ),
+        Some((Correction::Best, looks)) => format!(
+            "each at its test's level, 1 − (1 − {c:.0} %)/{looks} (normal approximation of block \
+             means), not all together: what holds at {c:.0} % is the next line"
+        ),
+        None => "each at its shard's per-test level".to_string(),
+    };
     let _ = writeln!(
         s,
-        "- {} candidates were **eliminated by evidence**: each is worse than its stage reference; \
-         all these statements hold together with probability ≥ {c:.0} % (normal approximation of \
-         block means). No candidate left without evidence.",
+        "- {} candidates were **eliminated by evidence**: each is worse than its stage reference, \
+         {together}. No candidate left without evidence.",
         t.confidence
     );
     let (n, what) = if t.unresolved.is_empty() {
