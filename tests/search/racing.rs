@@ -92,14 +92,30 @@ impl Sim {
 /// `early_look` > 0 a later block is first tested on its prefixes (`race::looks`, δ over the
 /// planned looks). No candidate leaves but by evidence. Returns (tied, fragments used,
 /// candidates eliminated at an early look).
+/// The tests' level: a confidence and its correction, or a fixed δ (the uncorrected control).
+#[derive(Clone, Copy)]
+struct Level {
+    confidence: f64,
+    correction: Correction,
+    delta: Option<f64>,
+}
+
+impl Level {
+    fn new(confidence: f64, correction: Correction) -> Level {
+        Level {
+            confidence,
+            correction,
+            delta: None,
+        }
+    }
+}
+
 fn simulate(
     sim: &Sim,
     seed: u64,
     total: usize,
     first: usize,
-    confidence: f64,
-    correction: Correction,
-    delta_override: Option<f64>,
+    level: Level,
     early_look: usize,
 ) -> (Vec<u64>, usize, usize) {
     let (pilot, plan) = race::blocks(total, first, 4);
@@ -137,12 +153,12 @@ fn simulate(
         let e = sim.errors(seed, r.clone());
         let er = &e[reference as usize];
         let rule = Rule {
-            delta: delta_override.unwrap_or(race::stage_delta(
-                1.0 - confidence,
+            delta: level.delta.unwrap_or(race::stage_delta(
+                1.0 - level.confidence,
                 planned_looks,
                 cur.len(),
                 1,
-                correction,
+                level.correction,
             )),
             bound: Bound::Normal,
             paired: true,
@@ -206,14 +222,27 @@ fn certified_set_contains_the_true_best_at_the_stated_rate() {
     let mut misses = [0usize; 5];
     let mut tied_sizes = Vec::new();
     let mut early = 0;
-    let (b, a) = (Correction::Best, Correction::All);
+    let (b, a) = (
+        Level::new(1.0 - alpha, Correction::Best),
+        Level::new(1.0 - alpha, Correction::All),
+    );
     for seed in 0..seeds {
         let runs = [
-            simulate(&sim, seed, 8192, 64, 1.0 - alpha, b, None, 0),
-            simulate(&sim, seed, 8192, 64, 1.0 - alpha, b, Some(0.5), 0),
-            simulate(&sim, seed, 8192, 64, 1.0 - alpha, b, None, 64),
-            simulate(&sim, seed, 8192, 64, 1.0 - alpha, a, None, 0),
-            simulate(&sim, seed, 8192, 64, 1.0 - alpha, a, None, 64),
+            simulate(&sim, seed, 8192, 64, b, 0),
+            simulate(
+                &sim,
+                seed,
+                8192,
+                64,
+                Level {
+                    delta: Some(0.5),
+                    ..b
+                },
+                0,
+            ),
+            simulate(&sim, seed, 8192, 64, b, 64),
+            simulate(&sim, seed, 8192, 64, a, 0),
+            simulate(&sim, seed, 8192, 64, a, 64),
         ];
         early += runs[2].2;
         for (k, (tied, _, _)) in runs.iter().enumerate() {
@@ -278,8 +307,8 @@ fn the_race_keeps_a_true_best_that_looks_bad_on_a_small_first_block() {
         let was_cut = rank >= keep;
         cut += was_cut as usize;
         for (k, correction) in [Correction::Best, Correction::All].into_iter().enumerate() {
-            let (tied, _, _) =
-                simulate(&sim, seed, total, 1024, 1.0 - alpha, correction, None, 1024);
+            let level = Level::new(1.0 - alpha, correction);
+            let (tied, _, _) = simulate(&sim, seed, total, 1024, level, 1024);
             if !tied.contains(&best) {
                 misses[k] += 1;
                 misses_cut[k] += was_cut as usize;
