@@ -486,3 +486,55 @@ fn docs_tables_have_whole_rows() {
         bad.join("\n")
     );
 }
+
+/// The summary of the m = 2 validation in docs/search.md ("m = 2 with `--correction best`") is
+/// what reports/search/validate_m2.txt records: the orders, the winner and false-elimination
+/// verdicts, the tied sets' sizes and worst ranks, and the races' share of the LP solves.
+#[test]
+fn the_m2_validation_summary_is_the_artefacts() {
+    let text = std::fs::read_to_string(root().join("reports/search/validate_m2.txt")).unwrap();
+    let orders = text.matches("--race-seed ").count();
+    assert_eq!(orders, 10, "racing orders in the artefact");
+    let all = |needle: &str| text.matches(needle).count() == orders;
+    assert!(all("tied for first in the race; in the tied set: true"));
+    assert!(all("(+0.0000 pp over the exhaustive winner)"));
+    assert!(all("better than the race winner on the full sample: 0 []"));
+    assert!(all("that of the stage reference): 0 []"));
+    // "validate: 6 tied (worst exhaustive rank 7), …" and "(15.2 % of exhaustive …)".
+    let number_after = |line: &str, key: &str| -> f64 {
+        let rest = &line[line.find(key).unwrap() + key.len()..];
+        let end = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
+        rest[..end].parse().unwrap()
+    };
+    let mut tied = Vec::new();
+    let mut worst = Vec::new();
+    let mut share = Vec::new();
+    for line in text.lines() {
+        if line.starts_with("validate: ") && line.contains(" tied (worst exhaustive rank ") {
+            tied.push(number_after(line, "validate: "));
+            worst.push(number_after(line, "worst exhaustive rank "));
+        }
+        if line.starts_with("--race-seed ") {
+            share.push(number_after(line, "LP solves planned ("));
+        }
+    }
+    let max = |v: &[f64]| v.iter().cloned().fold(f64::MIN, f64::max);
+    let min = |v: &[f64]| v.iter().cloned().fold(f64::MAX, f64::min);
+    let expected = format!(
+        "the tied sets held {} to {} candidates (worst exhaustive rank {}), and\neach race \
+         solved {:.1}–{:.1} % of the exhaustive sweep's LPs.",
+        min(&tied),
+        max(&tied),
+        max(&worst),
+        min(&share),
+        max(&share)
+    );
+    let doc = std::fs::read_to_string(root().join("docs/search.md")).unwrap();
+    assert!(
+        doc.contains(&expected),
+        "docs/search.md should say:\n{expected}"
+    );
+    assert!(doc.contains("is recorded in reports/search/validate_m2.txt: in every order the"));
+}
