@@ -99,20 +99,18 @@ pub fn pcf_at<const N: usize>(
                 // the lowest tangent plane met on the straight path to the tap: at each step
                 // of the longer axis the (one or two) texels the path passes between
                 let (ox, oy) = (xx as i64 - x as i64, yy as i64 - y as i64);
+                let mut lowest = |qx: usize, qy: usize| {
+                    let k = qy * width + qx;
+                    delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
+                };
                 match path_offsets(ox, oy) {
-                    Some(path) => {
-                        for &(qx, qy) in path {
-                            let k = (y as i64 + qy as i64) as usize * width
-                                + (x as i64 + qx as i64) as usize;
-                            delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
-                        }
-                    }
-                    None => {
-                        for (qx, qy) in path_texels(x, y, ox, oy) {
-                            let k = qy * width + qx;
-                            delta = delta.min(front.dzdu[k] * dx + front.dzdv[k] * dy);
-                        }
-                    }
+                    Some(path) => path.iter().for_each(|&(qx, qy)| {
+                        lowest(
+                            (x as i64 + qx as i64) as usize,
+                            (y as i64 + qy as i64) as usize,
+                        )
+                    }),
+                    None => path_texels(x, y, ox, oy).for_each(|(qx, qy)| lowest(qx, qy)),
                 }
             }
             let plane = zf + bias.slope_scale * delta;

@@ -485,14 +485,16 @@ pub fn resolution_text(t: &TieSet, _summary: &Summary, opts: &ReportOptions) -> 
 fn correction_text(correction: Correction, c: f64, looks: u64) -> String {
     match correction {
         Correction::Best => format!(
-            "confidence {c:.0} % that the best candidate survives (`--correction best`: it takes \
+            "confidence {c:.0} % that the best candidate survives (`--correction {}`: it takes \
              one test per look, so the Bonferroni split is over the {looks} looks of the stages \
              only; an elimination of another candidate is evidence at the per-test level, not \
-             jointly with the others)"
+             jointly with the others)",
+            correction.name()
         ),
         Correction::All => format!(
-            "confidence {c:.0} % for all eliminations together (`--correction all`: Bonferroni \
-             over the {looks} looks of the stages, the candidates of each stage and the shards)"
+            "confidence {c:.0} % for all eliminations together (`--correction {}`: Bonferroni \
+             over the {looks} looks of the stages, the candidates of each stage and the shards)",
+            correction.name()
         ),
     }
 }
