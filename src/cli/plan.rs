@@ -156,7 +156,7 @@ fn print_proxy(p: &momentlab::search::plan::Proxy, opts: &SweepOptions, secs: f6
     }
     match &p.forecast {
         Some(f) => println!(
-            "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads, refined): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
+            "plan: expected from {} runs of the race simulated on the proxy's estimates (gaps to its winner, spreads, refined; the proxy's winner as the reference of a stage whose earlier blocks lie in its fragments): stages {}; {} LP solves (80 % of the runs between {} and {}; {}), {} at the calibrated µs per LP of each family, each candidate weighted by its cost relative to its family's in the proxy",
             f.runs,
             stages(&mut f.stages.iter().map(|c| count(c.round() as u64))),
             count(lps),

@@ -12,8 +12,11 @@
 //! ([`race::decide`]: evidence only) and LP budget. On a look of n fragments each candidate's mean
 //! error is g_c + ι_c with independent ι_c ~ N(0, σ_c²/(2n)), so a paired difference to the
 //! reference R has variance (σ_c² + σ_R²)/(2n) ≈ σ_c²/n, half of it R's own noise, shared by
-//! every candidate of the look (as for exchangeable candidates). The mean LP solves over the
-//! replicates is the forecast; their spread is the race's spread over fragment orders.
+//! every candidate of the look (as for exchangeable candidates). Stage references are the
+//! leaders of these draws, except where the run's is known ([`known_reference`]: the proxy's
+//! winner, while the blocks before the stage lie in the fragments the proxy raced on). The
+//! mean LP solves over the replicates is the forecast; their spread is the race's spread over
+//! fragment orders.
 
 use super::config::SweepConfig;
 use super::race::{self, Bound, Correction, Moments, Rule, StageStats};
@@ -120,6 +123,18 @@ pub struct Shape {
     pub paired: bool,
     /// Number of shards N.
     pub shards: usize,
+    /// The proxy race's winner and the fragments it raced on ([`known_reference`]; None:
+    /// every stage reference is the simulated leader).
+    pub proxy_winner: Option<ProxyWinner>,
+}
+
+/// The proxy race's winner and the prefix of the run's fragment order the proxy raced on.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ProxyWinner {
+    /// Candidate index.
+    pub index: u64,
+    /// The proxy's fragments: the first ones of the run's order.
+    pub fragments: usize,
 }
 
 impl Shape {
@@ -137,6 +152,7 @@ impl Shape {
             bound: cfg.bound,
             paired: cfg.paired,
             shards: cfg.shard[1],
+            proxy_winner: None,
         }
     }
 }
@@ -253,6 +269,7 @@ fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
             Some(r) => r,
             None => sim.pilot(pilot.len()),
         };
+        let r = known_reference(shape, est, &cur, &plan[..k]).unwrap_or(r);
         cur = sim.stage(&cur, r, k, block.len(), planned_looks);
         stages_run += 1;
         reference = sim.leader(&cur).or(Some(r));
@@ -271,6 +288,24 @@ fn one_run(est: &[Estimate], shape: &Shape, rng: &mut ChaCha8Rng) -> Run {
         sim.score(&cur, rest);
     }
     sim.run
+}
+
+/// The reference the run is known to pick for the stage after the blocks `before`
+/// ([`Shape::proxy_winner`]): while every one of them lies in the fragments the proxy raced
+/// on, the run picks its leader on fragments on which the proxy's winner proved best, so the
+/// simulated run takes that winner (its position in `est`) while it is still in `cur`, in
+/// place of the leader of its independent draws. None for stage 0 and otherwise.
+fn known_reference(
+    shape: &Shape,
+    est: &[Estimate],
+    cur: &[usize],
+    before: &[std::ops::Range<usize>],
+) -> Option<usize> {
+    let w = shape.proxy_winner?;
+    if before.last()?.end > w.fragments {
+        return None;
+    }
+    cur.iter().copied().find(|&c| est[c].index == w.index)
 }
 
 /// The state of one simulated run.
@@ -434,7 +469,40 @@ mod tests {
             bound: Bound::Normal,
             paired: true,
             shards: 1,
+            proxy_winner: None,
         }
+    }
+
+    /// The proxy's winner is the reference of a stage whose earlier blocks all lie in the
+    /// proxy's fragments, while it races; never of stage 0.
+    #[test]
+    fn the_proxy_winner_is_the_reference_while_its_fragments_cover_the_blocks() {
+        let est: Vec<Estimate> = (10..15u64)
+            .map(|index| Estimate {
+                index,
+                gap: 0.0,
+                sd: 1.0,
+                esd: 1.0,
+                fragments: 0,
+            })
+            .collect();
+        let s = Shape {
+            proxy_winner: Some(ProxyWinner {
+                index: 13,
+                fragments: 200,
+            }),
+            ..shape(1000)
+        };
+        let blocks = [64..128, 128..384];
+        let cur = [0, 1, 3, 4];
+        assert_eq!(known_reference(&s, &est, &cur, &[]), None);
+        assert_eq!(known_reference(&s, &est, &cur, &blocks[..1]), Some(3));
+        assert_eq!(known_reference(&s, &est, &cur, &blocks), None);
+        assert_eq!(known_reference(&s, &est, &[0, 1], &blocks[..1]), None);
+        assert_eq!(
+            known_reference(&shape(1000), &est, &cur, &blocks[..1]),
+            None
+        );
     }
 
     fn looks_of(rows: &[(u64, [f64; 5])]) -> Vec<StageStats> {

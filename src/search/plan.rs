@@ -394,7 +394,13 @@ pub fn proxy_race(
                 Some((e, r)) => (e, Some(r)),
                 None => (est, None),
             };
-        let shape = forecast::Shape::of(cfg, order.len());
+        let shape = forecast::Shape {
+            proxy_winner: Some(forecast::ProxyWinner {
+                index: w,
+                fragments: keep,
+            }),
+            ..forecast::Shape::of(cfg, order.len())
+        };
         let f = forecast::simulate(&est, &shape, FORECAST_RUNS, cfg.seed);
         let lps = || est.iter().zip(&f.per_candidate).map(|(e, &n)| (e.index, n));
         let by_family = per_family(lps().map(|(i, n)| (family[&i], n.round() as u64)));
