@@ -473,19 +473,24 @@ mod tests {
         }
     }
 
+    /// Candidates `indices` with gap 0, spreads `sd` (paired) and `esd` (errors).
+    fn tied(indices: std::ops::Range<u64>, sd: f64, esd: f64) -> Vec<Estimate> {
+        indices
+            .map(|index| Estimate {
+                index,
+                gap: 0.0,
+                sd,
+                esd,
+                fragments: 0,
+            })
+            .collect()
+    }
+
     /// The proxy's winner is the reference of a stage whose earlier blocks all lie in the
     /// proxy's fragments, while it races; never of stage 0.
     #[test]
     fn the_proxy_winner_is_the_reference_while_its_fragments_cover_the_blocks() {
-        let est: Vec<Estimate> = (10..15u64)
-            .map(|index| Estimate {
-                index,
-                gap: 0.0,
-                sd: 1.0,
-                esd: 1.0,
-                fragments: 0,
-            })
-            .collect();
+        let est = tied(10..15, 1.0, 1.0);
         let s = Shape {
             proxy_winner: Some(ProxyWinner {
                 index: 13,
@@ -580,15 +585,7 @@ mod tests {
             correction: Correction::All,
             ..shape(fragments)
         };
-        let est: Vec<Estimate> = (0..256u64)
-            .map(|index| Estimate {
-                index,
-                gap: 0.0,
-                sd: 0.2,
-                esd: 0.3,
-                fragments: 0,
-            })
-            .collect();
+        let est = tied(0..256, 0.2, 0.3);
         let f = simulate(&est, &shape(8192), 16, 3);
         // Pilot 64, blocks 64, 256, 1024, 4096, then 2688; all 256 in every stage, then the
         // pilot block for all.
