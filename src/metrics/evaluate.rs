@@ -61,6 +61,9 @@ pub struct EvalOptions {
     pub skip_trivial: Option<bool>,
     /// Keep per-fragment values (G, PCF) in the report ([`ViewReport::values`]).
     pub keep_values: bool,
+    /// Count |G − PCF| per bin of these edges ([`histogram_bin`]) into
+    /// [`ViewReport::histogram`], without keeping the values.
+    pub histogram: Option<Arc<[f64]>>,
     /// Called as fragments finish (done, planned).
     pub progress: Option<Progress>,
 }
@@ -199,6 +202,7 @@ pub(super) struct Partial {
     unsettled: usize,
     out_of_range: usize,
     values: Vec<FragmentValue>,
+    histogram: Vec<u64>,
 }
 
 /// Error unless the stacks hold at least one fragment: an empty input has no error to
@@ -340,13 +344,17 @@ pub(super) fn shade_view(
     let shader = ViewShader::new(subject, stack, opts);
     let t1 = Instant::now();
     let keep = opts.keep_values;
+    let edges = opts.histogram.as_deref();
     let partials: Vec<Partial> = frags
         .par_chunks(512)
         .map_init(
             || subject.chunk_state(m),
             |(ev, buf), chunk| {
                 cold(ev);
-                let mut p = Partial::default();
+                let mut p = Partial {
+                    histogram: vec![0; edges.map_or(0, |e| e.len().saturating_sub(1))],
+                    ..Partial::default()
+                };
                 let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
                 for f in chunk {
                     let (g, trivial, solved) = shader.shade(ev, buf, f);
@@ -362,6 +370,9 @@ pub(super) fn shade_view(
                         }
                     } else {
                         p.non_finite += 1;
+                    }
+                    if let Some(k) = edges.and_then(|e| histogram_bin(e, (g - f.pcf).abs())) {
+                        p.histogram[k] += 1;
                     }
                     if keep {
                         p.values.push(FragmentValue {
@@ -383,7 +394,10 @@ pub(super) fn shade_view(
         )
         .collect();
     let shade_seconds = t1.elapsed().as_secs_f64();
-    let mut total = Partial::default();
+    let mut total = Partial {
+        histogram: vec![0; edges.map_or(0, |e| e.len().saturating_sub(1))],
+        ..Partial::default()
+    };
     let mut values = Vec::new();
     for p in partials {
         total.sum += p.sum;
@@ -395,6 +409,9 @@ pub(super) fn shade_view(
         total.non_finite += p.non_finite;
         total.unsettled += p.unsettled;
         total.out_of_range += p.out_of_range;
+        for (t, c) in total.histogram.iter_mut().zip(&p.histogram) {
+            *t += c;
+        }
         values.extend(p.values);
     }
     let finite = frags.len() - total.non_finite;
@@ -420,6 +437,7 @@ pub(super) fn shade_view(
         error: mean(total.sum),
         seconds: build + t0.elapsed().as_secs_f64(),
         shade_seconds,
+        histogram: total.histogram,
         values: keep.then_some(values),
     }
 }

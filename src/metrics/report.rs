@@ -52,6 +52,10 @@ pub struct ViewReport {
     pub seconds: f64,
     /// Wall time of the shading loop alone, seconds.
     pub shade_seconds: f64,
+    /// Fragments per bin of |G − PCF| over [`EvalOptions::histogram`]'s edges (empty
+    /// without them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub histogram: Vec<u64>,
     /// Per-fragment values, kept when asked for (not serialized).
     #[serde(skip)]
     pub values: Option<Vec<FragmentValue>>,
@@ -111,6 +115,16 @@ pub struct EvalReport {
     pub views: Vec<ViewReport>,
 }
 
+/// The bin of e among the bins [edges[k], edges[k+1]) of a histogram (the last one also holds
+/// everything above it); None for a negative or NaN e. `edges` holds at least two edges.
+pub fn histogram_bin(edges: &[f64], e: f64) -> Option<usize> {
+    if e.is_nan() || e < 0.0 || edges.len() < 2 {
+        return None;
+    }
+    let k = edges[1..].partition_point(|&edge| edge <= e);
+    Some(k.min(edges.len() - 2))
+}
+
 /// Mean of a sum over the `finite` of `fragments` fragments: 0 for no fragments, NaN when
 /// every output was non-finite (no error is known, and none is reported as perfect).
 pub(super) fn finite_mean(sum: f64, finite: usize, fragments: usize) -> f64 {
@@ -166,5 +180,24 @@ pub(super) fn report_of(
             0.0
         },
         views,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::histogram_bin;
+
+    #[test]
+    fn histogram_bins_are_half_open_and_the_last_is_open_above() {
+        let edges = [0.0, 1.0, 2.0, 4.0];
+        let bins: Vec<Option<usize>> = [0.0, 0.5, 1.0, 1.999, 2.0, 4.0, 1e300, f64::INFINITY]
+            .iter()
+            .map(|&e| histogram_bin(&edges, e))
+            .collect();
+        let want = [0, 0, 1, 1, 2, 2, 2, 2].map(Some);
+        assert_eq!(bins, want);
+        assert_eq!(histogram_bin(&edges, -1e-300), None);
+        assert_eq!(histogram_bin(&edges, f64::NAN), None);
+        assert_eq!(histogram_bin(&[0.0], 0.5), None);
     }
 }

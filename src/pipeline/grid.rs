@@ -6,6 +6,7 @@
 use super::techniques::evaluate;
 use super::Plan;
 use crate::artefact::{read_json, write_json};
+use crate::metrics::Subject;
 use crate::report::chart;
 use crate::report::recommend::per_scene;
 use crate::stack::DepthStack;
@@ -54,13 +55,14 @@ pub fn refine(
             "z^4".into(),
         ])?;
         let t = LpCandidate::new(basis, crate::Grid::uniform(n)?, crate::lp::SolverKind::Fast)?;
+        let label = format!("b_MSM, n = {n}");
         let rep = evaluate(
             stacks,
-            &t,
-            &format!("b_MSM, n = {n}"),
+            &[Subject::Technique(&t)],
+            &[&label],
             plan.lp_stride * 2,
-            false,
-        )?;
+        )?
+        .remove(0);
         let sc: Vec<(String, f64)> = per_scene(&rep)
             .into_iter()
             .map(|(a, e, _)| (a, e))

@@ -7,13 +7,13 @@ use crate::artefact::{read_json, write_json};
 use crate::metrics::eye;
 use crate::metrics::{self, Bias, EvalOptions, EvalReport, Subject, Subsample};
 use crate::report::pictures;
-use crate::report::recommend::{per_scene, Measured};
+use crate::report::recommend::{per_scene, Measured, HIST_EDGES};
 use crate::stack::DepthStack;
 use crate::technique::linalg::Precision;
 use crate::technique::lp_candidate::LpCandidate;
 use crate::technique::{self, registry, timing, Technique};
 use anyhow::Result;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// The LP candidates of the study (Algorithm 1 with the paper's bases).
@@ -92,58 +92,77 @@ pub fn artefact_name(name: &str, precision: &str) -> String {
 
 /// Every job, read back from `dir` when its artefact exists, otherwise measured and written.
 /// LP candidates run on `lp_grid` points (their artefact names carry it, so a different grid
-/// is measured afresh).
+/// is measured afresh). The jobs left to measure are evaluated together per stride
+/// ([`metrics::evaluate_subjects`]): each view's fragments and their PCF reference, most of
+/// the work of a closed form, are built once for all of them.
 pub fn evaluate_all(
     stacks: &[DepthStack],
     plan: &Plan,
     dir: &Path,
     lp_grid: usize,
 ) -> Result<Vec<Measured>> {
-    let mut all = Vec::new();
-    for j in jobs(plan, lp_grid)? {
-        let stem = if j.name.starts_with("lp:") {
-            format!("{} n{lp_grid}", j.name)
-        } else {
-            j.name.clone()
-        };
-        let file = dir.join(artefact_name(&stem, &j.precision));
-        let m = match read_json::<Measured>(&file) {
-            Ok(m) => m,
-            Err(_) => {
-                let m = measured(
-                    stacks,
-                    j.technique.as_ref(),
-                    &j.name,
-                    &j.precision,
-                    j.stride,
-                    j.speed_inputs,
-                )?;
-                write_json(&file, &m)?;
-                m
-            }
-        };
+    let jobs = jobs(plan, lp_grid)?;
+    let files: Vec<PathBuf> = jobs
+        .iter()
+        .map(|j| {
+            let stem = if j.name.starts_with("lp:") {
+                format!("{} n{lp_grid}", j.name)
+            } else {
+                j.name.clone()
+            };
+            dir.join(artefact_name(&stem, &j.precision))
+        })
+        .collect();
+    let mut all: Vec<Option<Measured>> = files.iter().map(|f| read_json(f).ok()).collect();
+    let mut strides: Vec<usize> = Vec::new();
+    for (j, m) in jobs.iter().zip(&all) {
+        if m.is_none() && !strides.contains(&j.stride) {
+            strides.push(j.stride);
+        }
+    }
+    for stride in strides {
+        let group: Vec<usize> = (0..jobs.len())
+            .filter(|&i| all[i].is_none() && jobs[i].stride == stride)
+            .collect();
+        let subjects: Vec<Subject> = group
+            .iter()
+            .map(|&i| Subject::Technique(jobs[i].technique.as_ref()))
+            .collect();
+        let names: Vec<&str> = group.iter().map(|&i| jobs[i].name.as_str()).collect();
+        let reports = evaluate(stacks, &subjects, &names, stride)?;
+        for (&i, r) in group.iter().zip(reports) {
+            let m = measured(stacks, &jobs[i], &r)?;
+            write_json(&files[i], &m)?;
+            all[i] = Some(m);
+        }
+    }
+    let all: Vec<Measured> = all.into_iter().flatten().collect();
+    for m in &all {
         eprintln!(
             "  {:<44} {}  error {:>9}  {:>9.1} ns/fragment  {} bit/texel",
-            j.name,
-            j.precision,
+            m.name,
+            m.precision,
             pct(m.error),
             m.ns_per_fragment,
             m.bits_per_texel
         );
-        all.push(m);
     }
     Ok(all)
 }
 
-/// Evaluate one technique on every `stride`-th fragment of the stacks, with a progress bar.
-pub fn evaluate(
+/// Evaluate `subjects` (named `names`) on every `stride`-th fragment of the stacks, with one
+/// progress bar, counting |G − PCF| in the bins of [`HIST_EDGES`].
+pub(super) fn evaluate(
     stacks: &[DepthStack],
-    t: &dyn Technique,
-    label: &str,
+    subjects: &[Subject<'_>],
+    names: &[&str],
     stride: usize,
-    keep_values: bool,
-) -> Result<EvalReport> {
-    let b = Arc::new(bar(0, label));
+) -> Result<Vec<EvalReport>> {
+    let label = match names {
+        [one] => one.to_string(),
+        _ => format!("{} techniques", names.len()),
+    };
+    let b = Arc::new(bar(0, &label));
     let bb = b.clone();
     let opts = EvalOptions {
         bias: Bias::default(),
@@ -152,39 +171,37 @@ pub fn evaluate(
         } else {
             Subsample::All
         },
-        keep_values,
+        histogram: Some(Arc::from(&HIST_EDGES[..])),
         progress: Some(Arc::new(move |done, total| {
             bb.set_total(total as u64);
             bb.set_done(done as u64);
         })),
         ..Default::default()
     };
-    let r = metrics::evaluate(stacks, t, &opts)?;
+    let r = metrics::evaluate_subjects(stacks, subjects, &opts)?;
     b.finish();
     Ok(r)
 }
 
-/// Error against PCF (every `stride`-th fragment) and speed (mean ns over `speed_inputs`
-/// fragments sampled from the same stacks, `metrics::windows::stacks_corpus`) of
-/// one technique configuration.
-pub fn measured(
-    stacks: &[DepthStack],
-    t: &dyn Technique,
-    name: &str,
-    precision: &str,
-    stride: usize,
-    speed_inputs: usize,
-) -> Result<Measured> {
-    let r = evaluate(stacks, t, name, stride, true)?;
-    let histogram = crate::report::recommend::histogram_of(&r);
+/// The artefact of `job` from its evaluation `r` (error against PCF, error histogram) and its
+/// speed (mean ns over `job.speed_inputs` fragments sampled from the same stacks,
+/// `metrics::windows::stacks_corpus`).
+fn measured(stacks: &[DepthStack], job: &Job, r: &EvalReport) -> Result<Measured> {
+    let t = job.technique.as_ref();
+    let mut histogram = vec![0u64; HIST_EDGES.len() - 1];
+    for v in &r.views {
+        for (h, c) in histogram.iter_mut().zip(&v.histogram) {
+            *h += c;
+        }
+    }
     // Speed on the same kind of input as the error: filter windows of real fragments.
-    let corpus = crate::metrics::windows::stacks_corpus(stacks, speed_inputs, 2015)?;
+    let corpus = crate::metrics::windows::stacks_corpus(stacks, job.speed_inputs, 2015)?;
     let ns = timing::measure(t, &corpus, 3).mean;
     Ok(Measured {
-        name: name.to_string(),
-        precision: precision.to_string(),
+        name: job.name.clone(),
+        precision: job.precision.clone(),
         // f64 storage doubles the texel size of the f32 layout the techniques report.
-        bits_per_texel: if precision == "f64" {
+        bits_per_texel: if job.precision == "f64" {
             2 * t.bits_per_texel()
         } else {
             t.bits_per_texel()
@@ -196,7 +213,7 @@ pub fn measured(
         non_finite: r.non_finite,
         unsettled: r.unsettled,
         seconds: r.seconds,
-        scenes: per_scene(&r),
+        scenes: per_scene(r),
         histogram,
         error_scaled: Some(r.error_scaled),
         leak: Some(r.leak),

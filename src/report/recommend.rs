@@ -54,10 +54,8 @@ pub const HIST_EDGES: [f64; 18] = [
 /// negative values are not counted).
 pub fn error_histogram(errors: impl Iterator<Item = f64>) -> Vec<u64> {
     let mut h = vec![0u64; HIST_EDGES.len() - 1];
-    for e in errors.filter(|e| *e >= 0.0) {
-        let k = HIST_EDGES[1..].partition_point(|&edge| edge <= e);
-        let last = h.len() - 1;
-        h[k.min(last)] += 1;
+    for k in errors.filter_map(|e| crate::metrics::histogram_bin(&HIST_EDGES, e)) {
+        h[k] += 1;
     }
     h
 }

@@ -341,6 +341,59 @@ fn subjects_evaluated_together_equal_each_alone() {
 }
 
 #[test]
+fn histograms_count_the_errors_the_kept_values_hold() {
+    let mut r = rng(15);
+    let stacks: Vec<_> = (0..3)
+        .map(|i| {
+            let (w, h) = (r.gen_range(5..30), r.gen_range(5..30));
+            random_stack(&mut r, &format!("v{i}"), w, h)
+        })
+        .collect();
+    let vsm = plain_vsm();
+    let snapped = test_vsm(Some(Grid::uniform(64).unwrap()), Some((0.4, 0.45)));
+    let subjects = [Subject::Technique(&vsm), Subject::Technique(&snapped)];
+    let edges: std::sync::Arc<[f64]> = std::sync::Arc::from(&[0.0, 1e-3, 0.01, 0.05, 0.2][..]);
+    let counted = metrics::evaluate_subjects(
+        &stacks,
+        &subjects,
+        &EvalOptions {
+            histogram: Some(edges.clone()),
+            ..EvalOptions::default()
+        },
+    )
+    .unwrap();
+    let kept = metrics::evaluate_subjects(
+        &stacks,
+        &subjects,
+        &EvalOptions {
+            keep_values: true,
+            ..EvalOptions::default()
+        },
+    )
+    .unwrap();
+    for (c, k) in counted.iter().zip(&kept) {
+        assert_eq!(c.error.to_bits(), k.error.to_bits());
+        for (cv, kv) in c.views.iter().zip(&k.views) {
+            assert!(kv.histogram.is_empty() && cv.values.is_none());
+            let mut want = vec![0u64; edges.len() - 1];
+            for v in kv.values.as_ref().unwrap() {
+                let e = (v.g - v.pcf).abs();
+                if e >= 0.0 {
+                    // the last bin also holds everything above its lower edge
+                    let k = (1..edges.len() - 1).filter(|&k| edges[k] <= e).count();
+                    want[k] += 1;
+                }
+            }
+            assert_eq!(cv.histogram, want, "{} {}", c.technique, cv.view);
+            let finite = cv.fragments - cv.non_finite;
+            assert_eq!(cv.histogram.iter().sum::<u64>() as usize, finite);
+        }
+    }
+    // The NaN band of the snapped technique is in no bin.
+    assert!(counted[1].non_finite > 0);
+}
+
+#[test]
 fn evaluate_equals_brute_force_for_a_closed_form_technique() {
     let mut r = rng(13);
     for round in 0..6 {
