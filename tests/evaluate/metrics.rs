@@ -288,19 +288,28 @@ fn pcf_as_a_technique_has_error_zero() {
     assert!(nonzero > 100);
 }
 
-/// Several subjects on the same fragments (built once) report what each reports alone: the
-/// same errors, counts and per-view figures, in the order given.
-#[test]
-fn subjects_evaluated_together_equal_each_alone() {
-    let mut r = rng(14);
-    let stacks: Vec<_> = (0..4)
+/// `count` random views of 5 to 29 texels a side, from `seed`.
+fn random_views(seed: u64, count: usize) -> Vec<momentlab::stack::DepthStack> {
+    let mut r = rng(seed);
+    (0..count)
         .map(|i| {
             let (w, h) = (r.gen_range(5..30), r.gen_range(5..30));
             random_stack(&mut r, &format!("v{i}"), w, h)
         })
-        .collect();
-    let vsm = plain_vsm();
-    let snapped = test_vsm(Some(Grid::uniform(64).unwrap()), Some((0.4, 0.45)));
+        .collect()
+}
+
+/// VSM on a 64-point grid whose output is NaN for z_f in [0.4, 0.45].
+fn snapped_vsm_with_nan_band() -> Mock {
+    test_vsm(Some(Grid::uniform(64).unwrap()), Some((0.4, 0.45)))
+}
+
+/// Several subjects on the same fragments (built once) report what each reports alone: the
+/// same errors, counts and per-view figures, in the order given.
+#[test]
+fn subjects_evaluated_together_equal_each_alone() {
+    let stacks = random_views(14, 4);
+    let (vsm, snapped) = (plain_vsm(), snapped_vsm_with_nan_band());
     let subjects = [
         Subject::Technique(&vsm),
         Subject::Pcf,
@@ -342,15 +351,8 @@ fn subjects_evaluated_together_equal_each_alone() {
 
 #[test]
 fn histograms_count_the_errors_the_kept_values_hold() {
-    let mut r = rng(15);
-    let stacks: Vec<_> = (0..3)
-        .map(|i| {
-            let (w, h) = (r.gen_range(5..30), r.gen_range(5..30));
-            random_stack(&mut r, &format!("v{i}"), w, h)
-        })
-        .collect();
-    let vsm = plain_vsm();
-    let snapped = test_vsm(Some(Grid::uniform(64).unwrap()), Some((0.4, 0.45)));
+    let stacks = random_views(15, 3);
+    let (vsm, snapped) = (plain_vsm(), snapped_vsm_with_nan_band());
     let subjects = [Subject::Technique(&vsm), Subject::Technique(&snapped)];
     let edges: std::sync::Arc<[f64]> = std::sync::Arc::from(&[0.0, 1e-3, 0.01, 0.05, 0.2][..]);
     let counted = metrics::evaluate_subjects(
