@@ -207,61 +207,55 @@ pub fn sweep(
         .enumerate()
         .map(|(v, s)| fragments_subsampled(s, v, bias, sub))
         .collect();
-    let fronts: Vec<Vec<f64>> = stacks.iter().map(front_map).collect();
     let n_frag: usize = frags.iter().map(|f| f.len()).sum();
-    let exact: Vec<Vec<Vec<f64>>> = stacks
-        .par_iter()
-        .zip(&fronts)
-        .map(|(s, f)| {
-            let id = identity_theta(tech.m());
-            decoded_moments(f, s.meta.width, s.meta.height, &id, Storage::Exact, &kernel)
-        })
-        .collect();
-    let mut out = Vec::new();
-    for cfg in configs {
-        let maps: Vec<Vec<Vec<f64>>> = stacks
+    // acc[a][c]: (Σ |G − PCF|, non-finite, Σ |G − G_exact|, noisy) of config c at alpha a,
+    // summed view by view, fragment by fragment.
+    let mut acc = vec![vec![(0.0, 0usize, 0.0, 0usize); configs.len()]; alphas.len()];
+    for (stack, fr) in stacks.iter().zip(&frags) {
+        // One view at a time: its unquantized moments and every config's decoded ones.
+        let (w, h) = (stack.meta.width, stack.meta.height);
+        let front = front_map(stack);
+        let id = identity_theta(tech.m());
+        let exact = decoded_moments(&front, w, h, &id, Storage::Exact, &kernel);
+        let maps: Vec<Vec<Vec<f64>>> = configs
             .par_iter()
-            .zip(&fronts)
-            .map(|(s, f)| {
-                decoded_moments(
-                    f,
-                    s.meta.width,
-                    s.meta.height,
-                    &cfg.theta,
-                    cfg.storage,
-                    &kernel,
-                )
-            })
+            .map(|cfg| decoded_moments(&front, w, h, &cfg.theta, cfg.storage, &kernel))
             .collect();
-        let per_alpha: Vec<(f64, usize, f64, f64)> = alphas
+        alphas
             .par_iter()
-            .map(|&a| {
+            .zip(acc.par_iter_mut())
+            .for_each(|(&a, acc)| {
                 let sh = tech.shadower(a);
-                let mut sum = 0.0;
-                let mut dev = 0.0;
-                let mut bad = 0;
-                let mut noisy = 0usize;
-                for ((fr, mp), ex) in frags.iter().zip(&maps).zip(&exact) {
-                    for f in fr {
+                for f in fr {
+                    // G on unquantized moments: the same for every config.
+                    let ge = sh.shadow(&exact[f.texel], f.zf);
+                    for (mp, (sum, bad, dev, noisy)) in maps.iter().zip(acc.iter_mut()) {
                         let g = sh.shadow(&mp[f.texel], f.zf);
-                        let ge = sh.shadow(&ex[f.texel], f.zf);
                         let d = if g.is_finite() && ge.is_finite() {
                             (g - ge).abs()
                         } else {
                             1.0
                         };
-                        noisy += (d > DISPLAY_STEP) as usize;
+                        *noisy += (d > DISPLAY_STEP) as usize;
                         if g.is_finite() {
-                            sum += (g - f.pcf).abs();
-                            dev += d;
+                            *sum += (g - f.pcf).abs();
+                            *dev += d;
                         } else {
-                            sum += 1.0;
-                            dev += 1.0;
-                            bad += 1;
+                            *sum += 1.0;
+                            *dev += 1.0;
+                            *bad += 1;
                         }
                     }
                 }
-                let n = n_frag.max(1) as f64;
+            });
+    }
+    let n = n_frag.max(1) as f64;
+    let mut out = Vec::new();
+    for (c, cfg) in configs.iter().enumerate() {
+        let per_alpha: Vec<(f64, usize, f64, f64)> = acc
+            .iter()
+            .map(|a| {
+                let (sum, bad, dev, noisy) = a[c];
                 (sum / n, bad, dev / n, noisy as f64 / n)
             })
             .collect();

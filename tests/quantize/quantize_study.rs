@@ -98,3 +98,57 @@ fn float32_storage_matches_the_evaluator() {
         assert!(s.errors.iter().all(|e| (0.0..=1.0).contains(e)), "{s:?}");
     }
 }
+
+/// The sweep shares each view's unquantized G between its configurations and sums view by
+/// view: every configuration reports what it reports swept alone, and two views report the
+/// fragment-weighted mean of each view swept alone.
+#[test]
+fn configurations_and_views_are_summed_independently() {
+    let a = scene();
+    let mut b = scene();
+    b.meta.view = "b".into();
+    for l in &mut b.depth {
+        for z in l.iter_mut().filter(|z| z.is_finite()) {
+            *z = (*z * 0.9 + 0.05).min(0.99);
+        }
+    }
+    let alphas = [1e-6, 1e-4, 1e-2];
+    let cfg = [
+        Config {
+            name: "opt16".into(),
+            theta: published(4).unwrap(),
+            storage: Storage::Unorm(16),
+        },
+        Config {
+            name: "can8".into(),
+            theta: identity_theta(4),
+            storage: Storage::Unorm(8),
+        },
+    ];
+    let run = |stacks: &[DepthStack], cfg: &[Config]| {
+        let bias = Bias::default();
+        sweep(stacks, Tech::Msm4, cfg, &alphas, &bias, &Subsample::All).unwrap()
+    };
+    let both = run(&[a.clone(), b.clone()], &cfg);
+    for (c, s) in cfg.iter().zip(&both) {
+        let alone = run(&[a.clone(), b.clone()], std::slice::from_ref(c));
+        assert_eq!(s.errors, alone[0].errors, "{}", c.name);
+        assert_eq!(s.deviation, alone[0].deviation, "{}", c.name);
+        assert_eq!(s.noise_share, alone[0].noise_share, "{}", c.name);
+        assert_eq!(s.non_finite, alone[0].non_finite, "{}", c.name);
+    }
+    let (sa, sb) = (run(&[a], &cfg), run(&[b], &cfg));
+    for ((s, x), y) in both.iter().zip(&sa).zip(&sb) {
+        let (na, nb) = (x.fragments as f64, y.fragments as f64);
+        assert_eq!(s.fragments, x.fragments + y.fragments);
+        for (k, a) in alphas.iter().enumerate() {
+            let mean = (na * x.errors[k] + nb * y.errors[k]) / (na + nb);
+            assert!((s.errors[k] - mean).abs() < 1e-12, "{} α={a}", s.config);
+            let dev = (na * x.deviation[k] + nb * y.deviation[k]) / (na + nb);
+            assert!((s.deviation[k] - dev).abs() < 1e-12);
+            assert_eq!(s.non_finite[k], x.non_finite[k] + y.non_finite[k]);
+        }
+    }
+    // Different views give different errors: the mean above is not trivially one view's.
+    assert_ne!(sa[0].errors, sb[0].errors);
+}
