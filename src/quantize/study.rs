@@ -89,7 +89,7 @@ impl Tech {
 /// f32) stored in `storage`, the two separable passes of `kernel` in f32 each stored in
 /// `storage` ([`pipeline::filter_map`], taps unfused), θ⁻¹ of the filtered texel in f64.
 /// `Storage::Exact` is the reference: the same filter in f64 without any rounding.
-/// Result: `[t][j]`.
+/// Result: texel t's m moments at `[t]`.
 pub fn decoded_moments(
     front: &[f64],
     width: usize,
@@ -97,15 +97,11 @@ pub fn decoded_moments(
     theta: &Theta,
     storage: Storage,
     kernel: &Gaussian,
-) -> Vec<Vec<f64>> {
+) -> Decoded {
     let m = theta.m();
     let mut b = vec![0.0; m];
     let mut s = vec![0.0; m];
-    let decode = |sv: &[f64]| {
-        let mut out = vec![0.0; m];
-        theta.decode(sv, &mut out);
-        out
-    };
+    let mut values = vec![0.0; front.len() * m];
     if storage == Storage::Exact {
         let mut stored = vec![vec![0.0; front.len()]; m];
         for (t, &z) in front.iter().enumerate() {
@@ -119,9 +115,13 @@ pub fn decoded_moments(
             .iter()
             .map(|c| filter_separable(c, width, height, kernel.weights_1d()))
             .collect();
-        return (0..front.len())
-            .map(|t| decode(&filtered.iter().map(|c| c[t]).collect::<Vec<_>>()))
-            .collect();
+        for (t, out) in values.chunks_mut(m).enumerate() {
+            for (sj, c) in s.iter_mut().zip(&filtered) {
+                *sj = c[t];
+            }
+            theta.decode(&s, out);
+        }
+        return Decoded { m, values };
     }
     let st = (storage, HalfRounding::NearestEven);
     let mut texels = vec![0.0f32; front.len() * m];
@@ -135,9 +135,51 @@ pub fn decoded_moments(
     let w = pipeline::weights_f32(kernel);
     let dims = (width, height, m);
     let v = pipeline::filter_map(&texels, dims, &w, Order::Unfused, st);
-    v.chunks(m)
-        .map(|c| decode(&c.iter().map(|&x| x as f64).collect::<Vec<_>>()))
-        .collect()
+    for (c, out) in v.chunks(m).zip(values.chunks_mut(m)) {
+        for (sj, &x) in s.iter_mut().zip(c) {
+            *sj = x as f64;
+        }
+        theta.decode(&s, out);
+    }
+    Decoded { m, values }
+}
+
+/// Decoded moment maps ([`decoded_moments`]): m values per texel, texel-major.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Decoded {
+    m: usize,
+    values: Vec<f64>,
+}
+
+impl Decoded {
+    /// Texels.
+    pub fn len(&self) -> usize {
+        self.values.len() / self.m.max(1)
+    }
+    /// Whether there is no texel.
+    pub fn is_empty(&self) -> bool {
+        self.values.is_empty()
+    }
+    /// Every texel's moments, in texel order.
+    pub fn iter(&self) -> std::slice::Chunks<'_, f64> {
+        self.values.chunks(self.m.max(1))
+    }
+}
+
+impl<'a> IntoIterator for &'a Decoded {
+    type Item = &'a [f64];
+    type IntoIter = std::slice::Chunks<'a, f64>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.iter()
+    }
+}
+
+impl std::ops::Index<usize> for Decoded {
+    type Output = [f64];
+    /// Texel t's moments.
+    fn index(&self, t: usize) -> &[f64] {
+        &self.values[t * self.m..(t + 1) * self.m]
+    }
 }
 
 /// θ = identity (canonical storage of b itself).
@@ -217,7 +259,7 @@ pub fn sweep(
         let front = front_map(stack);
         let id = identity_theta(tech.m());
         let exact = decoded_moments(&front, w, h, &id, Storage::Exact, &kernel);
-        let maps: Vec<Vec<Vec<f64>>> = configs
+        let maps: Vec<Decoded> = configs
             .par_iter()
             .map(|cfg| decoded_moments(&front, w, h, &cfg.theta, cfg.storage, &kernel))
             .collect();
@@ -450,7 +492,7 @@ mod tests {
         // the nearest step (filtering averages the earlier roundings), so the error stays within
         // three half quanta and exceeds one half quantum (the passes' stores are modelled)
         let exact = decoded_moments(&front, w, h, &identity_theta(4), Storage::Float32, &k);
-        let err = |d: &Vec<Vec<f64>>| {
+        let err = |d: &Decoded| {
             d.iter()
                 .zip(&exact)
                 .flat_map(|(a, b)| a.iter().zip(b).map(|(p, q)| (p - q).abs()))

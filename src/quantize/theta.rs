@@ -4,7 +4,7 @@
 //! Peters et al. 2016, Table 1), and exact containment verification.
 
 use super::curve::{row_min_max, Curve};
-use super::linalg::{mat_vec, Lu};
+use super::linalg::Lu;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
@@ -69,9 +69,13 @@ impl Theta {
 
     /// b = A⁻¹·(s − t).
     pub fn decode(&self, s: &[f64], out: &mut [f64]) {
-        let d: Vec<f64> = s.iter().zip(&self.offset).map(|(p, q)| p - q).collect();
-        let b = mat_vec(&self.inverse, &d);
-        out.copy_from_slice(&b);
+        for (o, row) in out.iter_mut().zip(&self.inverse) {
+            *o = row
+                .iter()
+                .zip(s.iter().zip(&self.offset))
+                .map(|(a, (p, q))| a * (p - q))
+                .sum();
+        }
     }
 }
 
