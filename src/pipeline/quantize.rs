@@ -6,7 +6,7 @@ use super::Plan;
 use crate::artefact::{Checkpoint, OutDir};
 use crate::metrics::{Bias, Subsample};
 use crate::quantize::curve::MonomialCurve;
-use crate::quantize::study::{self, sweep, Sweep, Tech};
+use crate::quantize::study::{self, Sweep, Tech};
 use crate::quantize::theta::{verify, Theta};
 use crate::report::quantize::{markdown, plot};
 use crate::stack::DepthStack;
@@ -109,6 +109,8 @@ pub fn study(s: &Study, od: &OutDir, discard: bool) -> Result<Written> {
     }
     let t0 = Instant::now();
     let mut all: Vec<Sweep> = Vec::new();
+    // The fragments and their PCF reference, built once for every technique still to sweep.
+    let mut frags = None;
     for (tech, ours) in s.techniques.iter().zip(&thetas) {
         if let Some(done) = cp.get::<Vec<Sweep>>(tech.name())? {
             all.extend(done);
@@ -120,7 +122,11 @@ pub fn study(s: &Study, od: &OutDir, discard: bool) -> Result<Written> {
             tech.name(),
             configs.len()
         );
-        let sw = sweep(&stacks, *tech, &configs, &s.alphas, &Bias::default(), &sub)?;
+        let frags = match &mut frags {
+            Some(f) => f,
+            None => frags.insert(study::sweep_fragments(&stacks, &Bias::default(), &sub)?),
+        };
+        let sw = study::sweep_on(&stacks, frags, *tech, &configs, &s.alphas)?;
         cp.put(tech.name(), &sw)?;
         all.extend(sw);
     }

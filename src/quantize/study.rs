@@ -12,7 +12,7 @@
 use super::pipeline::{self, HalfRounding, DISPLAY_STEP, MAX_NOISE};
 use super::theta::{published, Theta};
 use crate::kernel::{filter_separable, front_map, Gaussian};
-use crate::metrics::{fragments_subsampled, Bias, Subsample};
+use crate::metrics::{fragments_subsampled, Bias, Fragment, Subsample};
 use crate::shader::Order;
 use crate::stack::DepthStack;
 use crate::technique::hamburger::Hamburger;
@@ -239,21 +239,49 @@ pub fn sweep(
     bias: &Bias,
     sub: &Subsample,
 ) -> Result<Vec<Sweep>> {
+    let frags = sweep_fragments(stacks, bias, sub)?;
+    sweep_on(stacks, &frags, tech, configs, alphas)
+}
+
+/// The fragments (with their PCF reference) a sweep of `stacks` evaluates, one list per view:
+/// every technique's sweep of the same stacks reads the same ones ([`sweep_on`]).
+pub fn sweep_fragments(
+    stacks: &[DepthStack],
+    bias: &Bias,
+    sub: &Subsample,
+) -> Result<Vec<Vec<Fragment>>> {
     crate::metrics::require_fragments(stacks)?;
     for s in stacks {
         crate::metrics::check_stack(s)?;
     }
-    let kernel = Gaussian::paper();
-    let frags: Vec<_> = stacks
+    Ok(stacks
         .par_iter()
         .enumerate()
         .map(|(v, s)| fragments_subsampled(s, v, bias, sub))
-        .collect();
+        .collect())
+}
+
+/// [`sweep`] on the fragments `frags` of `stacks` ([`sweep_fragments`]).
+pub fn sweep_on(
+    stacks: &[DepthStack],
+    frags: &[Vec<Fragment>],
+    tech: Tech,
+    configs: &[Config],
+    alphas: &[f64],
+) -> Result<Vec<Sweep>> {
+    if frags.len() != stacks.len() {
+        anyhow::bail!(
+            "quantize: fragment lists for {} views, but {} stacks",
+            frags.len(),
+            stacks.len()
+        );
+    }
+    let kernel = Gaussian::paper();
     let n_frag: usize = frags.iter().map(|f| f.len()).sum();
     // acc[a][c]: (Σ |G − PCF|, non-finite, Σ |G − G_exact|, noisy) of config c at alpha a,
     // summed view by view, fragment by fragment.
     let mut acc = vec![vec![(0.0, 0usize, 0.0, 0usize); configs.len()]; alphas.len()];
-    for (stack, fr) in stacks.iter().zip(&frags) {
+    for (stack, fr) in stacks.iter().zip(frags) {
         // One view at a time: its unquantized moments and every config's decoded ones.
         let (w, h) = (stack.meta.width, stack.meta.height);
         let front = front_map(stack);
