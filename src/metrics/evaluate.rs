@@ -205,6 +205,16 @@ pub(super) struct Partial {
     histogram: Vec<u64>,
 }
 
+impl Partial {
+    /// Empty sums, with a zero count for every bin of the histogram `edges` (if any).
+    fn with_bins(edges: Option<&[f64]>) -> Partial {
+        Partial {
+            histogram: vec![0; edges.map_or(0, |e| e.len().saturating_sub(1))],
+            ..Partial::default()
+        }
+    }
+}
+
 /// Error unless the stacks hold at least one fragment: an empty input has no error to
 /// report (never a 0 % result).
 pub fn require_fragments(stacks: &[DepthStack]) -> Result<()> {
@@ -351,10 +361,7 @@ pub(super) fn shade_view(
             || subject.chunk_state(m),
             |(ev, buf), chunk| {
                 cold(ev);
-                let mut p = Partial {
-                    histogram: vec![0; edges.map_or(0, |e| e.len().saturating_sub(1))],
-                    ..Partial::default()
-                };
+                let mut p = Partial::with_bins(edges);
                 let unsettled0 = ev.as_ref().map_or(0, |e| e.unsettled());
                 for f in chunk {
                     let (g, trivial, solved) = shader.shade(ev, buf, f);
@@ -394,10 +401,7 @@ pub(super) fn shade_view(
         )
         .collect();
     let shade_seconds = t1.elapsed().as_secs_f64();
-    let mut total = Partial {
-        histogram: vec![0; edges.map_or(0, |e| e.len().saturating_sub(1))],
-        ..Partial::default()
-    };
+    let mut total = Partial::with_bins(edges);
     let mut values = Vec::new();
     for p in partials {
         total.sum += p.sum;

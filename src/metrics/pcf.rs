@@ -20,6 +20,12 @@ pub struct FrontMap {
 }
 
 impl FrontMap {
+    /// The tangent plane of texel k's front surface at the offset (dx, dy):
+    /// dz/du·dx + dz/dv·dy.
+    fn tangent(&self, k: usize, dx: f64, dy: f64) -> f64 {
+        self.dzdu[k] * dx + self.dzdv[k] * dy
+    }
+
     /// The front layer of `stack`.
     pub fn of(stack: &DepthStack) -> FrontMap {
         let n = stack.texel_count();
@@ -102,8 +108,7 @@ pub fn pcf_at<const N: usize>(
                 delta = match path_offsets(ox, oy) {
                     Some(path) => delta.min(lowest_plane(front, x, y, path, dx, dy)),
                     None => path_texels(x, y, ox, oy).fold(delta, |d, (qx, qy)| {
-                        let k = qy * width + qx;
-                        d.min(front.dzdu[k] * dx + front.dzdv[k] * dy)
+                        d.min(front.tangent(qy * width + qx, dx, dy))
                     }),
                 };
             }
@@ -145,8 +150,7 @@ fn lowest_plane(front: &FrontMap, x: usize, y: usize, path: &[(i8, i8)], dx: f64
     let w = front.width as isize;
     let base = (y * front.width + x) as isize;
     let plane = |&(qx, qy): &(i8, i8)| {
-        let k = (base + qy as isize * w + qx as isize) as usize;
-        front.dzdu[k] * dx + front.dzdv[k] * dy
+        front.tangent((base + qy as isize * w + qx as isize) as usize, dx, dy)
     };
     let mut lanes = [f64::NAN; 4];
     let chunks = path.chunks_exact(4);

@@ -188,12 +188,7 @@ pub(super) fn evaluate(
 /// `metrics::windows::stacks_corpus`).
 fn measured(stacks: &[DepthStack], job: &Job, r: &EvalReport) -> Result<Measured> {
     let t = job.technique.as_ref();
-    let mut histogram = vec![0u64; HIST_EDGES.len() - 1];
-    for v in &r.views {
-        for (h, c) in histogram.iter_mut().zip(&v.histogram) {
-            *h += c;
-        }
-    }
+    let histogram = crate::report::recommend::histogram_of(r);
     // Speed on the same kind of input as the error: filter windows of real fragments.
     let corpus = crate::metrics::windows::stacks_corpus(stacks, job.speed_inputs, 2015)?;
     let ns = timing::measure(t, &corpus, 3).mean;

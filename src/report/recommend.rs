@@ -60,13 +60,19 @@ pub fn error_histogram(errors: impl Iterator<Item = f64>) -> Vec<u64> {
     h
 }
 
-/// The error histogram of an evaluation kept with per-fragment values (empty without them).
+/// The error histogram of an evaluation that counted it in the bins of [`HIST_EDGES`]
+/// (`EvalOptions::histogram`), summed over its views (empty when no view counted one).
 pub fn histogram_of(r: &EvalReport) -> Vec<u64> {
-    let values = r.views.iter().flat_map(|v| v.values.iter().flatten());
-    if r.views.iter().all(|v| v.values.is_none()) {
+    if r.views.iter().all(|v| v.histogram.is_empty()) {
         return Vec::new();
     }
-    error_histogram(values.map(|f| (f.g - f.pcf).abs()))
+    let mut h = vec![0u64; HIST_EDGES.len() - 1];
+    for v in &r.views {
+        for (t, c) in h.iter_mut().zip(&v.histogram) {
+            *t += c;
+        }
+    }
+    h
 }
 
 /// Per scene of an evaluation: (scene, mean |G − PCF| over its finite fragments, finite fragments).

@@ -3,7 +3,7 @@
 
 use momentlab::metrics::{evaluate, Bias, EvalOptions, Subsample};
 use momentlab::quantize::study::{identity_theta, sweep, Config, Storage, Tech};
-use momentlab::quantize::theta::published;
+use momentlab::quantize::theta::{published, Theta};
 use momentlab::stack::{DepthStack, StackMeta};
 use momentlab::technique::hamburger4::Hamburger4;
 use momentlab::technique::linalg::Precision;
@@ -45,26 +45,32 @@ fn scene() -> DepthStack {
     }
 }
 
+fn config(name: &str, theta: Theta, storage: Storage) -> Config {
+    Config {
+        name: name.into(),
+        theta,
+        storage,
+    }
+}
+
+/// 16-bit storage with the published θ₄.
+fn opt16() -> Config {
+    config("opt16", published(4).unwrap(), Storage::Unorm(16))
+}
+
+/// Canonical 8-bit storage.
+fn can8() -> Config {
+    config("can8", identity_theta(4), Storage::Unorm(8))
+}
+
 #[test]
 fn float32_storage_matches_the_evaluator() {
     let stacks = vec![scene()];
     let alphas = [1e-6, 3e-5, 1e-3];
     let cfg = vec![
-        Config {
-            name: "f32".into(),
-            theta: identity_theta(4),
-            storage: Storage::Float32,
-        },
-        Config {
-            name: "opt16".into(),
-            theta: published(4).unwrap(),
-            storage: Storage::Unorm(16),
-        },
-        Config {
-            name: "can8".into(),
-            theta: identity_theta(4),
-            storage: Storage::Unorm(8),
-        },
+        config("f32", identity_theta(4), Storage::Float32),
+        opt16(),
+        can8(),
     ];
     let sw = sweep(
         &stacks,
@@ -113,18 +119,7 @@ fn configurations_and_views_are_summed_independently() {
         }
     }
     let alphas = [1e-6, 1e-4, 1e-2];
-    let cfg = [
-        Config {
-            name: "opt16".into(),
-            theta: published(4).unwrap(),
-            storage: Storage::Unorm(16),
-        },
-        Config {
-            name: "can8".into(),
-            theta: identity_theta(4),
-            storage: Storage::Unorm(8),
-        },
-    ];
+    let cfg = [opt16(), can8()];
     let run = |stacks: &[DepthStack], cfg: &[Config]| {
         let bias = Bias::default();
         sweep(stacks, Tech::Msm4, cfg, &alphas, &bias, &Subsample::All).unwrap()
