@@ -6,6 +6,7 @@ use momentlab::artefact::OutDir;
 use momentlab::basis::candidates::MAX_M;
 use momentlab::metrics::Bias;
 use momentlab::report::sweep::{self as sweep_report, ReportOptions};
+use momentlab::search::reference::ReferenceCache;
 use momentlab::search::reference::{self, Summary};
 use momentlab::search::run::{load_table, ranking_lines, references_for, sweep_line};
 use momentlab::search::{
@@ -327,8 +328,8 @@ pub fn run(args: Args) -> Result<()> {
         return Ok(());
     }
     if let Some(rows) = verified {
-        let (summary, refs) =
-            references_for(&data, &table, stacks.as_deref(), &rows, &opts, &results)?;
+        let cache = ReferenceCache::new(stacks.as_deref());
+        let (summary, refs) = references_for(&data, &table, &cache, &rows, &opts, &results, None)?;
         let ro = report_opts();
         sweep_report::write(&report, &rows, &data, &refs, &ro)?;
         print_ranking(&summary, args.json, ro.partial.as_ref())?;
@@ -421,7 +422,8 @@ fn sweep(
         Progress::Phase { name, units } => bar.phase(&format!("search {name}"), units),
         Progress::Advance(u) => bar.inc(u),
     };
-    let r = sweep_dataset(data, table, stacks, opts, results, Some(&progress))?;
+    let refs = ReferenceCache::new(stacks);
+    let r = sweep_dataset(data, table, &refs, opts, results, Some(&progress))?;
     bar.finish();
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");

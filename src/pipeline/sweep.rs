@@ -5,9 +5,13 @@
 use super::progress::bar;
 use super::Plan;
 use crate::artefact::OutDir;
+use crate::metrics::Bias;
 use crate::report::sweep::{self as sweep_report, ReportOptions};
+use crate::search::reference::ReferenceCache;
 use crate::search::run::{ranking_lines, sweep_line};
-use crate::search::{stacks_dataset, sweep_dataset, Progress, SweepOptions};
+use crate::search::{
+    stacks_dataset, sweep_dataset, Dataset, FunctionTable, Progress, SweepOptions,
+};
 use crate::stack::DepthStack;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
@@ -27,6 +31,9 @@ pub struct Folders<'a> {
 pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec<String>> {
     let mut notes = Vec::new();
     let mut compare: Vec<PathBuf> = Vec::new();
+    // One dataset and one set of references for every m: neither depends on m.
+    let mut data = Shared::default();
+    let refs = ReferenceCache::new(Some(stacks));
     for &m in &plan.search_ms {
         let results = dirs.data.join(format!("search-m{m}"));
         let candidates = match (plan.search_subset, m >= 3) {
@@ -42,7 +49,10 @@ pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec
             ..SweepOptions::default()
         };
         let t0 = Instant::now();
-        match sweep(stacks, &opts, &results, dirs.report, &compare) {
+        let done = data
+            .get(stacks, &opts)
+            .and_then(|(d, t)| sweep(d, t, &refs, &opts, &results, dirs.report, &compare));
+        match done {
             Ok(()) => {
                 let scope = match (plan.search_subset, m >= 3) {
                     (Some(k), true) => format!(
@@ -66,10 +76,44 @@ pub fn run_all(stacks: &[DepthStack], plan: &Plan, dirs: &Folders) -> Result<Vec
     Ok(notes)
 }
 
+/// The sweep's dataset and catalog table ([`stacks_dataset`]), built once for the sweeps of
+/// every m (they share grid, bias, sample and catalog; rebuilt if those change).
+#[derive(Default)]
+struct Shared {
+    built: Option<(DatasetKey, Dataset, FunctionTable)>,
+}
+
+/// What [`stacks_dataset`] reads from the options.
+type DatasetKey = (usize, Option<usize>, u64, Bias, Option<PathBuf>);
+
+impl Shared {
+    fn get(
+        &mut self,
+        stacks: &[DepthStack],
+        opts: &SweepOptions,
+    ) -> Result<(&Dataset, &FunctionTable)> {
+        let key = (
+            opts.grid,
+            opts.max_fragments,
+            opts.seed,
+            opts.bias,
+            opts.catalog.clone(),
+        );
+        if self.built.as_ref().is_none_or(|b| b.0 != key) {
+            let (data, table) = stacks_dataset(stacks, opts)?;
+            self.built = Some((key, data, table));
+        }
+        let (_, data, table) = self.built.as_ref().expect("built above");
+        Ok((data, table))
+    }
+}
+
 /// One sweep with a progress bar and its summary lines on stderr; the report of a complete
 /// sweep (the sweeps `compare` side by side) goes to `report`, replacing the run's own files.
 fn sweep(
-    stacks: &[DepthStack],
+    data: &Dataset,
+    table: &FunctionTable,
+    refs: &ReferenceCache,
     opts: &SweepOptions,
     results: &Path,
     report: &Path,
@@ -78,7 +122,7 @@ fn sweep(
     eprintln!(
         "search: m = {}, {} views, results in {}",
         opts.m,
-        stacks.len(),
+        refs.stacks().map_or(0, <[DepthStack]>::len),
         results.display()
     );
     let b = bar(0, &format!("sweep m = {}", opts.m));
@@ -88,8 +132,7 @@ fn sweep(
         }
         Progress::Advance(u) => b.inc(u),
     };
-    let (data, table) = stacks_dataset(stacks, opts)?;
-    let r = sweep_dataset(&data, &table, Some(stacks), opts, results, Some(&progress))?;
+    let r = sweep_dataset(data, table, refs, opts, results, Some(&progress))?;
     b.finish();
     if let Some(line) = sweep_line(&r) {
         eprintln!("{line}");
@@ -100,7 +143,7 @@ fn sweep(
             ..ReportOptions::of(opts, results)
         };
         let out = OutDir::new(report, true)?;
-        sweep_report::write(&out, &r.rows, &data, &r.references, &report_opts)?;
+        sweep_report::write(&out, &r.rows, data, &r.references, &report_opts)?;
         for line in ranking_lines(s) {
             eprintln!("{line}");
         }

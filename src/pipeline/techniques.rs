@@ -11,6 +11,7 @@ use crate::report::recommend::{per_scene, Measured, HIST_EDGES};
 use crate::stack::DepthStack;
 use crate::technique::linalg::Precision;
 use crate::technique::lp_candidate::LpCandidate;
+use crate::technique::timing::Corpus;
 use crate::technique::{self, registry, timing, Technique};
 use anyhow::Result;
 use std::path::{Path, PathBuf};
@@ -115,6 +116,7 @@ pub fn evaluate_all(
         .collect();
     let mut all: Vec<Option<Measured>> = files.iter().map(|f| read_json(f).ok()).collect();
     let mut strides: Vec<usize> = Vec::new();
+    let mut corpora = Corpora::default();
     for (j, m) in jobs.iter().zip(&all) {
         if m.is_none() && !strides.contains(&j.stride) {
             strides.push(j.stride);
@@ -131,7 +133,8 @@ pub fn evaluate_all(
         let names: Vec<&str> = group.iter().map(|&i| jobs[i].name.as_str()).collect();
         let reports = evaluate(stacks, &subjects, &names, stride)?;
         for (&i, r) in group.iter().zip(reports) {
-            let m = measured(stacks, &jobs[i], &r)?;
+            let corpus = corpora.get(stacks, jobs[i].speed_inputs)?;
+            let m = measured(&jobs[i], corpus, &r);
             write_json(&files[i], &m)?;
             all[i] = Some(m);
         }
@@ -186,13 +189,36 @@ pub(super) fn evaluate(
 /// The artefact of `job` from its evaluation `r` (error against PCF, error histogram) and its
 /// speed (mean ns over `job.speed_inputs` fragments sampled from the same stacks,
 /// `metrics::windows::stacks_corpus`).
-fn measured(stacks: &[DepthStack], job: &Job, r: &EvalReport) -> Result<Measured> {
+/// The speed corpora of the jobs (filter windows of real fragments,
+/// [`crate::metrics::windows::stacks_corpus`]), one per size, built on first use: the same
+/// seed draws the same windows for every job of that size.
+#[derive(Default)]
+struct Corpora(Vec<(usize, Corpus)>);
+
+impl Corpora {
+    fn get(&mut self, stacks: &[DepthStack], count: usize) -> Result<&Corpus> {
+        let k = match self.0.iter().position(|(n, _)| *n == count) {
+            Some(k) => k,
+            None => {
+                let c = crate::metrics::windows::stacks_corpus(stacks, count, SPEED_SEED)?;
+                self.0.push((count, c));
+                self.0.len() - 1
+            }
+        };
+        Ok(&self.0[k].1)
+    }
+}
+
+/// Seed of the speed corpora.
+const SPEED_SEED: u64 = 2015;
+
+/// The artefact of `job`: its evaluation `r` and its speed on `corpus` (the same kind of input
+/// as the error: filter windows of real fragments).
+fn measured(job: &Job, corpus: &Corpus, r: &EvalReport) -> Measured {
     let t = job.technique.as_ref();
     let histogram = crate::report::recommend::histogram_of(r);
-    // Speed on the same kind of input as the error: filter windows of real fragments.
-    let corpus = crate::metrics::windows::stacks_corpus(stacks, job.speed_inputs, 2015)?;
-    let ns = timing::measure(t, &corpus, 3).mean;
-    Ok(Measured {
+    let ns = timing::measure(t, corpus, 3).mean;
+    Measured {
         name: job.name.clone(),
         precision: job.precision.clone(),
         // f64 storage doubles the texel size of the f32 layout the techniques report.
@@ -212,7 +238,7 @@ fn measured(stacks: &[DepthStack], job: &Job, r: &EvalReport) -> Result<Measured
         histogram,
         error_scaled: Some(r.error_scaled),
         leak: Some(r.leak),
-    })
+    }
 }
 
 /// The `plan.pictures` evenly spaced views of the pictures.

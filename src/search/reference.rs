@@ -13,7 +13,9 @@ use crate::metrics::{self, Bias, EvalOptions, Subject};
 use crate::stack::DepthStack;
 use anyhow::{Context, Result};
 use serde::Serialize;
+use std::cell::RefCell;
 use std::f64::consts::PI;
+use std::rc::Rc;
 
 /// A labelled error value marked in the histogram (e.g. "b_MSM (LP)").
 #[derive(Clone, Debug, PartialEq)]
@@ -93,24 +95,26 @@ fn lp_reference_sets() -> [(&'static str, Vec<usize>); LP_REFERENCES] {
 /// Reference values as LP candidates on every fragment: PCF (0), VSM = (z, z²),
 /// ESM = exp(80(z−1)) (c = 80), b_MSM, b_TMSM.
 pub fn lp_references(data: &Dataset, solver: &str, chunk: usize) -> Result<Vec<Reference>> {
-    Ok(lp_reference_errors(data, solver, chunk)?
-        .into_iter()
-        .map(|(r, _)| r)
+    Ok(lp_reference_errors(data, solver, chunk, &|_| {})?
+        .iter()
+        .map(|(r, _)| r.clone())
         .collect())
 }
 
-/// [`lp_references`] with each reference's per-fragment errors (fragment order 0..n).
+/// [`lp_references`] with each reference's per-fragment errors (fragment order 0..n);
+/// `tick(fragments)` as solves finish.
 fn lp_reference_errors(
     data: &Dataset,
     solver: &str,
     chunk: usize,
+    tick: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<(Reference, Vec<f64>)>> {
     let table = paper_bases(data.grid())?;
     let s = Scorer::new(data, &table, solver, chunk)?;
     let ids: Vec<u32> = (0..data.fragments().len() as u32).collect();
     let sets = lp_reference_sets();
     let subsets: Vec<Vec<usize>> = sets.iter().map(|s| s.1.clone()).collect();
-    let errs = s.errors_many(&subsets, &ids, &|_| {})?;
+    let errs = s.errors_many(&subsets, &ids, tick)?;
     let mut out = vec![(
         Reference {
             label: "PCF".into(),
@@ -140,24 +144,96 @@ fn lp_reference_errors(
     Ok(out)
 }
 
+/// The references of the sweeps on one set of depth stacks, each computed once and kept for
+/// the next sweep (`reproduce` sweeps m = 2, 3 and 4 on the same stacks and dataset): the
+/// closed forms on the stacks ([`closed_form_references`], per bias) and the LP references'
+/// per-fragment errors (per dataset, told apart by [`Dataset::fingerprint`], solver and
+/// chunk). Neither depends on m.
+#[derive(Default)]
+pub struct ReferenceCache<'a> {
+    stacks: Option<&'a [DepthStack]>,
+    closed: RefCell<Option<(Bias, Vec<Reference>)>>,
+    lp: RefCell<Option<(LpKey, LpErrors)>>,
+}
+
+/// What the LP references' errors depend on: the dataset's fingerprint, solver and chunk.
+type LpKey = (u64, String, usize);
+/// The LP references with their per-fragment errors.
+type LpErrors = Rc<Vec<(Reference, Vec<f64>)>>;
+
+impl<'a> ReferenceCache<'a> {
+    /// A cache for sweeps on `stacks` (None: no closed-form references, e.g. synthetic data).
+    pub fn new(stacks: Option<&'a [DepthStack]>) -> ReferenceCache<'a> {
+        ReferenceCache {
+            stacks,
+            ..ReferenceCache::default()
+        }
+    }
+
+    /// The stacks the closed forms are evaluated on.
+    pub fn stacks(&self) -> Option<&'a [DepthStack]> {
+        self.stacks
+    }
+
+    /// [`closed_form_references`] on the stacks with `bias` (empty without stacks).
+    pub fn closed_forms(&self, bias: &Bias) -> Result<Vec<Reference>> {
+        let Some(stacks) = self.stacks else {
+            return Ok(Vec::new());
+        };
+        if let Some((b, refs)) = &*self.closed.borrow() {
+            if b == bias {
+                return Ok(refs.clone());
+            }
+        }
+        let refs = closed_form_references(stacks, bias)?;
+        *self.closed.borrow_mut() = Some((*bias, refs.clone()));
+        Ok(refs)
+    }
+
+    /// The LP references' errors on every fragment of `data` ([`lp_reference_errors`]);
+    /// `tick(fragments)` as solves finish (not called when they are known already).
+    fn lp_errors(
+        &self,
+        data: &Dataset,
+        solver: &str,
+        chunk: usize,
+        tick: &(dyn Fn(u64) + Sync),
+    ) -> Result<LpErrors> {
+        let key = (data.fingerprint(), solver.to_string(), chunk);
+        if let Some((k, e)) = &*self.lp.borrow() {
+            if *k == key {
+                return Ok(e.clone());
+            }
+        }
+        let e = Rc::new(lp_reference_errors(data, solver, chunk, tick)?);
+        *self.lp.borrow_mut() = Some((key, e.clone()));
+        Ok(e)
+    }
+}
+
 /// [`lp_references`] with the paired difference of each reference to the winner `cols` of
-/// `table` (both scored on every fragment of `data` in one pass, same solver): mean of
+/// `table` (both scored on every fragment of `data`, same solver): mean of
 /// e_ref − e_winner over the fragments, scaled like the errors, with its standard error.
+/// The references' errors come from `cache` when it holds them for this dataset; `tick`
+/// counts the fragments solved (winner and references).
 pub fn lp_references_paired(
     data: &Dataset,
     table: &FunctionTable,
     winner: &[usize],
-    solver: &str,
-    chunk: usize,
+    (solver, chunk): (&str, usize),
+    cache: &ReferenceCache,
+    tick: &(dyn Fn(u64) + Sync),
 ) -> Result<Vec<Reference>> {
     let ids: Vec<u32> = (0..data.fragments().len() as u32).collect();
     let s = Scorer::new(data, table, solver, chunk)?;
-    let ew = s.errors_many(&[winner.to_vec()], &ids, &|_| {})?;
+    let ew = s.errors_many(&[winner.to_vec()], &ids, tick)?;
     let ew = &ew[0].errors;
     let scale = data.nontrivial_population() as f64 / data.total_count().max(1) as f64;
-    Ok(lp_reference_errors(data, solver, chunk)?
-        .into_iter()
-        .map(|(mut r, e)| {
+    Ok(cache
+        .lp_errors(data, solver, chunk, tick)?
+        .iter()
+        .map(|(r, e)| {
+            let mut r = r.clone();
             if !e.is_empty() {
                 let d: Vec<f64> = e.iter().zip(ew).map(|(a, b)| a - b).collect();
                 let m = Moments::of(&d);

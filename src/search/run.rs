@@ -3,7 +3,7 @@
 //! the references (the report files: `crate::report::sweep`).
 
 use super::config::Parameters;
-use super::reference::{self, Reference, Summary};
+use super::reference::{self, Reference, ReferenceCache, Summary};
 use super::results::{read_rows, Row};
 use super::{run_sweep, Dataset, FunctionTable, Hooks, Outcome, Progress, SamplePlan, Scorer};
 use super::{SweepConfig, SweepSummary};
@@ -203,12 +203,13 @@ pub fn stacks_dataset(
 
 /// The whole sweep on a prepared dataset and table ([`stacks_dataset`], synthetic data, custom
 /// catalogs): [`run_sweep`] into `results` (resumable), then for a complete unsharded run the
-/// references (LP on the same fragments, closed forms via `metrics::evaluate` on the `stacks`)
-/// and the ranking ([`references_for`]).
+/// references (LP on the same fragments, closed forms via `metrics::evaluate` on the stacks of
+/// `refs`, which keeps them for the next sweep on the same data) and the ranking
+/// ([`references_for`]).
 pub fn sweep_dataset(
     data: &Dataset,
     table: &FunctionTable,
-    stacks: Option<&[DepthStack]>,
+    refs: &ReferenceCache,
     opts: &SweepOptions,
     results: &Path,
     progress: Option<&(dyn Fn(Progress) + Sync)>,
@@ -237,7 +238,8 @@ pub fn sweep_dataset(
         references: Vec::new(),
     };
     if out.summary.is_some() && opts.shard[1] == 1 {
-        let (ranking, refs) = references_for(data, table, stacks, &out.rows, opts, results)?;
+        let (ranking, refs) =
+            references_for(data, table, refs, &out.rows, opts, results, progress)?;
         out.ranking = Some(ranking);
         out.references = refs;
     }
@@ -326,18 +328,34 @@ fn references_seconds(
 }
 
 /// The references (LP, paired with the winner; closed forms with `opts.closed_forms`) and the
-/// ranking of existing `rows` of the results folder `results`.
+/// ranking of existing `rows` of the results folder `results`; `refs` holds what an earlier
+/// sweep on the same data computed already. Progress: the phases "references (LP)" (fragment
+/// solves) and "references (closed forms)".
 pub fn references_for(
     data: &Dataset,
     table: &FunctionTable,
-    stacks: Option<&[DepthStack]>,
+    refs: &ReferenceCache,
     rows: &[Row],
     opts: &SweepOptions,
     results: &Path,
+    progress: Option<&(dyn Fn(Progress) + Sync)>,
 ) -> Result<(Summary, Vec<Reference>)> {
     if scored_rows(rows) == 0 {
         bail!("{}: no scored candidates to report", results.display());
     }
+    let phase = |name: &str, units: u64| {
+        if let Some(p) = progress {
+            p(Progress::Phase {
+                name: name.to_string(),
+                units,
+            });
+        }
+    };
+    let tick = |u: u64| {
+        if let Some(p) = progress {
+            p(Progress::Advance(u));
+        }
+    };
     // The LP references paired with the winner on every fragment (their difference to it).
     let winner = super::tieset::winner_of(rows).and_then(|w| {
         w.functions
@@ -345,17 +363,25 @@ pub fn references_for(
             .map(|n| table.names().iter().position(|x| x == n))
             .collect::<Option<Vec<usize>>>()
     });
-    let mut refs = match &winner {
-        Some(cols) => reference::lp_references_paired(data, table, cols, &opts.solver, opts.chunk)?,
+    let fragments = data.fragments().len() as u64;
+    let mut out = match &winner {
+        Some(cols) => {
+            phase(
+                "references (LP)",
+                (1 + reference::LP_REFERENCES as u64) * fragments,
+            );
+            let solver = (opts.solver.as_str(), opts.chunk);
+            reference::lp_references_paired(data, table, cols, solver, refs, &tick)?
+        }
         None => reference::lp_references(data, &opts.solver, opts.chunk)?,
     };
-    if opts.closed_forms {
-        if let Some(s) = stacks {
-            refs.extend(reference::closed_form_references(s, &opts.bias)?);
-        }
+    if opts.closed_forms && refs.stacks().is_some() {
+        phase("references (closed forms)", 1);
+        out.extend(refs.closed_forms(&opts.bias)?);
+        tick(1);
     }
-    let summary = reference::summarize(rows, &refs);
-    Ok((summary, refs))
+    let summary = reference::summarize(rows, &out);
+    Ok((summary, out))
 }
 
 fn scored_rows(rows: &[Row]) -> usize {

@@ -8,6 +8,7 @@
 use crate::common::tmp_path;
 use momentlab::basis::Catalog;
 use momentlab::metrics::{self, Bias, EvalOptions};
+use momentlab::search::reference::ReferenceCache;
 use momentlab::search::run::load_table;
 use momentlab::search::{sweep_dataset, Dataset, SamplePlan, SweepOptions};
 use momentlab::stack::{DepthStack, StackMeta};
@@ -116,7 +117,8 @@ fn compare(stacks: &[DepthStack], grid: &Grid, solver: &str, names: &[&[&str]], 
         closed_forms: false,
         ..SweepOptions::default()
     };
-    let r = sweep_dataset(&data, &table, Some(stacks), &opts, &dir, None).unwrap();
+    let refs = ReferenceCache::new(Some(stacks));
+    let r = sweep_dataset(&data, &table, &refs, &opts, &dir, None).unwrap();
     assert!(r.summary.is_some());
     for n in names {
         let row = r
@@ -315,4 +317,43 @@ fn capped_sample_is_stratified_and_seeded() {
         }
     )
     .is_err());
+}
+
+/// The references a [`ReferenceCache`] keeps for the next sweep (as `reproduce` sweeps m = 2, 3
+/// and 4) equal the references a fresh cache computes, for each m, and a dataset that changed
+/// (another sample) gets its own LP references, not the kept ones.
+#[test]
+fn kept_references_equal_fresh_ones() {
+    let stacks = [stack(11, 24, 20, 3), stack(12, 20, 24, 2)];
+    let grid = Grid::uniform(64).unwrap();
+    let table = load_table(None, &grid).unwrap();
+    let shared = ReferenceCache::new(Some(&stacks[..]));
+    for (tag, max_fragments) in [("all", None), ("capped", Some(120))] {
+        let plan = SamplePlan {
+            max_fragments,
+            seed: 1,
+        };
+        let data = Dataset::from_stacks(&stacks, &grid, &Bias::default(), &plan).unwrap();
+        for (m, names) in [(1, "z;z^2;exp(40z)"), (2, "z,z^2;z,exp(-10z);z^2,sin(πz)")] {
+            let opts = SweepOptions {
+                m,
+                grid: grid.len(),
+                chunk: 64,
+                max_fragments,
+                exhaustive: true,
+                names: Some(names.to_string()),
+                ..SweepOptions::default()
+            };
+            let run = |refs: &ReferenceCache, t: &str| {
+                let dir = tmp_path(&format!("kept-refs-{tag}-m{m}-{t}"));
+                let r = sweep_dataset(&data, &table, refs, &opts, &dir, None).unwrap();
+                std::fs::remove_dir_all(&dir).ok();
+                r.references
+            };
+            let kept = run(&shared, "kept");
+            let fresh = run(&ReferenceCache::new(Some(&stacks[..])), "fresh");
+            assert_eq!(kept, fresh, "{tag}, m = {m}");
+            assert!(kept.iter().any(|r| r.closed_form) && kept.iter().any(|r| r.diff.is_some()));
+        }
+    }
 }
