@@ -30,6 +30,7 @@ use crate::quantize::pipeline::{self as stored, HalfRounding};
 use crate::quantize::study::Storage;
 use crate::shader::{Func, Module, Order, Shape};
 use anyhow::{bail, Result};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// A filtered channel may differ from the model's two filter passes over the GPU's own encoded
@@ -230,19 +231,29 @@ pub fn model_shadow(
     let Some(f) = module.func("tunedShadow") else {
         bail!("shader module has no tunedShadow");
     };
-    let mut input = vec![0.0f32; m + 1];
-    let mut scratch = Vec::new();
-    let mut out = [0.0f32];
-    let mut g = Vec::with_capacity(receivers.texel.len());
-    for (&t, &zf) in receivers.texel.iter().zip(&receivers.zf) {
-        let t = t as usize;
-        input[..m].copy_from_slice(&map[t * m..(t + 1) * m]);
-        input[m] = zf;
-        f.eval_order_into(order, &input, &mut scratch, &mut out)?;
-        g.push(out[0]);
-    }
+    // Receivers in parallel blocks; each receiver's evaluation is the same as serially.
+    let mut g = vec![0.0f32; receivers.texel.len()];
+    g.par_chunks_mut(RECEIVER_BLOCK)
+        .zip(receivers.texel.par_chunks(RECEIVER_BLOCK))
+        .zip(receivers.zf.par_chunks(RECEIVER_BLOCK))
+        .try_for_each(|((g, texels), zfs)| {
+            let mut input = vec![0.0f32; m + 1];
+            let mut scratch = Vec::new();
+            let mut out = [0.0f32];
+            for ((g, &t), &zf) in g.iter_mut().zip(texels).zip(zfs) {
+                let t = t as usize;
+                input[..m].copy_from_slice(&map[t * m..(t + 1) * m]);
+                input[m] = zf;
+                f.eval_order_into(order, &input, &mut scratch, &mut out)?;
+                *g = out[0];
+            }
+            Ok::<(), anyhow::Error>(())
+        })?;
     Ok(g)
 }
+
+/// Receivers per parallel block of [`model_shadow`].
+const RECEIVER_BLOCK: usize = 512;
 
 /// Run the pipeline of `program` on the GPU and compare it with the model; `label` names the
 /// setting in the verdict.

@@ -14,6 +14,7 @@
 use crate::kernel::{clamp_coord, Gaussian};
 use crate::shader::{Func, Order};
 use anyhow::{bail, Result};
+use rayon::prelude::*;
 use serde::Serialize;
 
 /// One step of an 8-bit display: a shadow further than this from the same technique on exact
@@ -129,14 +130,23 @@ pub fn encode_map(
     }
     let m = encode.n_outputs();
     let mut out = vec![0.0f32; depth.len() * m];
-    let mut scratch = Vec::new();
-    for (t, &z) in depth.iter().enumerate() {
-        let o = &mut out[t * m..(t + 1) * m];
-        encode.eval_order_into(order, &[z], &mut scratch, o)?;
-        for v in o.iter_mut() {
-            *v = store(storage, rounding, *v);
-        }
+    if m == 0 {
+        return Ok(out);
     }
+    // Texels in parallel blocks (each texel's evaluation as serially).
+    const BLOCK: usize = 1024;
+    out.par_chunks_mut(BLOCK * m)
+        .zip(depth.par_chunks(BLOCK))
+        .try_for_each(|(out, depth)| {
+            let mut scratch = Vec::new();
+            for (o, &z) in out.chunks_exact_mut(m).zip(depth) {
+                encode.eval_order_into(order, &[z], &mut scratch, o)?;
+                for v in o.iter_mut() {
+                    *v = store(storage, rounding, *v);
+                }
+            }
+            Ok::<(), anyhow::Error>(())
+        })?;
     Ok(out)
 }
 
@@ -196,23 +206,29 @@ pub fn filter_pass(
     assert_eq!(map.len(), width * height * m, "filter_pass: map size");
     let r = (weights.len() / 2) as i64;
     let mut out = vec![0.0f32; map.len()];
-    for y in 0..height {
-        for x in 0..width {
-            for c in 0..m {
-                let tap = |i: usize| {
-                    let d = i as i64 - r;
-                    let t = if vertical {
-                        clamp_coord(y, d, height) * width + x
-                    } else {
-                        y * width + clamp_coord(x, d, width)
-                    };
-                    map[t * m + c]
-                };
-                let acc = tap_sum(weights, tap, order);
-                out[(y * width + x) * m + c] = store(storage, rounding, acc);
-            }
-        }
+    if out.is_empty() {
+        return out;
     }
+    // Rows in parallel; every value is the same tap sum as serially.
+    out.par_chunks_mut(width * m)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for x in 0..width {
+                for c in 0..m {
+                    let tap = |i: usize| {
+                        let d = i as i64 - r;
+                        let t = if vertical {
+                            clamp_coord(y, d, height) * width + x
+                        } else {
+                            y * width + clamp_coord(x, d, width)
+                        };
+                        map[t * m + c]
+                    };
+                    let acc = tap_sum(weights, tap, order);
+                    row[x * m + c] = store(storage, rounding, acc);
+                }
+            }
+        });
     out
 }
 
