@@ -12,6 +12,7 @@
 
 use crate::stack::DepthStack;
 use anyhow::{bail, Result};
+use rayon::prelude::*;
 
 /// A normalised, separable, odd-sized Gaussian filter kernel.
 ///
@@ -134,26 +135,30 @@ pub fn min_filter(map: &[f64], width: usize, height: usize, radius: usize) -> Ve
     let taps = 2 * radius + 1;
     let mut out = vec![f64::INFINITY; map.len()];
     check_map(map.len(), width, height, "min_filter");
+    if map.is_empty() {
+        return out;
+    }
     let mut tmp = vec![f64::INFINITY; map.len()];
     let r = radius as i64;
-    for y in 0..height {
-        for x in 0..width {
+    // Rows in parallel, each value as serially.
+    tmp.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
             let mut m = f64::INFINITY;
             for i in 0..taps {
                 m = m.min(map[y * width + clamp_coord(x, i as i64 - r, width)]);
             }
-            tmp[y * width + x] = m;
+            *o = m;
         }
-    }
-    for y in 0..height {
-        for x in 0..width {
+    });
+    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
             let mut m = f64::INFINITY;
             for i in 0..taps {
                 m = m.min(tmp[clamp_coord(y, i as i64 - r, height) * width + x]);
             }
-            out[y * width + x] = m;
+            *o = m;
         }
-    }
+    });
     out
 }
 
@@ -162,7 +167,7 @@ fn separable(
     width: usize,
     height: usize,
     taps: usize,
-    acc: impl Fn(&mut f64, f64, usize),
+    acc: impl Fn(&mut f64, f64, usize) + Sync,
 ) -> Vec<f64> {
     check_map(map.len(), width, height, "filter_separable");
     assert!(
@@ -173,20 +178,21 @@ fn separable(
         return Vec::new();
     }
     let r = (taps / 2) as i64;
+    // Rows in parallel, each value summed in tap order as serially.
     let mut tmp = vec![0.0; map.len()];
-    for y in 0..height {
+    tmp.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
         let row = &map[y * width..(y + 1) * width];
-        for x in 0..width {
+        for (x, o) in out.iter_mut().enumerate() {
             let mut s = 0.0;
             for i in 0..taps {
                 acc(&mut s, row[clamp_coord(x, i as i64 - r, width)], i);
             }
-            tmp[y * width + x] = s;
+            *o = s;
         }
-    }
+    });
     let mut out = vec![0.0; map.len()];
-    for y in 0..height {
-        for x in 0..width {
+    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
+        for (x, o) in row.iter_mut().enumerate() {
             let mut s = 0.0;
             for i in 0..taps {
                 acc(
@@ -195,9 +201,9 @@ fn separable(
                     i,
                 );
             }
-            out[y * width + x] = s;
+            *o = s;
         }
-    }
+    });
     out
 }
 
@@ -238,26 +244,36 @@ pub fn moment_maps_of(
     height: usize,
     m: usize,
     kernel: &Gaussian,
-    mut f: impl FnMut(f64, &mut [f64]),
+    f: impl Fn(f64, &mut [f64]) + Sync,
 ) -> Vec<Vec<f64>> {
     check_map(front.len(), width, height, "moment_maps");
-    let mut raw = vec![vec![0.0; front.len()]; m];
-    let mut buf = vec![0.0; m];
-    for (t, &z) in front.iter().enumerate() {
-        f(z, &mut buf);
-        for j in 0..m {
-            raw[j][t] = buf[j];
-        }
+    if m == 0 {
+        return Vec::new();
     }
-    raw.iter()
-        .map(|map| filter_separable(map, width, height, kernel.weights_1d()))
+    // b(z) of every texel (row-major, texels in parallel), then map by map, filtered in
+    // parallel.
+    let mut values = vec![0.0; front.len() * m];
+    values
+        .par_chunks_mut(m)
+        .zip(front.par_iter())
+        .for_each(|(o, &z)| f(z, o));
+    (0..m)
+        .into_par_iter()
+        .map(|j| {
+            let raw: Vec<f64> = values.iter().skip(j).step_by(m).copied().collect();
+            filter_separable(&raw, width, height, kernel.weights_1d())
+        })
         .collect()
 }
 
 /// The m filtered moment maps b_t = Σ_l w_l b(z0(t+l)) of a stack's front layer (background
 /// depth 1, clamped edges, the paper's 9×9 Gaussian σ = 2.4), computed separably.
 /// `result[j][t]` = b_j at texel t.
-pub fn moment_maps(stack: &DepthStack, m: usize, f: impl FnMut(f64, &mut [f64])) -> Vec<Vec<f64>> {
+pub fn moment_maps(
+    stack: &DepthStack,
+    m: usize,
+    f: impl Fn(f64, &mut [f64]) + Sync,
+) -> Vec<Vec<f64>> {
     let front = front_map(stack);
     moment_maps_of(
         &front,
