@@ -124,7 +124,7 @@ fn check_map(len: usize, width: usize, height: usize, what: &str) {
 /// Panics if `map.len() != width * height` or the weights have even length (programming errors,
 /// not user input).
 pub fn filter_separable(map: &[f64], width: usize, height: usize, weights_1d: &[f64]) -> Vec<f64> {
-    separable(map, width, height, weights_1d.len(), |acc, v, i| {
+    separable(map, width, height, weights_1d.len(), 0.0, |acc, v, i| {
         *acc += weights_1d[i] * v
     })
 }
@@ -132,41 +132,26 @@ pub fn filter_separable(map: &[f64], width: usize, height: usize, weights_1d: &[
 /// Separable min filter over the (2r+1)² neighbourhood with clamped edges:
 /// out(t) = min_l map(t+l). Used for trivial fragments (F_Z(z) = 0 ⇔ z ≤ min_l z0(t+l)).
 pub fn min_filter(map: &[f64], width: usize, height: usize, radius: usize) -> Vec<f64> {
-    let taps = 2 * radius + 1;
-    let mut out = vec![f64::INFINITY; map.len()];
     check_map(map.len(), width, height, "min_filter");
-    if map.is_empty() {
-        return out;
-    }
-    let mut tmp = vec![f64::INFINITY; map.len()];
-    let r = radius as i64;
-    // Rows in parallel, each value as serially.
-    tmp.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, o) in row.iter_mut().enumerate() {
-            let mut m = f64::INFINITY;
-            for i in 0..taps {
-                m = m.min(map[y * width + clamp_coord(x, i as i64 - r, width)]);
-            }
-            *o = m;
-        }
-    });
-    out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
-        for (x, o) in row.iter_mut().enumerate() {
-            let mut m = f64::INFINITY;
-            for i in 0..taps {
-                m = m.min(tmp[clamp_coord(y, i as i64 - r, height) * width + x]);
-            }
-            *o = m;
-        }
-    });
-    out
+    separable(
+        map,
+        width,
+        height,
+        2 * radius + 1,
+        f64::INFINITY,
+        |m, v, _| *m = m.min(v),
+    )
 }
 
+/// The two passes of a separable filter over rows, then columns (clamped edges): each output
+/// folds its taps in order with `acc`, starting from `init`. Rows run in parallel; every value
+/// is folded in tap order.
 fn separable(
     map: &[f64],
     width: usize,
     height: usize,
     taps: usize,
+    init: f64,
     acc: impl Fn(&mut f64, f64, usize) + Sync,
 ) -> Vec<f64> {
     check_map(map.len(), width, height, "filter_separable");
@@ -178,12 +163,11 @@ fn separable(
         return Vec::new();
     }
     let r = (taps / 2) as i64;
-    // Rows in parallel, each value summed in tap order as serially.
     let mut tmp = vec![0.0; map.len()];
     tmp.par_chunks_mut(width).enumerate().for_each(|(y, out)| {
         let row = &map[y * width..(y + 1) * width];
         for (x, o) in out.iter_mut().enumerate() {
-            let mut s = 0.0;
+            let mut s = init;
             for i in 0..taps {
                 acc(&mut s, row[clamp_coord(x, i as i64 - r, width)], i);
             }
@@ -193,7 +177,7 @@ fn separable(
     let mut out = vec![0.0; map.len()];
     out.par_chunks_mut(width).enumerate().for_each(|(y, row)| {
         for (x, o) in row.iter_mut().enumerate() {
-            let mut s = 0.0;
+            let mut s = init;
             for i in 0..taps {
                 acc(
                     &mut s,
