@@ -186,9 +186,6 @@ pub(super) fn evaluate(
     Ok(r)
 }
 
-/// The artefact of `job` from its evaluation `r` (error against PCF, error histogram) and its
-/// speed (mean ns over `job.speed_inputs` fragments sampled from the same stacks,
-/// `metrics::windows::stacks_corpus`).
 /// The speed corpora of the jobs (filter windows of real fragments,
 /// [`crate::metrics::windows::stacks_corpus`]), one per size, built on first use: the same
 /// seed draws the same windows for every job of that size.
@@ -212,8 +209,9 @@ impl Corpora {
 /// Seed of the speed corpora.
 const SPEED_SEED: u64 = 2015;
 
-/// The artefact of `job`: its evaluation `r` and its speed on `corpus` (the same kind of input
-/// as the error: filter windows of real fragments).
+/// The artefact of `job` from its evaluation `r` (error against PCF, error histogram) and its
+/// speed: mean ns over `corpus`, `job.speed_inputs` filter windows of real fragments (the same
+/// kind of input as the error).
 fn measured(job: &Job, corpus: &Corpus, r: &EvalReport) -> Measured {
     let t = job.technique.as_ref();
     let histogram = crate::report::recommend::histogram_of(r);
