@@ -64,7 +64,6 @@ pub fn paper_bases(grid: &crate::Grid) -> Result<FunctionTable> {
     )
 }
 
-/// Column sets of [`paper_bases`]: polynomial and trigonometric bases with m functions.
 /// Display names of the columns of [`paper_bases`] (Fig. 3 legends).
 const FIG3_NAMES: [&str; 8] = [
     "z", "z²", "z³", "z⁴", "sin 2πz", "cos 2πz", "sin 4πz", "cos 4πz",
@@ -79,10 +78,10 @@ pub fn trig_cols(m: usize) -> Vec<usize> {
     (4..4 + m).collect()
 }
 
-/// The paper's LP reference bases: (label, columns of [`paper_bases`]).
 /// Number of LP references scored on every fragment after a race ([`lp_references`]).
 pub const LP_REFERENCES: usize = 4;
 
+/// The paper's LP reference bases: (label, columns of [`paper_bases`]).
 fn lp_reference_sets() -> [(&'static str, Vec<usize>); LP_REFERENCES] {
     [
         ("VSM (LP)", vec![0, 1]),
